@@ -1,0 +1,29 @@
+"""Options shared by the subcommands."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+from ..analysis import jsonable
+from ..case import parse_param_overrides
+
+__all__ = ["add_case_arguments", "case_kwargs", "print_json"]
+
+
+def add_case_arguments(parser):
+    parser.add_argument("case", metavar="CASE", help="case file (TOML)")
+    parser.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                        help="override a case parameter (repeatable); VALUE may be an expression")
+    parser.add_argument("--config", default=None, metavar="NAME",
+                        help="a named configuration of the case's [configurations] table")
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+
+
+def case_kwargs(args) -> dict:
+    return {"config": args.config, "params": parse_param_overrides(args.param)}
+
+
+def print_json(obj):
+    json.dump(jsonable(obj), sys.stdout, indent=1, allow_nan=False)
+    sys.stdout.write("\n")

@@ -1,0 +1,83 @@
+"""``mbseig linearize CASE``: M, P, Q, the null-space basis, q₀, λ₀ and the state matrix."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..case import load_case
+from ..errors import CaseError
+from ..linear import linearize
+from ..statics import equilibrium
+from .common import add_case_arguments, case_kwargs, print_json
+
+FORMATS = (".npz", ".mat", ".json")
+
+
+def register(sub):
+    p = sub.add_parser("linearize", help="equilibrium and reduced linear model M, P, Q")
+    add_case_arguments(p)
+    p.add_argument("--out", default=None, metavar="FILE",
+                   help="write the matrices to FILE (.npz, .mat or .json)")
+    p.set_defaults(run=run)
+
+
+def _arrays(model, eq, lin):
+    arrays = {"M": lin.M, "P": lin.P, "Q": lin.Q, "N": lin.N, "q0": lin.q0, "lam0": lin.lam0}
+    try:
+        arrays["A"] = lin.state_matrix()
+    except np.linalg.LinAlgError:
+        pass  # singular M: no first-order state matrix (descriptor form only)
+    return arrays
+
+
+def run(args) -> int:
+    kwargs = case_kwargs(args)
+    model = load_case(args.case, config=kwargs["config"], **kwargs["params"])
+    eq = equilibrium(model)
+    lin = linearize(model, eq)
+    arrays = _arrays(model, eq, lin)
+    meta = {
+        "case": model.name, "parameters": dict(model.parameters),
+        "n_coordinates": int(model.n), "n_constraints": int(lin.n_constraints),
+        "n_redundant": int(eq.n_redundant), "dof": int(lin.dof),
+        "equilibrium": {"residual": float(eq.residual), "iterations": int(eq.iterations)},
+        "coordinate_names": list(model.coordinate_names),
+        "rank_tol": lin.tolerances.get("rank_tol"),
+    }
+    if args.out:
+        _write(Path(args.out), arrays, meta)
+    if args.json:
+        print_json({**meta, **{k: v.tolist() for k, v in arrays.items()}})
+    else:
+        print(f"case {model.name}: {model.n} coordinates, {lin.n_constraints} constraints "
+              f"({eq.n_redundant} redundant), {lin.dof} DOF; equilibrium residual "
+              f"{eq.residual:.2e} after {eq.iterations} iterations")
+        if args.out:
+            print(f"wrote {args.out}: {', '.join(arrays)}")
+        elif lin.dof <= 8:
+            with np.printoptions(precision=6, suppress=False, linewidth=120):
+                for k in ("M", "P", "Q"):
+                    print(f"{k} =\n{arrays[k]}")
+    return 0
+
+
+def _write(path, arrays, meta):
+    if path.suffix not in FORMATS:
+        raise CaseError(f"output must end in {', '.join(FORMATS)}", file=str(path), element="--out")
+    try:
+        if path.suffix == ".npz":
+            np.savez(path, coordinate_names=np.array(meta["coordinate_names"]), **arrays)
+        elif path.suffix == ".mat":
+            import scipy.io
+
+            scipy.io.savemat(str(path), {**arrays, "coordinate_names": meta["coordinate_names"]})
+        else:
+            import json
+
+            from ..analysis import jsonable
+
+            path.write_text(json.dumps(jsonable({**meta, **{k: v.tolist() for k, v in arrays.items()}})))
+    except OSError as exc:
+        raise CaseError(f"cannot write: {exc.strerror or exc}", file=str(path), element="--out") from None

@@ -1,0 +1,121 @@
+"""Linearization about an equilibrium and projection onto the constraint null space (DESIGN §4).
+
+With N an orthonormal basis of null Φ_q(q₀) (rank-revealing SVD, relative tolerance ``rank_tol``)
+and q = q₀ + N x:
+
+    M_r ẍ + P ẋ + Q x = 0,     M_r = Nᵀ M N,   P = Nᵀ C N,   Q = Nᵀ (K + H(λ₀)) N
+
+    C = −∂g/∂q̇,   K = −∂g/∂q,   H(λ₀) = Σ_k λ₀,k ∇²Φ_k   (stiffness of the constraint forces)
+
+          q̇, q ──► [ g(q, q̇) ] ──► −K, −C ─┐
+                                            ├─► Nᵀ(·)N ──► M_r, P, Q
+          λ₀ ────► [ Σ λ ∇²Φ ] ──► H ───────┘
+
+Neither P nor Q is assumed symmetric: follower forces make Q non-symmetric and gyroscopic terms
+make P skew.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+from .case import LinearCase
+from .statics import Equilibrium
+
+__all__ = ["LinearModel", "linearize", "null_space_basis"]
+
+
+@dataclass(frozen=True, eq=False)
+class LinearModel:
+    """Reduced linear model  M ẍ + P ẋ + Q x = 0,  q = q₀ + N x.
+
+    First-order form (when M is invertible), state z = [x; ẋ]:
+
+        ż = A z,   A = ┌   0        I    ┐
+                       └ −M⁻¹Q   −M⁻¹P  ┘
+    """
+
+    M: np.ndarray
+    P: np.ndarray
+    Q: np.ndarray
+    N: np.ndarray
+    q0: np.ndarray
+    lam0: np.ndarray
+    coordinate_names: tuple
+    name: str = ""
+    parameters: dict = field(default_factory=dict)
+    rank: int = 0
+    n_constraints: int = 0
+    constraint_stiffness: bool = True
+    tolerances: dict = field(default_factory=dict)
+
+    @property
+    def dof(self) -> int:
+        return self.M.shape[0]
+
+    @property
+    def n_redundant(self) -> int:
+        return self.n_constraints - self.rank
+
+    def state_matrix(self) -> np.ndarray:
+        """A of ż = A z; raises numpy.linalg.LinAlgError when M is singular."""
+        n = self.dof
+        MinvQ = np.linalg.solve(self.M, self.Q)
+        MinvP = np.linalg.solve(self.M, self.P)
+        return np.block([[np.zeros((n, n)), np.eye(n)], [-MinvQ, -MinvP]])
+
+    def to_statespace(self):
+        """python-control StateSpace with generalized-force inputs and x, ẋ outputs.
+
+        ż = A z + B u,  B = [0; M⁻¹],  y = z.
+        """
+        import control
+
+        n = self.dof
+        A = self.state_matrix()
+        B = np.vstack([np.zeros((n, n)), np.linalg.inv(self.M)])
+        return control.ss(A, B, np.eye(2 * n), np.zeros((2 * n, n)))
+
+
+def null_space_basis(Phi_q, n, rank_tol):
+    """(N, rank): orthonormal basis of null(Φ_q) from the SVD, rank by σ > rank_tol·σ_max."""
+    if Phi_q.shape[0] == 0:
+        return np.eye(n), 0
+    A = Phi_q.toarray() if sp.issparse(Phi_q) else np.asarray(Phi_q)
+    _, s, vt = sla.svd(A, full_matrices=True)
+    rank = int(np.sum(s > rank_tol * s[0])) if s.size and s[0] > 0 else 0
+    return vt[rank:].T.copy(), rank
+
+
+def linearize(model, eq: Equilibrium, *, rank_tol: float = 1e-10,
+              constraint_stiffness: bool = True) -> LinearModel:
+    """Linear model about ``eq`` (see module docstring).
+
+    rank_tol : relative singular-value threshold for null Φ_q.
+    constraint_stiffness : include H(λ₀).  ``False`` reproduces the common mistake of dropping
+        the constraint-force stiffness; it exists to measure that error, never for production.
+    """
+    if isinstance(model, LinearCase):
+        return LinearModel(M=model.M, P=model.P, Q=model.Q, N=np.eye(model.n), q0=np.zeros(model.n),
+                           lam0=np.zeros(0), coordinate_names=model.coordinate_names, name=model.name,
+                           parameters=model.parameters, tolerances={"rank_tol": rank_tol})
+    q0, lam0 = eq.q, eq.lam
+    K, C = model.force_jacobians(q0)
+    if constraint_stiffness and model.n_constraints:
+        K = K + model.constraint_hessian(q0, lam0)
+    N, rank = null_space_basis(model.phi_q(q0), model.n, rank_tol)
+    Md, Cd, Kd = (A.toarray() for A in (model.mass, C, K))
+    if model.n_constraints == 0:
+        Mr, Pr, Qr = Md, Cd, Kd
+    else:
+        Mr, Pr, Qr = (N.T @ A @ N for A in (Md, Cd, Kd))
+    return LinearModel(
+        M=Mr, P=Pr, Q=Qr, N=N, q0=q0, lam0=lam0, coordinate_names=model.coordinate_names,
+        name=model.name, parameters=model.parameters, rank=rank,
+        n_constraints=model.n_constraints, constraint_stiffness=constraint_stiffness,
+        tolerances={"rank_tol": rank_tol},
+    )

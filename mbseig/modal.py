@@ -1,0 +1,149 @@
+"""Modes and their stability (DESIGN §6).
+
+For an eigenvalue s_k = −δ_k + iω_k:  ω_n = |s|,  ζ = δ/|s|,  f = ω/2π, and
+
+    δ > tol_k  stable,   |δ| ≤ tol_k  critical,   δ < −tol_k  unstable,
+
+    tol_k = max(safety · κ_k · max(η_k, ε),  stability_rtol · |s_k|,  stability_atol)
+
+where κ_k·η_k is the first-order error bound of s_k (absolute condition number times backward
+error, see :mod:`mbseig.qep`).  So "δ = 0" means "zero within the numerical error of this
+eigenvalue", and every tolerance is recorded per mode.  Kinds: ``rigid-body`` (|s| ≤ tol),
+``oscillatory`` (complex, δ ≥ −tol), ``flutter`` (complex, δ < −tol), ``overdamped`` (real,
+negative), ``divergence`` (real, positive); |ω| ≤ tol counts as real.
+
+Listing: a complex-conjugate pair once (ω > 0), real eigenvalues each; sorted by ω_n, then δ,
+then ω (deterministic).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg as sla
+
+from .qep import EPS, solve_qep
+
+__all__ = ["Modes", "modes", "STABILITY_ORDER"]
+
+STABILITY_ORDER = {"stable": 0, "critical": 1, "unstable": 2}
+
+
+@dataclass(frozen=True, eq=False)
+class Modes:
+    """Listed modes of M s² + P s + Q with per-mode errors, tolerances and classification."""
+
+    eigenvalues: np.ndarray
+    delta: np.ndarray
+    omega_n: np.ndarray
+    omega_d: np.ndarray
+    freq_hz: np.ndarray
+    zeta: np.ndarray
+    stability: list
+    kind: list
+    backward_error: np.ndarray
+    condition: np.ndarray
+    error_estimate: np.ndarray
+    tolerance: np.ndarray
+    vectors: np.ndarray  # reduced coordinates, one column per listed mode
+    shapes: np.ndarray  # full coordinates q = N x, normalized to max |component| = 1
+    dominant: list  # per mode: [(coordinate name, |component|), ...]
+    verdict: str
+    solver: str
+    solver_reason: str
+    n_infinite: int
+    all_eigenvalues: np.ndarray
+    tolerances: dict = field(default_factory=dict)
+
+    def __len__(self):
+        return self.eigenvalues.size
+
+    def table(self) -> str:
+        """Readable fixed-width table of the listed modes."""
+        head = (f"{'#':>3} {'Re s':>13} {'Im s':>13} {'delta':>11} {'omega_n':>11} {'f [Hz]':>11} "
+                f"{'zeta':>10} {'eta':>8}  {'stability':<9} {'kind':<11} dominant")
+        rows = [head, "-" * len(head)]
+        for k in range(len(self)):
+            s = self.eigenvalues[k]
+            dom = ", ".join(f"{nm}" for nm, _ in self.dominant[k][:3])
+            rows.append(
+                f"{k + 1:>3} {s.real:>13.6g} {s.imag:>13.6g} {self.delta[k]:>11.4g} "
+                f"{self.omega_n[k]:>11.6g} {self.freq_hz[k]:>11.6g} {self.zeta[k]:>10.3g} "
+                f"{self.backward_error[k]:>8.1e}  {self.stability[k]:<9} {self.kind[k]:<11} {dom}"
+            )
+        return "\n".join(rows)
+
+
+def modes(M, P, Q, *, solver: str = "auto", N=None, coordinate_names=None,
+          stability_rtol: float = 1e-12, stability_atol: float = 0.0, safety: float = 10.0,
+          n_dominant: int = 3, rigid_rank_tol: float = 1e-6, **solver_options) -> Modes:
+    """Solve and classify the modes of (M s² + P s + Q) x = 0.
+
+    N, coordinate_names : null-space basis and full-coordinate names for mode shapes (q = N x).
+    stability_rtol, stability_atol, safety : see the module docstring.
+    rigid_rank_tol : relative pivot threshold for counting independent rigid-body vectors.
+    Other keywords go to :func:`mbseig.qep.solve_qep` (``sym_tol``, ``rayleigh_tol``, ``scale``).
+    """
+    sol = solve_qep(M, P, Q, solver=solver, **solver_options)
+    s_all = sol.eigenvalues
+    err_all = sol.condition * np.maximum(sol.backward_error, EPS)
+    tol_all = np.maximum.reduce([safety * err_all, stability_rtol * np.abs(s_all),
+                                 np.full(s_all.size, stability_atol)])
+    rigid = np.abs(s_all) <= tol_all
+    # a complex pair is listed once (ω > 0; real LAPACK drivers return exact conjugates) and a
+    # real eigenvalue on its own; a rigid-body mode (s = 0, double when P x = 0) is listed once
+    # per independent vector: as many as the rank of the rigid eigenvectors.
+    listed = (~rigid) & (s_all.imag >= 0)
+    rigid_idx = np.flatnonzero(rigid)
+    if rigid_idx.size:
+        R = sol.vectors[:, rigid_idx]
+        _, sv, piv = sla.qr(R, mode="economic", pivoting=True)
+        d = np.abs(np.diag(sv))
+        r = int(np.sum(d > rigid_rank_tol * d[0])) if d.size and d[0] > 0 else 0
+        listed[rigid_idx[np.sort(piv[:r])]] = True
+    sel = np.flatnonzero(listed)
+    s = s_all[sel]
+    eta, kappa, X = sol.backward_error[sel], sol.condition[sel], sol.vectors[:, sel]
+    err, tol, is_rigid = err_all[sel], tol_all[sel], rigid[sel]
+    delta, omega = 0.0 - s.real, s.imag  # 0.0 − x: no negative zeros in reports
+    wn = np.abs(s)
+    order = np.lexsort((omega, delta, wn))
+    s, eta, kappa, X, err, tol, delta, omega, wn, is_rigid = (
+        a[..., order] for a in (s, eta, kappa, X, err, tol, delta, omega, wn, is_rigid))
+    stability, kind = [], []
+    for k in range(s.size):
+        if is_rigid[k]:
+            st, kd = "critical", "rigid-body"
+        else:
+            st = "stable" if delta[k] > tol[k] else "unstable" if delta[k] < -tol[k] else "critical"
+            if abs(omega[k]) <= tol[k]:
+                kd = "overdamped" if delta[k] > 0 else "divergence"
+            else:
+                kd = "flutter" if st == "unstable" else "oscillatory"
+        stability.append(st)
+        kind.append(kd)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        zeta = np.where(wn > 0, delta / wn, 0.0)
+    n_full = X.shape[0] if N is None else N.shape[0]
+    full = X if N is None else N @ X
+    names = list(coordinate_names) if coordinate_names is not None else [f"q{k + 1}" for k in range(n_full)]
+    shapes = np.zeros_like(full)
+    dominant = []
+    for k in range(full.shape[1]):
+        v = full[:, k]
+        j = int(np.argmax(np.abs(v)))
+        shapes[:, k] = v / v[j] if v[j] != 0 else v
+        mag = np.abs(shapes[:, k])
+        top = np.argsort(-mag, kind="stable")[:n_dominant]
+        dominant.append([(names[i], float(mag[i])) for i in top if mag[i] >= 0.05])
+    verdict = max(stability, key=STABILITY_ORDER.get) if stability else "stable"
+    return Modes(
+        eigenvalues=s, delta=delta, omega_n=wn, omega_d=omega, freq_hz=omega / (2 * np.pi),
+        zeta=zeta, stability=stability, kind=kind, backward_error=eta, condition=kappa,
+        error_estimate=err, tolerance=tol, vectors=X, shapes=shapes, dominant=dominant,
+        verdict=verdict, solver=sol.solver, solver_reason=sol.reason, n_infinite=sol.n_infinite,
+        all_eigenvalues=s_all,
+        tolerances={"stability_rtol": stability_rtol, "stability_atol": stability_atol,
+                    "safety": safety, "rigid_rank_tol": rigid_rank_tol, **{k: v for k, v in sol.details.items()}},
+    )

@@ -1,0 +1,134 @@
+"""The assembled nonlinear model.
+
+    M q̈ + Φ_qᵀ(q) λ = g(q, q̇),        Φ(q) = 0
+
+M is constant in natural coordinates (point masses and planar bodies on their basic points), so it
+is assembled once.  g, its Jacobians, Φ, Φ_q, Σ λ_k ∇²Φ_k and γ are assembled on demand from the
+element kernels of :mod:`mbseig.model.elements` as sparse matrices.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+from .affine import Affine
+
+__all__ = ["Model"]
+
+
+def _scatter(n_rows, n_cols, blocks):
+    """Sum of dense local blocks (rows_idx, cols_idx, values) into a CSR matrix."""
+    rows, cols, vals = [], [], []
+    for r, c, v in blocks:
+        if v.size == 0:
+            continue
+        rr, cc = np.meshgrid(r, c, indexing="ij")
+        rows.append(rr.ravel())
+        cols.append(cc.ravel())
+        vals.append(np.asarray(v, dtype=float).ravel())
+    if not rows:
+        return sp.csr_matrix((n_rows, n_cols))
+    return sp.coo_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n_rows, n_cols)
+    ).tocsr()
+
+
+@dataclass(frozen=True, eq=False)
+class Model:
+    """A constrained multibody model in natural coordinates.
+
+    Attributes
+    ----------
+    coordinate_names : names of the n coordinates, e.g. ``("B.x", "B.y", ...)``.
+    q_init : initial guess of the coordinates (from the case's point positions).
+    mass : constant n×n mass matrix (CSR).
+    g_const : constant generalized forces (gravity, constant point forces).
+    forces, constraints : element objects (see :mod:`mbseig.model.elements`).
+    points : named affine maps of every basic point and body marker, for reports and drawings.
+    bodies : body name → (basic point i, basic point j).
+    """
+
+    name: str
+    source: str
+    parameters: dict
+    dimension: int
+    coordinate_names: tuple
+    q_init: np.ndarray
+    mass: sp.csr_matrix
+    g_const: np.ndarray
+    forces: tuple
+    constraints: tuple
+    points: dict = field(default_factory=dict)
+    bodies: dict = field(default_factory=dict)
+    length_scale: float = 1.0
+    description: str = ""
+    expected: dict = field(default_factory=dict)
+
+    # ---- sizes ---------------------------------------------------------------------------
+    @property
+    def n(self) -> int:
+        return len(self.coordinate_names)
+
+    @property
+    def n_constraints(self) -> int:
+        return sum(c.n_eq for c in self.constraints)
+
+    def constraint_row_names(self) -> list[str]:
+        return [c.name for c in self.constraints for _ in range(c.n_eq)]
+
+    def _row_offsets(self):
+        off = np.cumsum([0] + [c.n_eq for c in self.constraints])
+        return off
+
+    # ---- forces --------------------------------------------------------------------------
+    def generalized_force(self, q, qd=None) -> np.ndarray:
+        """g(q, q̇)."""
+        qd = np.zeros(self.n) if qd is None else qd
+        g = self.g_const.copy()
+        for f in self.forces:
+            np.add.at(g, f.idx, f.force(q, qd))
+        return g
+
+    def force_jacobians(self, q, qd=None):
+        """(K, C) = (−∂g/∂q, −∂g/∂q̇) as CSR matrices."""
+        qd = np.zeros(self.n) if qd is None else qd
+        kb, cb = [], []
+        for f in self.forces:
+            K, C = f.jacobians(q, qd)
+            kb.append((f.idx, f.idx, K))
+            cb.append((f.idx, f.idx, C))
+        return _scatter(self.n, self.n, kb), _scatter(self.n, self.n, cb)
+
+    # ---- constraints ---------------------------------------------------------------------
+    def phi(self, q) -> np.ndarray:
+        if not self.constraints:
+            return np.zeros(0)
+        return np.concatenate([c.phi(q) for c in self.constraints])
+
+    def phi_q(self, q) -> sp.csr_matrix:
+        off = self._row_offsets()
+        blocks = [(np.arange(off[k], off[k + 1]), c.idx, c.jac(q)) for k, c in enumerate(self.constraints)]
+        return _scatter(self.n_constraints, self.n, blocks)
+
+    def constraint_hessian(self, q, lam) -> sp.csr_matrix:
+        """H(λ) = Σ_k λ_k ∇²Φ_k(q), the stiffness of the constraint forces."""
+        off = self._row_offsets()
+        blocks = [(c.idx, c.idx, c.hess(q, lam[off[k]:off[k + 1]])) for k, c in enumerate(self.constraints)]
+        return _scatter(self.n, self.n, blocks)
+
+    def gamma(self, q, qd) -> np.ndarray:
+        """γ = −(Φ_q q̇)_q q̇, so that Φ_q q̈ = γ on the constraint manifold."""
+        if not self.constraints:
+            return np.zeros(0)
+        return np.concatenate([c.gamma(q, qd) for c in self.constraints])
+
+    def constraint_scales(self) -> np.ndarray:
+        if not self.constraints:
+            return np.zeros(0)
+        return np.concatenate([np.full(c.n_eq, c.scale()) for c in self.constraints])
+
+    def point_position(self, name: str, q) -> np.ndarray:
+        return self.points[name](q)

@@ -1,0 +1,256 @@
+"""Quadratic eigenvalue problem (M s² + P s + Q) x = 0 (DESIGN §5).
+
+Solver paths (a registry, :data:`SOLVERS`; the result says which one ran and why):
+
+``eigh``          P = 0, M and Q symmetric, M positive definite: ``eigh(Q, M)``, s = ±√(−ω²).
+``proportional``  P = αM + βQ (Rayleigh damping, fitted and verified), M, Q symmetric, M > 0:
+                  the undamped modes with s² + (α + βω²) s + ω² = 0 solved per mode.
+``companion``     M symmetric positive definite: mass-normalized (M = LLᵀ, x = L⁻ᵀy) first
+                  companion matrix scaled by γ, standard eigenproblem (LAPACK geev):
+
+                      A = ┌    0          I    ┐ ,   s = γ μ
+                          └ −Q̃/γ²     −P̃/γ   ┘
+``qz``            anything else: Fan–Lin–Van Dooren scaled pencil (γ = √(‖Q‖/‖M‖),
+                  δ = 2/(‖Q‖ + γ‖P‖)), QZ (LAPACK ggev); infinite eigenvalues of a singular M
+                  dropped and counted.
+
+Every eigenpair carries its backward error (Tisseur 2000, Frobenius-norm weights)
+
+    η = ‖(s²M + sP + Q)x‖ / ((|s|²‖M‖ + |s|‖P‖ + ‖Q‖) ‖x‖)
+
+and its absolute condition number κ = (|s|²‖M‖ + |s|‖P‖ + ‖Q‖)‖x‖‖y‖ / |yᴴ(2sM + P)x| from the
+left eigenvector y, so that κ·η bounds the error of s to first order.  Of a companion
+eigenvector both halves are candidates for x; the one with the smaller η is kept.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+from .errors import SolverError
+
+__all__ = ["QEPSolution", "solve_qep", "choose_solver", "SOLVERS", "backward_errors"]
+
+EPS = np.finfo(float).eps
+
+
+@dataclass(frozen=True, eq=False)
+class QEPSolution:
+    """All finite eigenvalues s (2n minus the infinite ones) with unit right vectors (columns of
+    ``vectors``), backward errors, absolute condition numbers and the path that produced them."""
+
+    eigenvalues: np.ndarray
+    vectors: np.ndarray
+    backward_error: np.ndarray
+    condition: np.ndarray
+    solver: str
+    reason: str
+    n_infinite: int = 0
+    norms: tuple = (0.0, 0.0, 0.0)
+    details: dict = field(default_factory=dict)
+
+
+def _dense(A):
+    A = A.toarray() if sp.issparse(A) else np.asarray(A)
+    if np.iscomplexobj(A):
+        raise SolverError("M, P and Q must be real matrices")
+    return np.asarray(A, dtype=float)
+
+
+def _is_symmetric(A, tol):
+    nA = np.linalg.norm(A)
+    return np.linalg.norm(A - A.T) <= tol * nA if nA > 0 else True
+
+
+def _cholesky(M):
+    try:
+        return sla.cholesky(M, lower=True)
+    except np.linalg.LinAlgError:
+        return None
+
+
+def _rayleigh_fit(M, P, Q, tol):
+    """(α, β) with P = αM + βQ to relative accuracy tol, or None."""
+    nP = np.linalg.norm(P)
+    if nP == 0:
+        return 0.0, 0.0
+    A = np.column_stack([M.ravel(), Q.ravel()])
+    coef, *_ = np.linalg.lstsq(A, P.ravel(), rcond=None)
+    if np.linalg.norm(A @ coef - P.ravel()) <= tol * nP:
+        return float(coef[0]), float(coef[1])
+    return None
+
+
+def choose_solver(M, P, Q, *, sym_tol=1e-13, rayleigh_tol=1e-12):
+    """(name, reason, extras) of the path ``auto`` takes for these matrices."""
+    symmetric = _is_symmetric(M, sym_tol) and _is_symmetric(Q, sym_tol)
+    L = _cholesky(0.5 * (M + M.T)) if _is_symmetric(M, sym_tol) else None
+    if symmetric and L is not None:
+        if not np.any(P):
+            return "eigh", "P = 0, M and Q symmetric, M positive definite", {}
+        if _is_symmetric(P, sym_tol):
+            ab = _rayleigh_fit(M, P, Q, rayleigh_tol)
+            if ab is not None:
+                return ("proportional", f"P = {ab[0]:.6g} M + {ab[1]:.6g} Q (Rayleigh damping)",
+                        {"alpha": ab[0], "beta": ab[1]})
+    if L is not None:
+        return "companion", "M symmetric positive definite: mass-normalized companion", {}
+    return "qz", "M not symmetric positive definite: scaled QZ on the companion pencil", {}
+
+
+def backward_errors(M, P, Q, s, X, norms=None):
+    """η_k for the pairs (s_k, X[:, k])."""
+    nM, nP, nQ = norms if norms is not None else (np.linalg.norm(M), np.linalg.norm(P), np.linalg.norm(Q))
+    R = (M @ X) * s**2 + (P @ X) * s + Q @ X
+    denom = (np.abs(s) ** 2 * nM + np.abs(s) * nP + nQ) * np.linalg.norm(X, axis=0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        eta = np.linalg.norm(R, axis=0) / denom
+    return np.where(denom > 0, eta, np.inf)
+
+
+def _conditions(M, P, Q, s, X, Y, norms):
+    nM, nP, nQ = norms
+    num = (np.abs(s) ** 2 * nM + np.abs(s) * nP + nQ) * np.linalg.norm(X, axis=0) * np.linalg.norm(Y, axis=0)
+    den = np.abs(np.einsum("ij,ij->j", Y.conj(), (M @ X) * (2 * s) + P @ X))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        kappa = num / den
+    return np.where(den > 0, kappa, np.inf)
+
+
+def _unit(X):
+    nrm = np.linalg.norm(X, axis=0)
+    nrm[nrm == 0] = 1.0
+    return X / nrm
+
+
+# ---------------------------------------------------------------------------------------------
+def _solve_eigh(M, P, Q, opts):
+    w, V = sla.eigh(0.5 * (Q + Q.T), 0.5 * (M + M.T))
+    return _from_undamped(w, V, 0.0, 0.0)
+
+
+def _solve_proportional(M, P, Q, opts):
+    alpha, beta = opts["alpha"], opts["beta"]
+    w, V = sla.eigh(0.5 * (Q + Q.T), 0.5 * (M + M.T))
+    return _from_undamped(w, V, alpha, beta)
+
+
+def _from_undamped(w, V, alpha, beta):
+    """Both roots of s² + (α + βω²)s + ω² = 0 per undamped mode (numerically stable form)."""
+    c = alpha + beta * w
+    disc = c * c - 4.0 * w
+    s1 = np.empty(w.size, complex)
+    s2 = np.empty(w.size, complex)
+    osc = disc < 0
+    s1[osc] = -c[osc] / 2 + 0.5j * np.sqrt(-disc[osc])
+    s2[osc] = np.conj(s1[osc])
+    re = ~osc
+    root = np.sqrt(disc[re])
+    cr = c[re]
+    big = -(cr + np.copysign(root, cr)) / 2  # the root of larger magnitude, no cancellation
+    small = np.divide(w[re], big, out=np.zeros_like(big), where=big != 0)
+    s1[re], s2[re] = big, small
+    s = np.concatenate([s1, s2])
+    X = np.concatenate([V, V], axis=1).astype(complex)
+    return s, X, X, X, 0
+
+
+def _solve_companion(M, P, Q, opts):
+    n = M.shape[0]
+    L = sla.cholesky(0.5 * (M + M.T), lower=True)
+    Linv_Q = sla.solve_triangular(L, Q, lower=True)
+    Qt = sla.solve_triangular(L, Linv_Q.T, lower=True).T  # L⁻¹ Q L⁻ᵀ
+    Linv_P = sla.solve_triangular(L, P, lower=True)
+    Pt = sla.solve_triangular(L, Linv_P.T, lower=True).T
+    gamma = np.sqrt(np.linalg.norm(Qt) / np.sqrt(n)) if np.any(Qt) else 1.0
+    gamma = gamma if gamma > 0 else 1.0
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-Qt / gamma**2, -Pt / gamma]])
+    mu, W, Z = sla.eig(A, left=True, right=True, overwrite_a=True, check_finite=False)
+    s = gamma * mu
+    back = lambda Y: sla.solve_triangular(L.T, Y, lower=False)  # L⁻ᵀ y
+    X1 = back(Z[:n])
+    X2 = back(Z[n:]) / np.where(mu != 0, mu, 1.0)
+    Y = back(W[n:])
+    return s, X1, X2, Y, 0, {"gamma": gamma}
+
+
+def _solve_qz(M, P, Q, opts):
+    n = M.shape[0]
+    nM, nP, nQ = (np.linalg.norm(A) for A in (M, P, Q))
+    gamma = np.sqrt(nQ / nM) if nM > 0 and nQ > 0 else 1.0
+    delta = 2.0 / (nQ + nP * gamma) if (nQ + nP * gamma) > 0 else 1.0
+    if not opts.get("scale", True):
+        gamma, delta = 1.0, 1.0
+    Ms, Ps, Qs = gamma**2 * delta * M, gamma * delta * P, delta * Q
+    I = np.eye(n)
+    A = np.block([[np.zeros((n, n)), I], [-Qs, -Ps]])
+    B = np.block([[I, np.zeros((n, n))], [np.zeros((n, n)), Ms]])
+    w, W, Z = sla.eig(A, B, left=True, right=True, homogeneous_eigvals=True, check_finite=False)
+    alpha, beta = w
+    inf_tol = opts.get("infinite_tol", 100 * n * EPS)
+    finite = np.abs(beta) > inf_tol * np.abs(alpha)
+    mu = alpha[finite] / beta[finite]
+    Z, W = Z[:, finite], W[:, finite]
+    s = gamma * mu
+    X1 = Z[:n]
+    X2 = Z[n:] / np.where(mu != 0, mu, 1.0)
+    Y = W[n:]
+    return s, X1, X2, Y, int(np.sum(~finite)), {"gamma": gamma, "delta": delta, "infinite_tol": inf_tol}
+
+
+SOLVERS = {
+    "eigh": _solve_eigh,
+    "proportional": _solve_proportional,
+    "companion": _solve_companion,
+    "qz": _solve_qz,
+}
+
+
+def solve_qep(M, P, Q, *, solver: str = "auto", sym_tol: float = 1e-13,
+              rayleigh_tol: float = 1e-12, scale: bool = True) -> QEPSolution:
+    """Solve (M s² + P s + Q) x = 0 by the path ``solver`` (``auto`` picks by structure).
+
+    sym_tol : relative tolerance for treating M, Q (and P) as symmetric.
+    rayleigh_tol : relative residual under which P counts as αM + βQ.
+    scale : Fan–Lin–Van Dooren scaling on the QZ path (``False`` only to measure its value).
+    """
+    M, P, Q = _dense(M), _dense(P), _dense(Q)
+    n = M.shape[0]
+    if not (M.shape == P.shape == Q.shape == (n, n)):
+        raise SolverError(f"M, P, Q must be square and of one size, got {M.shape}, {P.shape}, {Q.shape}")
+    if not all(np.all(np.isfinite(A)) for A in (M, P, Q)):
+        raise SolverError("M, P and Q must be finite")
+    name, reason, extras = choose_solver(M, P, Q, sym_tol=sym_tol, rayleigh_tol=rayleigh_tol)
+    if solver != "auto":
+        if solver not in SOLVERS:
+            raise SolverError(f"unknown solver {solver!r} (auto, {', '.join(SOLVERS)})")
+        if solver in ("eigh", "proportional") and name not in ("eigh", "proportional"):
+            raise SolverError(f"solver {solver!r} does not apply: {reason}")
+        if solver == "eigh" and name == "proportional":
+            raise SolverError("solver 'eigh' does not apply: P is not zero")
+        if solver == "proportional" and name == "eigh":
+            extras = {"alpha": 0.0, "beta": 0.0}
+        if solver == "companion" and _cholesky(0.5 * (M + M.T)) is None:
+            raise SolverError("solver 'companion' needs M symmetric positive definite")
+        name, reason = solver, f"requested ({reason})"
+    norms = (np.linalg.norm(M), np.linalg.norm(P), np.linalg.norm(Q))
+    opts = {**extras, "scale": scale}
+    if n == 0:
+        e = np.zeros(0)
+        return QEPSolution(e.astype(complex), np.zeros((0, 0), complex), e, e, name, reason, 0, norms)
+    out = SOLVERS[name](M, P, Q, opts)
+    s, X1, X2, Y, n_inf = out[:5]
+    details = out[5] if len(out) > 5 else {}
+    X1, X2 = _unit(X1), _unit(X2)
+    e1 = backward_errors(M, P, Q, s, X1, norms)
+    e2 = backward_errors(M, P, Q, s, X2, norms)
+    take2 = e2 < e1
+    X = np.where(take2[None, :], X2, X1)
+    eta = np.minimum(e1, e2)
+    kappa = _conditions(M, P, Q, s, X, _unit(Y), norms)
+    return QEPSolution(s, X, eta, kappa, name, reason, n_inf, norms,
+                       {**details, "second_half_vectors": int(np.sum(take2))})

@@ -1,0 +1,78 @@
+"""The command line on every case, the fixed JSON schema (DESIGN §8) and exit codes."""
+
+import json
+
+import numpy as np
+import pytest
+from conftest import CASES
+
+from mbseig.cli import main
+
+CASE_FILES = sorted(CASES.glob("*.toml"))
+MODE_KEYS = {"index", "eigenvalue", "delta", "omega_n", "omega_d", "freq_hz", "zeta", "stability",
+             "kind", "backward_error"}
+TOP_KEYS = {"case", "parameters", "n_coordinates", "n_constraints", "n_redundant", "dof", "solver",
+            "equilibrium", "verdict", "modes"}
+
+
+@pytest.mark.parametrize("path", CASE_FILES, ids=lambda p: p.stem)
+def test_modes_json_schema(path, capsys):
+    assert main(["modes", str(path), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert TOP_KEYS <= set(out)
+    assert set(out["equilibrium"]) >= {"residual", "iterations"}
+    assert out["verdict"] in ("stable", "critical", "unstable")
+    worst = max((m["stability"] for m in out["modes"]),
+                key=["stable", "critical", "unstable"].index)
+    assert out["verdict"] == worst
+    keys = [(m["omega_n"], m["delta"]) for m in out["modes"]]
+    assert keys == sorted(keys)
+    for i, m in enumerate(out["modes"], 1):
+        assert MODE_KEYS <= set(m)
+        assert m["index"] == i
+        re, im = m["eigenvalue"]
+        assert im >= 0
+        assert m["delta"] == pytest.approx(-re, abs=0.0)
+        assert m["omega_n"] == pytest.approx(np.hypot(re, im), rel=1e-12)
+        assert m["stability"] in ("stable", "critical", "unstable")
+        assert m["kind"] in ("oscillatory", "overdamped", "rigid-body", "divergence", "flutter")
+
+
+@pytest.mark.parametrize("path", CASE_FILES, ids=lambda p: p.stem)
+def test_modes_table_and_linearize(path, capsys, tmp_path):
+    assert main(["modes", str(path)]) == 0
+    text = capsys.readouterr().out
+    assert "verdict:" in text
+    for suffix in (".npz", ".mat", ".json"):
+        out = tmp_path / f"lin{suffix}"
+        assert main(["linearize", str(path), "--out", str(out)]) == 0
+        assert out.stat().st_size > 0
+    capsys.readouterr()
+    assert main(["linearize", str(path), "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    M, Q = np.array(data["M"]), np.array(data["Q"])
+    assert M.shape == Q.shape == (data["dof"], data["dof"])
+
+
+def test_linearize_npz_round_trip(tmp_path):
+    """Matrices written by --out give the same modes as the direct pipeline (same arrays)."""
+    import mbseig
+    from mbseig.analysis import analyze
+
+    path = CASES / "four_bar.toml"
+    out = tmp_path / "fb.npz"
+    assert main(["linearize", str(path), "--out", str(out)]) == 0
+    z = np.load(out)
+    a = analyze(path)
+    np.testing.assert_array_equal(z["M"], a.linear.M)
+    np.testing.assert_array_equal(z["Q"], a.linear.Q)
+    md = mbseig.modes(z["M"], z["P"], z["Q"])
+    np.testing.assert_allclose(md.eigenvalues, a.modes.eigenvalues, rtol=1e-14)
+
+
+def test_param_override(capsys):
+    assert main(["modes", str(CASES / "chain_fixed_fixed.toml"), "--param", "n=3", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["dof"] == 3 and out["parameters"]["n"] == 3
+    # closed form, n = 3: omega_1 = 2 sqrt(1000) sin(pi/8)
+    assert out["modes"][0]["omega_n"] == pytest.approx(2 * np.sqrt(1000) * np.sin(np.pi / 8), rel=1e-12)
