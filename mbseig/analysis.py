@@ -6,6 +6,7 @@ import math
 from dataclasses import dataclass
 
 from .case import LinearCase, load_case
+from .errors import MbseigError
 from .linear import LinearModel, linearize
 from .modal import Modes, modes
 from .statics import Equilibrium, equilibrium
@@ -32,10 +33,13 @@ def analyze(path, *, config=None, params=None, solver="auto", constraint_stiffne
     """Run the pipeline on ``path`` (or on an already loaded ``model``)."""
     if model is None:
         model = load_case(path, config=config, **(params or {}))
-    eq = equilibrium(model)
-    lin = linearize(model, eq, constraint_stiffness=constraint_stiffness)
-    md = modes(lin.M, lin.P, lin.Q, solver=solver, N=lin.N, coordinate_names=lin.coordinate_names,
-               **(modes_options or {}))
+    try:
+        eq = equilibrium(model)
+        lin = linearize(model, eq, constraint_stiffness=constraint_stiffness)
+        md = modes(lin.M, lin.P, lin.Q, solver=solver, N=lin.N,
+                   coordinate_names=lin.coordinate_names, **(modes_options or {}))
+    except MbseigError as exc:
+        raise exc.located(file=model.source) from None
     return Analysis(model, eq, lin, md)
 
 

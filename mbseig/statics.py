@@ -24,7 +24,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .case import LinearCase
-from .errors import EquilibriumError
+from .errors import EquilibriumError, MbseigError
 
 __all__ = ["Equilibrium", "equilibrium", "constraint_rank"]
 
@@ -65,12 +65,20 @@ def constraint_rank(Phi_q, rank_tol):
 
 def equilibrium(model, *, tol: float = 1e-12, max_iter: int = 50, rank_tol: float = 1e-10,
                 q_init=None) -> Equilibrium:
-    """Find the static equilibrium of ``model`` (see module docstring).
+    """Find the static equilibrium of ``model`` (see the module docstring).
 
     tol : relative residual at which Newton stops (forces scaled by ``force_scale``, each
         constraint by its own scale, e.g. L² for a rigid length).
     rank_tol : relative singular-value threshold for the rank of Φ_q (redundancy count).
+    Errors name the case file and the constraint or coordinate that could not be balanced.
     """
+    try:
+        return _equilibrium(model, tol=tol, max_iter=max_iter, rank_tol=rank_tol, q_init=q_init)
+    except MbseigError as exc:
+        raise exc.located(file=getattr(model, "source", None)) from None
+
+
+def _equilibrium(model, *, tol, max_iter, rank_tol, q_init):
     if isinstance(model, LinearCase):
         return Equilibrium(q=np.zeros(model.n), lam=np.zeros(0), residual=0.0, force_residual=0.0,
                            constraint_residual=0.0, iterations=0, rank=0, n_redundant=0,
