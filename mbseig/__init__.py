@@ -11,12 +11,14 @@ Modules: :mod:`~mbseig.case` (case files), :mod:`~mbseig.model` (elements and as
 """
 
 from .case import LinearCase, load_case
-from .errors import CaseError, EquilibriumError, ExpressionError, MbseigError, SolverError
+from .errors import (CaseError, EquilibriumError, ExpressionError, MbseigError, SimulationError,
+                     SolverError)
 from .linear import LinearModel, linearize
 from .modal import Modes, modes
 from .model import Model
 from .qep import QEPSolution, solve_qep
 from .statics import Equilibrium, equilibrium
+from .timedomain import CheckResult, ModeCheck, check_modes
 
 __version__ = "0.1.0"
 
@@ -26,15 +28,19 @@ __all__ = [
     "linearize",
     "modes",
     "solve_qep",
+    "check_modes",
     "LinearCase",
     "Model",
     "Equilibrium",
     "LinearModel",
     "Modes",
     "QEPSolution",
+    "CheckResult",
+    "ModeCheck",
     "MbseigError",
     "CaseError",
     "ExpressionError",
     "EquilibriumError",
     "SolverError",
+    "SimulationError",
 ]

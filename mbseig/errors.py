@@ -40,3 +40,7 @@ class EquilibriumError(MbseigError, RuntimeError):
 
 class SolverError(MbseigError, RuntimeError):
     """An eigensolver failed or its result did not pass its own checks."""
+
+
+class SimulationError(MbseigError, RuntimeError):
+    """The time-domain check cannot integrate the model (massless free motion, a failed step)."""

@@ -15,7 +15,7 @@ from ..errors import MbseigError
 
 __all__ = ["main", "SUBCOMMANDS"]
 
-SUBCOMMANDS = ["linearize", "modes"]
+SUBCOMMANDS = ["linearize", "modes", "check"]
 
 
 def build_parser() -> argparse.ArgumentParser:
