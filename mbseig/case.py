@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
+from .case_batch import Batcher, LazyPoints
 from .errors import CaseError, MbseigError
 from .expr import evaluate
 from .model.affine import Affine, combine
@@ -239,7 +240,7 @@ def _template(text, names, fields):
     return re.sub(r"\{([^{}]*)\}", sub, text)
 
 
-def _expand(section, items, params):
+def _expand(section, items, params, batch=None):
     """Yield (label, names) for every element of a section, expanding ``repeat``."""
     if not isinstance(items, list):
         raise CaseError(f"[[{section}]] must be an array of tables", element=section)
@@ -272,6 +273,9 @@ def _expand(section, items, params):
         total += max(count, 0)
         if total > MAX_REPEAT:
             raise CaseError(f"more than {MAX_REPEAT} repeated elements", element=label)
+        if batch is not None and batch(section, item, label, var,
+                                       np.arange(int(first), int(last) + 1, dtype=float), params):
+            continue  # expanded at once by mbseig.case_batch
         for i in range(int(first), int(last) + 1):
             yield item, f"{label} ({var}={i})", {**params, var: float(i)}
 
@@ -293,7 +297,8 @@ class _Builder:
 
     # -- points ------------------------------------------------------------------------
     def build(self):
-        for item, label, names in _expand("points", self.data.get("points", []), self.params):
+        batch = Batcher(self)  # vectorized expansion of repeated points, masses and springs
+        for item, label, names in _expand("points", self.data.get("points", []), self.params, batch):
             f = _Fields(item, label, names)
             pname = f.text("name")
             if pname in self.point_index:
@@ -323,8 +328,9 @@ class _Builder:
         mass_blocks, g_const = [], np.zeros(self.n)
         gravity = self._gravity()
         constraints, forces = [], []
+        batch.bind(g_const, forces, gravity)
 
-        for item, label, names in _expand("masses", self.data.get("masses", []), self.params):
+        for item, label, names in _expand("masses", self.data.get("masses", []), self.params, batch):
             f = _Fields(item, label, names)
             f.raw("name", None)
             point = self._basic_point(f, f.text("point"))
@@ -377,15 +383,17 @@ class _Builder:
         for item, label, names in _expand("joints", self.data.get("joints", []), self.params):
             self._joint(_Fields(item, label, names), constraints)
 
-        for item, label, names in _expand("forces", self.data.get("forces", []), self.params):
+        for item, label, names in _expand("forces", self.data.get("forces", []), self.params, batch):
             self._force(_Fields(item, label, names), forces, g_const)
 
         mass = sp.csr_matrix((self.n, self.n))
         if mass_blocks:
             from .model.system import _scatter
             mass = _scatter(self.n, self.n, mass_blocks)
-        points = {p: self._affine_of(p) for p in self.point_index}
-        points.update(self.markers)
+        rows, vals = batch.mass_coo()
+        if rows.size:
+            mass = mass + sp.csr_matrix((vals, (rows, rows)), shape=(self.n, self.n))
+        points = LazyPoints(self.point_index, self.point_pos, self.markers)
         return Model(
             name=self.name, source=self.source, parameters=dict(self.params), dimension=self.dim,
             coordinate_names=tuple(self.coord_names), q_init=q0, mass=mass, g_const=g_const,

@@ -20,14 +20,19 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import warnings
+
 import numpy as np
 import scipy.linalg as sla
+import scipy.sparse as sp
 
+from .errors import SolverError
 from .qep import EPS, solve_qep
 
 __all__ = ["Modes", "modes", "STABILITY_ORDER"]
 
 STABILITY_ORDER = {"stable": 0, "critical": 1, "unstable": 2}
+DENSE_MAX = 20000  # sparse input above this size needs a partial-spectrum request
 
 
 @dataclass(frozen=True, eq=False)
@@ -77,15 +82,34 @@ class Modes:
 
 def modes(M, P, Q, *, solver: str = "auto", N=None, coordinate_names=None,
           stability_rtol: float = 1e-12, stability_atol: float = 0.0, safety: float = 10.0,
-          n_dominant: int = 3, rigid_rank_tol: float = 1e-6, **solver_options) -> Modes:
+          n_dominant: int = 3, rigid_rank_tol: float = 1e-6, n_modes: int | None = None,
+          target: float | None = None, band=None, constraints=None, eta_warn: float = 1e-12,
+          **solver_options) -> Modes:
     """Solve and classify the modes of (M s² + P s + Q) x = 0.
 
     N, coordinate_names : null-space basis and full-coordinate names for mode shapes (q = N x).
     stability_rtol, stability_atol, safety : see the module docstring.
     rigid_rank_tol : relative pivot threshold for counting independent rigid-body vectors.
-    Other keywords go to :func:`mbseig.qep.solve_qep` (``sym_tol``, ``rayleigh_tol``, ``scale``).
+    n_modes, target, band, constraints : ask for a partial spectrum of sparse matrices (the
+        ``partial-*`` paths of :func:`mbseig.sparse.solve_partial`): ``n_modes`` modes nearest the
+        angular frequency ``target`` (rad/s, default 0), or every mode with ω_n in
+        ``band = (ω_lo, ω_hi)``; ``constraints`` is Φ_q when M, P, Q are in full coordinates.
+    eta_warn : a listed mode whose backward error exceeds it is named in a RuntimeWarning.
+    Other keywords go to :func:`mbseig.qep.solve_qep` (``sym_tol``, ``rayleigh_tol``, ``scale``,
+    ``left``) or to :func:`mbseig.sparse.solve_partial`.
     """
-    sol = solve_qep(M, P, Q, solver=solver, **solver_options)
+    partial = (n_modes is not None or target is not None or band is not None
+               or constraints is not None or str(solver).startswith("partial-"))
+    if partial:
+        from .sparse import solve_partial
+
+        sol = solve_partial(M, P, Q, n_modes=n_modes, target=target, band=band, G=constraints,
+                            solver=solver, **solver_options)
+    else:
+        if sp.issparse(M) and M.shape[0] > DENSE_MAX:
+            raise SolverError(f"{M.shape[0]} unknowns is beyond the dense path (limit {DENSE_MAX}): "
+                              f"ask for a partial spectrum (n_modes=, target= or band=)")
+        sol = solve_qep(M, P, Q, solver=solver, **solver_options)
     s_all = sol.eigenvalues
     err_all = sol.condition * np.maximum(sol.backward_error, EPS)
     tol_all = np.maximum.reduce([safety * err_all, stability_rtol * np.abs(s_all),
@@ -135,9 +159,19 @@ def modes(M, P, Q, *, solver: str = "auto", N=None, coordinate_names=None,
         j = int(np.argmax(np.abs(v)))
         shapes[:, k] = v / v[j] if v[j] != 0 else v
         mag = np.abs(shapes[:, k])
-        top = np.argsort(-mag, kind="stable")[:n_dominant]
+        if mag.size > 4 * n_dominant:  # large models: the top entries without a full sort
+            cand = np.argpartition(-mag, n_dominant)[:n_dominant]
+            top = cand[np.lexsort((cand, -mag[cand]))]
+        else:
+            top = np.argsort(-mag, kind="stable")[:n_dominant]
         dominant.append([(names[i], float(mag[i])) for i in top if mag[i] >= 0.05])
     verdict = max(stability, key=STABILITY_ORDER.get) if stability else "stable"
+    missed = np.flatnonzero(eta > eta_warn)
+    if missed.size:
+        names_ = ", ".join(f"{z.real:.6g}{z.imag:+.6g}j (η={e:.1e})"
+                           for z, e in zip(s[missed][:8], eta[missed][:8]))
+        warnings.warn(f"{missed.size} eigenvalues miss the backward-error target {eta_warn:g} "
+                      f"({sol.solver}): {names_}", RuntimeWarning, stacklevel=2)
     return Modes(
         eigenvalues=s, delta=delta, omega_n=wn, omega_d=omega, freq_hz=omega / (2 * np.pi),
         zeta=zeta, stability=stability, kind=kind, backward_error=eta, condition=kappa,
@@ -145,5 +179,5 @@ def modes(M, P, Q, *, solver: str = "auto", N=None, coordinate_names=None,
         verdict=verdict, solver=sol.solver, solver_reason=sol.reason, n_infinite=sol.n_infinite,
         all_eigenvalues=s_all,
         tolerances={"stability_rtol": stability_rtol, "stability_atol": stability_atol,
-                    "safety": safety, "rigid_rank_tol": rigid_rank_tol, **{k: v for k, v in sol.details.items()}},
+                    "safety": safety, "rigid_rank_tol": rigid_rank_tol, "eta_warn": eta_warn, **{k: v for k, v in sol.details.items()}},
     )

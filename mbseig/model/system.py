@@ -15,6 +15,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .affine import Affine
+from .batched import coo_sum
 
 __all__ = ["Model"]
 
@@ -89,18 +90,29 @@ class Model:
         qd = np.zeros(self.n) if qd is None else qd
         g = self.g_const.copy()
         for f in self.forces:
-            np.add.at(g, f.idx, f.force(q, qd))
+            if hasattr(f, "add_force"):  # a batch of identical elements (model/batched.py)
+                f.add_force(g, q, qd)
+            else:
+                np.add.at(g, f.idx, f.force(q, qd))
         return g
 
     def force_jacobians(self, q, qd=None):
         """(K, C) = (−∂g/∂q, −∂g/∂q̇) as CSR matrices."""
         qd = np.zeros(self.n) if qd is None else qd
-        kb, cb = [], []
+        kb, cb, kt, ct = [], [], [], []
         for f in self.forces:
+            if hasattr(f, "jacobian_coo"):  # batches give COO triplets
+                Kt, Ct = f.jacobian_coo(q, qd)
+                kt.append(Kt)
+                ct.append(Ct)
+                continue
             K, C = f.jacobians(q, qd)
             kb.append((f.idx, f.idx, K))
             cb.append((f.idx, f.idx, C))
-        return _scatter(self.n, self.n, kb), _scatter(self.n, self.n, cb)
+        K, C = _scatter(self.n, self.n, kb), _scatter(self.n, self.n, cb)
+        if kt:
+            K, C = K + coo_sum(self.n, self.n, kt), C + coo_sum(self.n, self.n, ct)
+        return K, C
 
     # ---- constraints ---------------------------------------------------------------------
     def phi(self, q) -> np.ndarray:

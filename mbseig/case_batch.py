@@ -1,0 +1,279 @@
+"""Vectorized expansion of repeated case elements (``repeat = {i = [first, last]}``).
+
+Repeated points, point masses and spring/damper elements are expanded for all values of the
+index at once: each expression is parsed once and evaluated on a numpy array of index values
+(the whitelist of :mod:`mbseig.expr`, with numpy functions), each name template is formatted
+once per member, and springs become one :class:`~mbseig.model.batched.SpringDamperSet`.
+
+Anything unusual (an unknown field, a non-finite value, a name that clashes, a point that is a
+body marker, an ``enabled`` or ``name`` field, ...) makes the batch decline, and the element is
+expanded one member at a time by :mod:`mbseig.case`, which then reports the precise error. The
+batch path therefore changes speed, never results or messages.
+"""
+
+from __future__ import annotations
+
+import ast
+import re
+from collections.abc import Mapping
+
+import numpy as np
+
+from .expr import CONSTANTS, MAX_LENGTH
+from .model.affine import Affine
+from .model.batched import SpringDamperSet
+
+__all__ = ["Batcher", "vector_evaluate", "vector_template", "LazyPoints"]
+
+_TEMPLATE = re.compile(r"\{([^{}]*)\}")
+_FUNCS = {
+    "sqrt": np.sqrt, "sin": np.sin, "cos": np.cos, "tan": np.tan, "asin": np.arcsin,
+    "acos": np.arccos, "atan": np.arctan, "atan2": np.arctan2, "exp": np.exp, "log": np.log,
+    "abs": np.abs, "deg": np.radians,
+    "min": lambda *a: np.minimum.reduce(np.broadcast_arrays(*a)),
+    "max": lambda *a: np.maximum.reduce(np.broadcast_arrays(*a)),
+}
+_BIN = {ast.Add: np.add, ast.Sub: np.subtract, ast.Mult: np.multiply, ast.Div: np.divide,
+        ast.Pow: np.power, ast.Mod: np.mod}
+_PARSED: dict[str, object] = {}
+
+
+class _Decline(Exception):
+    """The batch path does not handle this element; expand it member by member."""
+
+
+def _parse(text):
+    tree = _PARSED.get(text)
+    if tree is None:
+        if len(text) > MAX_LENGTH:
+            raise _Decline
+        try:
+            tree = ast.parse(text.strip(), mode="eval").body
+        except SyntaxError:
+            raise _Decline from None
+        _PARSED[text] = tree
+    return tree
+
+
+def _walk(node, names, var, ivals):
+    if isinstance(node, ast.Constant):
+        if isinstance(node.value, bool) or not isinstance(node.value, (int, float)):
+            raise _Decline
+        return float(node.value)
+    if isinstance(node, ast.Name):
+        if node.id == var:
+            return ivals
+        if node.id in names:
+            return float(names[node.id])
+        if node.id in CONSTANTS:
+            return CONSTANTS[node.id]
+        raise _Decline
+    if isinstance(node, ast.BinOp) and type(node.op) in _BIN:
+        a, b = _walk(node.left, names, var, ivals), _walk(node.right, names, var, ivals)
+        if isinstance(node.op, ast.Pow) and np.any(np.abs(b) > 1e4):
+            raise _Decline
+        if isinstance(node.op, (ast.Div, ast.Mod)) and np.any(np.asarray(b) == 0):
+            raise _Decline
+        return _BIN[type(node.op)](a, b)
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
+        v = _walk(node.operand, names, var, ivals)
+        return -v if isinstance(node.op, ast.USub) else v
+    if (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in _FUNCS
+            and not node.keywords and node.args):
+        return _FUNCS[node.func.id](*[_walk(a, names, var, ivals) for a in node.args])
+    raise _Decline
+
+
+def vector_evaluate(value, names, var, ivals):
+    """Values of a number or expression for every index value (array), or raise _Decline."""
+    if isinstance(value, bool):
+        raise _Decline
+    if isinstance(value, (int, float)):
+        out = np.full(ivals.size, float(value))
+    elif isinstance(value, str):
+        with np.errstate(all="ignore"):
+            out = np.broadcast_to(np.asarray(_walk(_parse(value), names, var, ivals), float),
+                                  ivals.shape).copy()
+    else:
+        raise _Decline
+    if not np.all(np.isfinite(out)):
+        raise _Decline
+    return out
+
+
+def vector_template(text, names, var, ivals):
+    """``"m{i + 1}"`` for every index value: a list of strings (integers only), or _Decline."""
+    if not isinstance(text, str):
+        raise _Decline
+    parts = _TEMPLATE.split(text)
+    if len(parts) == 1:
+        return [text] * ivals.size
+    cols = []
+    for k, part in enumerate(parts):
+        if k % 2 == 0:
+            cols.append([part] * ivals.size if part else None)
+            continue
+        v = vector_evaluate(part, names, var, ivals)
+        if not np.all(v == np.round(v)) or np.any(np.abs(v) > 1e15):
+            raise _Decline
+        cols.append(v.astype(np.int64).astype(str).tolist())
+    cols = [c for c in cols if c is not None]
+    return ["".join(t) for t in zip(*cols)] if len(cols) > 1 else cols[0]
+
+
+class LazyPoints(Mapping):
+    """name → :class:`Affine` of every basic point and marker, built on first access."""
+
+    def __init__(self, index, positions, markers):
+        self._index, self._pos, self._markers, self._cache = index, positions, dict(markers), {}
+
+    def __getitem__(self, name):
+        if name in self._markers:
+            return self._markers[name]
+        a = self._cache.get(name)
+        if a is None:
+            if name not in self._index:
+                raise KeyError(name)
+            a = self._cache[name] = Affine.select(self._index[name], self._pos[name])
+        return a
+
+    def __iter__(self):
+        yield from self._index
+        yield from (m for m in self._markers if m not in self._index)
+
+    def __len__(self):
+        return len(self._index) + sum(1 for m in self._markers if m not in self._index)
+
+
+class Batcher:
+    """Callbacks for :func:`mbseig.case._expand`: ``batch(section, item, label, var, ivals,
+    params) -> bool`` (True when the whole repeated element was added)."""
+
+    def __init__(self, builder):
+        self.b = builder
+        self.mass_rows: list[np.ndarray] = []
+        self.mass_vals: list[np.ndarray] = []
+        self.g_const = None
+        self.gravity = None
+        self.forces = None
+
+    def bind(self, g_const, forces, gravity):
+        self.g_const, self.forces, self.gravity = g_const, forces, gravity
+
+    def __call__(self, section, item, label, var, ivals, params):
+        handler = {"points": self._points, "masses": self._masses, "forces": self._forces}.get(section)
+        if handler is None or ivals.size == 0 or "enabled" in item or "name" in item and section != "points":
+            return False
+        try:
+            handler(item, label, var, ivals, params)
+        except _Decline:
+            return False
+        return True
+
+    def mass_coo(self):
+        if not self.mass_rows:
+            return np.zeros(0, np.intp), np.zeros(0)
+        return np.concatenate(self.mass_rows), np.concatenate(self.mass_vals)
+
+    # -- sections --------------------------------------------------------------------------
+    def _points(self, item, label, var, ivals, params):
+        b = self.b
+        if set(item) - {"name", "position", "fixed", "repeat"}:
+            raise _Decline
+        names = vector_template(item.get("name"), params, var, ivals)
+        pos_t = item.get("position")
+        fixed = item.get("fixed", False)
+        if not isinstance(pos_t, list) or len(pos_t) != b.dim or not isinstance(fixed, bool):
+            raise _Decline
+        pos = np.column_stack([vector_evaluate(v, params, var, ivals) for v in pos_t])
+        if len(set(names)) != len(names) or any("." in nm or nm in b.point_index for nm in names):
+            raise _Decline
+        nb, dim = pos.shape
+        if fixed:
+            idx = np.full((nb, dim), -1, dtype=np.intp)
+        else:
+            start = len(b.q_init)
+            idx = np.arange(start, start + nb * dim, dtype=np.intp).reshape(nb, dim)
+            axes = "xyz"[:dim]
+            b.coord_names += [f"{nm}.{ax}" for nm in names for ax in axes]
+            b.q_init += pos.ravel().tolist()
+        b.point_index.update(zip(names, idx))
+        b.point_pos.update(zip(names, pos))
+
+    def _point_rows(self, refs, params, var, ivals):
+        """(idx, pos) arrays (nb, dim) of templated basic-point names."""
+        b = self.b
+        names = vector_template(refs, params, var, ivals)
+        try:
+            idx = np.array([b.point_index[nm] for nm in names], dtype=np.intp).reshape(ivals.size, b.dim)
+            pos = np.array([b.point_pos[nm] for nm in names], dtype=float).reshape(ivals.size, b.dim)
+        except KeyError:
+            raise _Decline from None
+        return idx, pos
+
+    def _masses(self, item, label, var, ivals, params):
+        if set(item) - {"point", "mass", "repeat"}:
+            raise _Decline
+        idx, _ = self._point_rows(item.get("point"), params, var, ivals)
+        m = vector_evaluate(item.get("mass"), params, var, ivals)
+        if not np.all(m > 0):
+            raise _Decline
+        mm = np.broadcast_to(m[:, None], idx.shape)
+        ok = idx >= 0
+        self.mass_rows.append(idx[ok])
+        self.mass_vals.append(mm[ok])
+        if self.gravity is not None:
+            np.add.at(self.g_const, idx[ok], (mm * self.gravity[None, :])[ok])
+
+    def _forces(self, item, label, var, ivals, params):
+        kind = item.get("type")
+        if kind not in ("spring", "damper", "spring_damper"):
+            raise _Decline
+        if set(item) - {"type", "points", "stiffness", "damping", "free_length", "repeat"}:
+            raise _Decline
+        pts = item.get("points")
+        if not isinstance(pts, list) or len(pts) != 2:
+            raise _Decline
+        ia, pa = self._point_rows(pts[0], params, var, ivals)
+        ib, pb = self._point_rows(pts[1], params, var, ivals)
+
+        def num(key, default):
+            if key not in item:
+                if default is None:
+                    raise _Decline
+                return np.full(ivals.size, default)
+            v = vector_evaluate(item[key], params, var, ivals)
+            if not np.all(v >= 0):
+                raise _Decline
+            return v
+
+        k = num("stiffness", 0.0 if kind == "damper" else None)
+        c = num("damping", 0.0 if kind == "spring" else None)
+        d0 = pb - pa
+        init = d0[:, 0] if self.b.dim == 1 else np.linalg.norm(d0, axis=1)
+        if "free_length" in item:
+            l0 = vector_evaluate(item["free_length"], params, var, ivals)
+        else:
+            l0 = init
+        if self.b.dim > 1 and np.any(l0 < 0):
+            raise _Decline
+        live = np.any(ia >= 0, axis=1) | np.any(ib >= 0, axis=1)
+        sel = np.flatnonzero(live)
+        first = int(ivals[0])
+        labels = _Labels(label, var, ivals[sel].astype(np.int64))
+        self.forces.append(SpringDamperSet(label, ia[sel], ib[sel], pa[sel], pb[sel], k[sel],
+                                           np.asarray(l0, float)[sel], c[sel], labels))
+        del first
+
+
+class _Labels:
+    """Element labels ``forces[1] (i=7)`` of a batch, formatted on demand."""
+
+    def __init__(self, label, var, ivals):
+        self.label, self.var, self.ivals = label, var, ivals
+
+    def __len__(self):
+        return self.ivals.size
+
+    def __getitem__(self, k):
+        return f"{self.label} ({self.var}={int(self.ivals[k])})"

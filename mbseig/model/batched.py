@@ -1,0 +1,154 @@
+"""Batched element kernels: one object for many identical elements, vectorized over the batch.
+
+A repeated element of a case (``repeat = {i = [1, "n"]}``) becomes one batch instead of n
+Python objects, so that building and assembling a model with 10⁶ coordinates takes seconds.
+The physics is that of the single-element kernel in :mod:`mbseig.model.elements`
+(:class:`~mbseig.model.elements.SpringDamper`), evaluated for all members at once:
+
+    d = r_b − r_a,  g_a += f,  g_b −= f,
+    1-D:  f = k (d − l0) + c ḋ                     (signed extension)
+    n-D:  f = k (l − l0) e + c (e·ḋ) e,  l = |d|,  e = d/l
+
+and the local Jacobians [[K_f, −K_f], [−K_f, K_f]] are scattered as COO triplets.
+Besides ``add_force`` and ``jacobian_coo`` (used by :class:`~mbseig.model.Model`), a batch offers
+the single-element interface ``idx``, ``force``, ``jacobians`` on the union of its coordinates.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..errors import EquilibriumError
+
+__all__ = ["SpringDamperSet", "coo_sum"]
+
+
+def coo_sum(n_rows, n_cols, triplets):
+    """Sum of (rows, cols, values) triplets as CSR."""
+    triplets = [t for t in triplets if t[0].size]
+    if not triplets:
+        return sp.csr_matrix((n_rows, n_cols))
+    r, c, v = (np.concatenate(x) for x in zip(*triplets))
+    return sp.coo_matrix((v, (r, c)), shape=(n_rows, n_cols)).tocsr()
+
+
+@dataclass(frozen=True, eq=False)
+class SpringDamperSet:
+    """Springs/dashpots k, l0, c between points a and b, one row per member.
+
+    ia, ib : (nb, dim) coordinate indices of the two points (−1: a fixed component whose value
+        is in pa / pb).  ``labels[k]`` names member k in error messages.
+    """
+
+    name: str
+    ia: np.ndarray
+    ib: np.ndarray
+    pa: np.ndarray
+    pb: np.ndarray
+    stiffness: np.ndarray
+    free_length: np.ndarray
+    damping: np.ndarray
+    labels: tuple = ()
+
+    @property
+    def dim(self) -> int:
+        return self.ia.shape[1]
+
+    def __len__(self):
+        return self.ia.shape[0]
+
+    @cached_property
+    def idx(self) -> np.ndarray:
+        both = np.concatenate([self.ia.ravel(), self.ib.ravel()])
+        return np.unique(both[both >= 0])
+
+    def _gather(self, idx, fixed, v):
+        return np.where(idx >= 0, v[np.maximum(idx, 0)], fixed)
+
+    def _d(self, q, qd):
+        d = self._gather(self.ib, self.pb, q) - self._gather(self.ia, self.pa, q)
+        zero = np.zeros_like(self.pa)
+        dd = self._gather(self.ib, zero, qd) - self._gather(self.ia, zero, qd)
+        return d, dd
+
+    def _label(self, k):
+        return self.labels[k] if k < len(self.labels) else f"{self.name} [{k}]"
+
+    def _geometry(self, d):
+        l = np.linalg.norm(d, axis=1)
+        zero = l == 0.0
+        bad = zero & (self.free_length != 0.0) & (self.stiffness != 0.0)
+        if np.any(bad):
+            raise EquilibriumError("spring has zero length but a non-zero free length: its "
+                                   "direction is undefined", element=self._label(int(np.argmax(bad))))
+        e = np.divide(d, l[:, None], out=np.zeros_like(d), where=~zero[:, None])
+        e[zero, 0] = 1.0
+        return l, e
+
+    def member_forces(self, q, qd):
+        """f (nb, dim): the force of each member on its point a (−f on b)."""
+        d, dd = self._d(q, qd)
+        if self.dim == 1:
+            return self.stiffness[:, None] * (d - self.free_length[:, None]) + self.damping[:, None] * dd
+        l, e = self._geometry(d)
+        mag = self.stiffness * (l - self.free_length) + self.damping * np.einsum("ij,ij->i", e, dd)
+        return mag[:, None] * e
+
+    def add_force(self, g, q, qd):
+        f = self.member_forces(q, qd)
+        for idx, sign in ((self.ia, 1.0), (self.ib, -1.0)):
+            ok = idx >= 0
+            np.add.at(g, idx[ok], sign * f[ok])
+
+    def force(self, q, qd):
+        g = np.zeros(q.shape[0])
+        self.add_force(g, q, qd)
+        return g[self.idx]
+
+    def _local(self, q, qd):
+        """(Kf, Cf): (nb, dim, dim) member Jacobians of f with respect to d and ḋ."""
+        nb, dim = self.ia.shape
+        if dim == 1:
+            return self.stiffness[:, None, None] * np.ones((nb, 1, 1)), \
+                self.damping[:, None, None] * np.ones((nb, 1, 1))
+        d, dd = self._d(q, qd)
+        l, e = self._geometry(d)
+        I = np.eye(dim)[None]
+        E = e[:, :, None] * e[:, None, :]
+        Pn = I - E
+        safe = np.where(l > 0, l, 1.0)
+        r = np.where(l > 0, self.free_length / safe, 0.0)[:, None, None]
+        k = self.stiffness[:, None, None]
+        Kf = k * ((1.0 - r) * I + r * E)
+        edd = np.einsum("ij,ij->i", e, dd)[:, None, None]
+        c_l = np.where(l > 0, self.damping / safe, 0.0)[:, None, None]
+        Kf = Kf + c_l * (np.einsum("ij,ijk->ik", dd, Pn)[:, None, :] * e[:, :, None] + edd * Pn)
+        Kf = np.where((l > 0)[:, None, None], Kf, k * I)
+        return Kf, self.damping[:, None, None] * E
+
+    def jacobian_coo(self, q, qd):
+        """((rows, cols, K values), (rows, cols, C values)) of K = −∂g/∂q, C = −∂g/∂q̇."""
+        Kf, Cf = self._local(q, qd)
+        loc = np.concatenate([self.ia, self.ib], axis=1)  # (nb, 2 dim)
+        rows = np.broadcast_to(loc[:, :, None], loc.shape + (loc.shape[1],))
+        cols = np.broadcast_to(loc[:, None, :], rows.shape)
+        ok = (rows >= 0) & (cols >= 0)
+        S = np.array([[1.0, -1.0], [-1.0, 1.0]])
+        out = []
+        for F in (Kf, Cf):
+            B = np.einsum("ab,nij->naibj", S, F).reshape(rows.shape)
+            out.append((rows[ok], cols[ok], B[ok]))
+        return tuple(out)
+
+    def jacobians(self, q, qd):
+        """Dense (K, C) on ``idx`` (the single-element interface; small batches only)."""
+        n = q.shape[0]
+        (rk, ck, vk), (rc, cc, vc) = self.jacobian_coo(q, qd)
+        K = sp.coo_matrix((vk, (rk, ck)), shape=(n, n)).toarray()
+        C = sp.coo_matrix((vc, (rc, cc)), shape=(n, n)).toarray()
+        ix = np.ix_(self.idx, self.idx)
+        return K[ix], C[ix]
