@@ -22,6 +22,7 @@ class Analysis:
     eq: Equilibrium
     linear: LinearModel
     modes: Modes
+    refinement: object = None  # mbseig.refine.Refinement when beams were refined
 
     @property
     def case_name(self) -> str:
@@ -29,10 +30,21 @@ class Analysis:
 
 
 def analyze(path, *, config=None, params=None, solver="auto", constraint_stiffness=True,
-            modes_options=None, model=None) -> Analysis:
-    """Run the pipeline on ``path`` (or on an already loaded ``model``)."""
+            modes_options=None, model=None, refine=None) -> Analysis:
+    """Run the pipeline on ``path`` (or on an already loaded ``model``).
+
+    refine : {"modes", "f_max", "accuracy", "max_elements"} to refine the case's
+        ``elements = "auto"`` beams for those modes (:mod:`mbseig.refine`); a case's own
+        ``[refinement]`` table does the same when ``path`` is given.
+    """
     if model is None:
         model = load_case(path, config=config, **(params or {}))
+        if refine or (getattr(model, "flexible", None) or {}).get("refinement"):
+            from .refine import refine_analysis
+
+            return refine_analysis(path, config=config, params=params, request=refine,
+                                   solver=solver, constraint_stiffness=constraint_stiffness,
+                                   modes_options=modes_options)
     try:
         eq = equilibrium(model)
         lin = linearize(model, eq, constraint_stiffness=constraint_stiffness)
@@ -74,6 +86,11 @@ def modes_json(a: Analysis) -> dict:
         "redundant_constraints": list(eq.redundant),
         "tolerances": {k: float(v) for k, v in md.tolerances.items() if isinstance(v, (int, float))},
     }
+    flexible = (getattr(model, "flexible", None) or {}).get("bodies")
+    if flexible:  # extension: theory, slenderness and mesh of each beam / FE body
+        out["flexible_bodies"] = {nm: dict(r) for nm, r in flexible.items()}
+    if a.refinement is not None:
+        out["refinement"] = a.refinement.as_dict()
     for k in range(len(md)):
         s = md.eigenvalues[k]
         out["modes"].append({

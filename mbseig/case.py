@@ -42,7 +42,7 @@ _AXES = "xyz"
 _TOP_KEYS = {
     "schema_version", "title", "description", "source", "kind", "dimension", "gravity",
     "parameters", "points", "masses", "bodies", "joints", "forces", "matrices", "expected",
-    "configurations",
+    "configurations", "beams", "fe_bodies", "refinement",
 }
 
 
@@ -105,7 +105,8 @@ def load_case(path, config: str | None = None, **params):
         raise exc.located(file=str(path)) from None
 
 
-def build_case(data, *, name, source, base_dir=Path("."), config=None, overrides=None):
+def build_case(data, *, name, source, base_dir=Path("."), config=None, overrides=None, mesh=None):
+    """Build from parsed TOML; ``mesh`` maps a beam's name or index to its element count."""
     unknown = sorted(set(data) - _TOP_KEYS)
     if unknown:
         raise CaseError(f"unknown top-level field {unknown[0]!r}", element="case")
@@ -123,7 +124,9 @@ def build_case(data, *, name, source, base_dir=Path("."), config=None, overrides
         return _linear_case(data, name, source, base_dir, params, description, expected)
     if kind != "multibody":
         raise CaseError(f"kind must be 'multibody' or 'linear', got {kind!r}", element="case")
-    return _Builder(data, name, source, params, description, expected).build()
+    builder = _Builder(data, name, source, params, description, expected)
+    builder.base_dir, builder.mesh = base_dir, mesh  # FE matrix files; beam meshes (mbseig.refine)
+    return builder.build()
 
 
 def _parameters(table, configurations, config, overrides):
@@ -316,6 +319,9 @@ class _Builder:
                 self.q_init += list(pos)
             self.point_index[pname] = idx
             self.point_pos[pname] = pos
+        from .flexible import allocate as allocate_flexible, assemble as assemble_flexible
+
+        allocate_flexible(self, getattr(self, "mesh", None))  # beam nodes, FE-body coordinates
         if not self.q_init:
             raise CaseError("the model has no free coordinates (every point is fixed)", element="points")
         self.n = len(self.q_init)
@@ -380,6 +386,10 @@ class _Builder:
             rod = DistanceConstraint(f"{label} (rigid length)", rj - ri, L)
             self._add_constraint(constraints, rod, f)
 
+        mass_elements = []  # configuration-dependent masses (co-rotational beams)
+        flexible = assemble_flexible(self, forces, constraints, mass_blocks, mass_elements,
+                                     g_const, gravity)
+
         for item, label, names in _expand("joints", self.data.get("joints", []), self.params):
             self._joint(_Fields(item, label, names), constraints)
 
@@ -399,7 +409,7 @@ class _Builder:
             coordinate_names=tuple(self.coord_names), q_init=q0, mass=mass, g_const=g_const,
             forces=tuple(forces), constraints=tuple(constraints), points=points,
             bodies=self.bodies, length_scale=self.length_scale, description=self.description,
-            expected=self.expected,
+            expected=self.expected, mass_elements=tuple(mass_elements), flexible=flexible,
         )
 
     def _gravity(self):

@@ -108,7 +108,7 @@ def linearize(model, eq: Equilibrium, *, rank_tol: float = 1e-10,
     if constraint_stiffness and model.n_constraints:
         K = K + model.constraint_hessian(q0, lam0)
     N, rank = null_space_basis(model.phi_q(q0), model.n, rank_tol)
-    Md, Cd, Kd = (A.toarray() for A in (model.mass, C, K))
+    Md, Cd, Kd = (A.toarray() for A in (model.mass_matrix(q0), C, K))
     if model.n_constraints == 0:
         Mr, Pr, Qr = Md, Cd, Kd
     else:

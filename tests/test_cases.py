@@ -24,7 +24,11 @@ def test_case_expected_values(path):
     rtol, atol = exp.get("rtol", 1e-10), exp.get("atol", 0.0)
     w = expected_omega_n(exp, params)
     if w is not None:
-        np.testing.assert_allclose(np.sort(a.modes.omega_n), np.sort(w), rtol=rtol, atol=atol)
+        got = np.sort(a.modes.omega_n)
+        if exp.get("lowest", False):  # a discretized continuum: only its lowest modes are known
+            assert got.size >= w.size
+            got = got[:w.size]
+        np.testing.assert_allclose(got, np.sort(w), rtol=rtol, atol=atol)
     s = expected_eigenvalues(exp, params)
     if s is not None:
         got = a.modes.eigenvalues

@@ -50,6 +50,11 @@ class Model:
     forces, constraints : element objects (see :mod:`mbseig.model.elements`).
     points : named affine maps of every basic point and body marker, for reports and drawings.
     bodies : body name → (basic point i, basic point j).
+    mass_elements : (element, M_ref) pairs for masses that depend on the configuration
+        (co-rotational beams, ``element.mass(q)`` on ``element.idx``); ``mass`` holds them as
+        M_ref (at the builder's initial positions) and :meth:`mass_matrix` re-evaluates them.
+    flexible : ``{"bodies": {name: record}, "refinement": {...}}`` for beams and FE bodies
+        (theory, slenderness, elements, warnings), see :mod:`mbseig.flexible`.
     """
 
     name: str
@@ -67,6 +72,8 @@ class Model:
     length_scale: float = 1.0
     description: str = ""
     expected: dict = field(default_factory=dict)
+    mass_elements: tuple = ()
+    flexible: dict = field(default_factory=dict)
 
     # ---- sizes ---------------------------------------------------------------------------
     @property
@@ -83,6 +90,13 @@ class Model:
     def _row_offsets(self):
         off = np.cumsum([0] + [c.n_eq for c in self.constraints])
         return off
+
+    def mass_matrix(self, q=None) -> sp.csr_matrix:
+        """M(q): ``mass`` with the configuration-dependent element masses evaluated at q."""
+        if q is None or not self.mass_elements:
+            return self.mass
+        blocks = [(e.idx, e.idx, e.mass(q) - M_ref) for e, M_ref in self.mass_elements]
+        return (self.mass + _scatter(self.n, self.n, blocks)).tocsr()
 
     # ---- forces --------------------------------------------------------------------------
     def generalized_force(self, q, qd=None) -> np.ndarray:

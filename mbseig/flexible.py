@@ -1,0 +1,407 @@
+"""Flexible bodies in case files: ``[[beams]]`` and ``[[fe_bodies]]``.
+
+Called by the case builder (:mod:`mbseig.case`) in two steps: :func:`allocate` adds the extra
+coordinates right after the points (interior beam nodes ``beam.n3.x``/``.y``, node angles
+``beam.n3.theta``, FE interface angles ``body.A.theta`` and modal coordinates ``body.eta1``), and
+:func:`assemble` adds elements, masses and constraints once bodies exist (a beam end may be
+clamped to a rigid body).
+
+Beam ends (``ends = [start, end]``): ``"free"`` (the node's rotation is a free coordinate: a pin
+or a free end), ``"clamped"`` (rotation fixed to ground) or the name of a planar rigid body (the
+node's rotation follows that body: a weld).  Translation is whatever the end point is: fixed,
+free, or shared with bodies and joints.
+
+Theory guidance (recorded per beam and issued as :class:`BeamTheoryWarning`): Euler–Bernoulli
+below slenderness L/d = ``EB_SLENDERNESS`` neglects shear and rotary inertia that matter, and
+below ``MIN_SLENDERNESS`` neither beam theory describes the body well.
+
+FE bodies: reduced mass and stiffness matrices (Craig–Bampton or modal) on the coordinates
+z = [interface dofs; modal coordinates], the interface dofs being (u_x, u_y, θ) per interface node
+(``interface_dofs = 3``) or (u_x, u_y) (``= 2``), displacements from the reference positions in
+the case's frame.  The body is linear about that reference (small motion; no geometric
+stiffness): U = ½ zᵀ K z, T = ½ żᵀ M ż, z = C q + d.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import CaseError
+from .model.affine import Affine, combine
+from .model.beams import THEORIES, BeamElement, BeamSection, RotationLock, section_properties
+
+__all__ = ["BeamTheoryWarning", "EB_SLENDERNESS", "MIN_SLENDERNESS", "AUTO_START_ELEMENTS",
+           "LinearFEBody", "allocate", "assemble"]
+
+EB_SLENDERNESS = 10.0  # below this, Euler–Bernoulli neglects shear that matters
+MIN_SLENDERNESS = 5.0  # below this, no beam theory is adequate
+AUTO_START_ELEMENTS = 2  # elements of an "auto" beam before refinement
+MAX_ELEMENTS = 4096
+
+
+class BeamTheoryWarning(UserWarning):
+    """A beam theory used outside the slenderness range where it is accurate."""
+
+
+@dataclass
+class _BeamSpec:
+    name: str
+    label: str
+    points: tuple
+    length: float
+    section: BeamSection
+    depth: float
+    n_elements: int
+    auto: bool
+    ends: tuple
+    node_pos: list = field(default_factory=list)  # initial (x, y) per node
+    pos_idx: list = field(default_factory=list)  # coordinate indices (−1 fixed) per node
+    theta_idx: list = field(default_factory=list)  # coordinate index or −1 per node
+    theta0: float = 0.0
+    warnings: list = field(default_factory=list)
+
+
+@dataclass(frozen=True, eq=False)
+class LinearFEBody:
+    """Linear reduced FE body: U = ½ zᵀ K z with z = C q[idx] + d (module docstring)."""
+
+    name: str
+    z: Affine
+    K: np.ndarray
+
+    @property
+    def idx(self):
+        return self.z.idx
+
+    def force(self, q, qd):
+        return -(self.z.C.T @ (self.K @ self.z(q)))
+
+    def jacobians(self, q, qd):
+        m = self.idx.size
+        return self.z.C.T @ self.K @ self.z.C, np.zeros((m, m))
+
+
+# ---------------------------------------------------------------------------------------------
+def _new_coord(b, name, value):
+    k = len(b.q_init)
+    b.coord_names.append(name)
+    b.q_init.append(float(value))
+    return k
+
+
+def _parse_ends(f):
+    ends = f.raw("ends", ["free", "free"])
+    if (not isinstance(ends, list) or len(ends) != 2
+            or not all(isinstance(e, str) for e in ends)):
+        raise f.error('ends must be [start, end], each "free", "clamped" or a body name')
+    return tuple(ends)
+
+
+def _beam_spec(b, f, mesh_override):
+    from .case import _template
+
+    name = f.text("name")
+    if "." in name or name in b.point_index:
+        raise f.error(f"beam name {name!r} is used already or contains '.'")
+    pts = f.raw("points")
+    if not isinstance(pts, list) or len(pts) != 2 or not all(isinstance(p, str) for p in pts):
+        raise f.error("points must be a list of two basic point names [start, end]")
+    pa, pb = (_template(p, f.names, f) for p in pts)
+    for p in (pa, pb):
+        if p not in b.point_index:
+            raise f.error(f"unknown point {p!r}")
+    if pa == pb:
+        raise f.error("a beam needs two different end points")
+    init_len = float(np.linalg.norm(b.point_pos[pb] - b.point_pos[pa]))
+    length = f.num("length", init_len, positive=True)
+    if init_len == 0:
+        raise f.error("the end points coincide in the case: the beam's direction is undefined")
+    E = f.num("E", positive=True)
+    rho = f.num("rho", positive=True)
+    theory = f.text("theory", "euler-bernoulli")
+    if theory not in THEORIES:
+        raise f.error(f"theory must be one of {', '.join(THEORIES)}, got {theory!r}")
+    sec = f.raw("section", None)
+    kappa_default = 5.0 / 6.0
+    if sec is not None:
+        if f.has("A") or f.has("I"):
+            raise f.error("give either section = {...} or A and I, not both")
+        from .case import _Fields
+
+        sf = _Fields(sec, f"{f.label}.section", f.names)
+        shape = sf.text("shape")
+        if shape == "rectangle":
+            dims = {"b": sf.num("b", positive=True), "h": sf.num("h", positive=True)}
+        elif shape == "circle":
+            dims = {"d": sf.num("d", positive=True)}
+        else:
+            raise sf.error(f"shape must be 'rectangle' (b, h) or 'circle' (d), got {shape!r}")
+        sf.done()
+        props = section_properties(shape=shape, dims=dims)
+        A, I, depth, kappa_default = props["A"], props["I"], props["depth"], props["kappa"]
+        f.raw("depth", None)
+    else:
+        A = f.num("A", positive=True)
+        I = f.num("I", positive=True)
+        depth = f.num("depth", math.sqrt(12.0 * I / A), positive=True)
+    kappa = f.num("shear_coefficient", kappa_default, positive=True)
+    G = f.num("G", None)
+    nu = f.num("nu", None)
+    if G is not None and nu is not None:
+        raise f.error("give either G or nu, not both")
+    if G is None:
+        if nu is None:
+            if theory == "timoshenko":
+                raise f.error("a Timoshenko beam needs the shear modulus G or Poisson's ratio nu")
+            nu = 0.3
+        if not -1.0 < nu < 0.5:
+            raise f.error(f"nu must lie in (−1, 0.5), got {nu:g}")
+        G = E / (2.0 * (1.0 + nu))
+    elif not G > 0:
+        raise f.error(f"G must be positive, got {G:g}")
+    raw_n = f.raw("elements", "auto")
+    auto = raw_n == "auto"
+    if auto:
+        n = AUTO_START_ELEMENTS
+    else:
+        n = f.num("elements")
+        if not (float(n).is_integer() and 1 <= n <= MAX_ELEMENTS):
+            raise f.error(f'elements must be an integer in 1..{MAX_ELEMENTS} or "auto", got {n!r}')
+        n = int(n)
+    if mesh_override is not None:
+        n = int(mesh_override)
+    ends = _parse_ends(f)
+    f.done()
+    section = BeamSection(E=E, G=G, A=A, I=I, rho=rho, kappa=kappa, theory=theory)
+    spec = _BeamSpec(name=name, label=f.label, points=(pa, pb), length=length, section=section,
+                     depth=depth, n_elements=n, auto=auto, ends=ends)
+    slender = length / depth
+    if theory == "euler-bernoulli" and slender < EB_SLENDERNESS:
+        spec.warnings.append(
+            f"Euler–Bernoulli theory at slenderness L/d = {slender:.3g} < {EB_SLENDERNESS:g}: "
+            "shear deformation and rotary inertia matter; use theory = \"timoshenko\"")
+    if slender < MIN_SLENDERNESS:
+        spec.warnings.append(
+            f"slenderness L/d = {slender:.3g} < {MIN_SLENDERNESS:g}: beam theory is inaccurate "
+            "for so stubby a body; use a 2-D/3-D FE model (import it as an fe_body)")
+    return spec
+
+
+def allocate(b, mesh=None):
+    """Parse ``[[beams]]`` and ``[[fe_bodies]]`` and add their coordinates to the builder ``b``."""
+    from .case import _expand, _Fields
+
+    mesh = mesh or {}
+    b.beam_specs, b.fe_specs = [], []
+    items = b.data.get("beams", [])
+    if items and b.dim != 2:
+        raise CaseError("beams need dimension = 2", element="beams")
+    names = set()
+    for k, (item, label, params) in enumerate(_expand("beams", items, b.params)):
+        f = _Fields(item, label, params)
+        spec = _beam_spec(b, f, mesh.get(k, mesh.get(item.get("name"))))
+        if spec.name in names:
+            raise f.error(f"duplicate beam name {spec.name!r}")
+        names.add(spec.name)
+        pa, pb = spec.points
+        xa, xb = b.point_pos[pa], b.point_pos[pb]
+        chord = xb - xa
+        spec.theta0 = math.atan2(chord[1], chord[0])
+        n = spec.n_elements
+        for i in range(n + 1):
+            if i == 0 or i == n:
+                p = pa if i == 0 else pb
+                spec.node_pos.append(b.point_pos[p])
+                spec.pos_idx.append(b.point_index[p])
+            else:
+                r = xa + chord * (i / n)
+                idx = [_new_coord(b, f"{spec.name}.n{i}.{ax}", r[a]) for a, ax in enumerate("xy")]
+                spec.node_pos.append(r)
+                spec.pos_idx.append(np.array(idx, dtype=np.intp))
+            end = 0 if i == 0 else 1 if i == n else None
+            if end is not None and spec.ends[end] == "clamped":
+                spec.theta_idx.append(-1)
+            else:
+                spec.theta_idx.append(_new_coord(b, f"{spec.name}.n{i}.theta", spec.theta0))
+        for msg in spec.warnings:
+            warnings.warn(f"{label}: {msg}", BeamTheoryWarning, stacklevel=4)
+        b.beam_specs.append(spec)
+    items = b.data.get("fe_bodies", [])
+    if items and b.dim != 2:
+        raise CaseError("fe_bodies need dimension = 2", element="fe_bodies")
+    for item, label, params in _expand("fe_bodies", items, b.params):
+        b.fe_specs.append(_fe_spec(b, _Fields(item, label, params)))
+
+
+def _fe_spec(b, f):
+    from .case import _matrix_value, _template
+
+    name = f.text("name")
+    if "." in name or name in b.point_index:
+        raise f.error(f"FE body name {name!r} is used already or contains '.'")
+    base = getattr(b, "base_dir", None)
+    if base is None:
+        from pathlib import Path
+
+        base = Path(b.source).parent
+    M = _matrix_value(f.raw("mass"), f"{f.label}.mass", f.names, base)
+    K = _matrix_value(f.raw("stiffness"), f"{f.label}.stiffness", f.names, base)
+    if M.shape != K.shape:
+        raise f.error(f"mass is {M.shape[0]}×{M.shape[0]} but stiffness {K.shape[0]}×{K.shape[0]}")
+    iface = f.raw("interface")
+    if not isinstance(iface, list) or not iface or not all(isinstance(p, str) for p in iface):
+        raise f.error("interface must be a non-empty list of point names (matrix node order)")
+    iface = [_template(p, f.names, f) for p in iface]
+    for p in iface:
+        if p not in b.point_index:
+            raise f.error(f"unknown interface point {p!r}")
+    ndof = f.num("interface_dofs", 3.0)
+    if ndof not in (2.0, 3.0):
+        raise f.error("interface_dofs must be 2 (u_x, u_y) or 3 (u_x, u_y, θ)")
+    ndof = int(ndof)
+    rots = f.raw("rotations", ["free"] * len(iface)) if ndof == 3 else []
+    if ndof == 3 and (not isinstance(rots, list) or len(rots) != len(iface)):
+        raise f.error("rotations must list one of \"free\", \"clamped\" or a body per interface point")
+    f.done()
+    n_if = ndof * len(iface)
+    if M.shape[0] < n_if:
+        raise f.error(f"matrices are {M.shape[0]}×{M.shape[0]}, fewer than the {n_if} interface dofs")
+    for key, A in (("mass", M), ("stiffness", K)):
+        if not np.allclose(A, A.T, rtol=1e-9, atol=1e-12 * np.abs(A).max()):
+            raise f.error(f"{key} matrix is not symmetric")
+    theta_idx = []
+    for p, rot in zip(iface, rots):
+        theta_idx.append(-1 if rot == "clamped" else _new_coord(b, f"{name}.{p}.theta", 0.0))
+    eta_idx = [_new_coord(b, f"{name}.eta{k + 1}", 0.0) for k in range(M.shape[0] - n_if)]
+    return {"name": name, "label": f.label, "M": M, "K": K, "interface": iface, "ndof": ndof,
+            "rotations": list(rots), "theta_idx": theta_idx, "eta_idx": eta_idx}
+
+
+# ---------------------------------------------------------------------------------------------
+def assemble(b, forces, constraints, mass_blocks, mass_elements, g_const, gravity):
+    """Add beam and FE-body elements; return the model's ``flexible`` record."""
+    q_init = np.array(b.q_init)
+    record = {}
+    refinement = parse_refinement(b.data.get("refinement"), b.params)
+    if refinement and not any(s.auto for s in b.beam_specs):
+        raise CaseError('[refinement] needs a beam with elements = "auto"', element="refinement")
+    for spec in b.beam_specs:
+        record[spec.name] = _assemble_beam(b, spec, q_init, forces, constraints, mass_blocks,
+                                           mass_elements, g_const, gravity)
+    for spec in b.fe_specs:
+        record[spec["name"]] = _assemble_fe(b, spec, constraints, forces, mass_blocks, q_init)
+    if not record:
+        return {}
+    return {"bodies": record, "refinement": refinement}
+
+
+def parse_refinement(table, params):
+    """``[refinement]``: modes (count), f_max [Hz], accuracy, max_elements → dict or {}."""
+    from .case import _Fields
+
+    if table is None:
+        return {}
+    f = _Fields(table, "refinement", params)
+    out = {"modes": f.num("modes", None), "f_max": f.num("f_max", None, positive=True),
+           "accuracy": f.num("accuracy", 1e-3, positive=True),
+           "max_elements": f.num("max_elements", 256, positive=True)}
+    f.done()
+    if out["modes"] is None and out["f_max"] is None:
+        raise f.error("name the modes of interest: modes = K (the lowest K) and/or f_max [Hz]")
+    if out["modes"] is not None:
+        if not (float(out["modes"]).is_integer() and out["modes"] >= 1):
+            raise f.error(f"modes must be a positive integer, got {out['modes']!r}")
+        out["modes"] = int(out["modes"])
+    out["max_elements"] = int(out["max_elements"])
+    return {k: v for k, v in out.items() if v is not None}
+
+
+def _node_affines(spec, k):
+    pos = Affine.select(spec.pos_idx[k], spec.node_pos[k])
+    t = spec.theta_idx[k]
+    theta = Affine.select([t], [spec.theta0])
+    return pos, theta
+
+
+def _lock(b, label, body, theta, f_error):
+    if body not in b.bodies:
+        raise CaseError(f'end {body!r} is neither "free", "clamped" nor a body', element=label)
+    u = b._body_dir(body)
+    stacked = combine([(1.0, u), (1.0, theta)], stack=True)
+    ux, uy, th = stacked(np.array(b.q_init))
+    return RotationLock(f"{label} (rotation follows {body})", stacked, th - math.atan2(uy, ux))
+
+
+def _assemble_beam(b, spec, q_init, forces, constraints, mass_blocks, mass_elements, g_const,
+                   gravity):
+    n = spec.n_elements
+    l0 = spec.length / n
+    nodes = [_node_affines(spec, k) for k in range(n + 1)]
+    for k in range(n):
+        (r1, t1), (r2, t2) = nodes[k], nodes[k + 1]
+        w = combine([(1.0, r1), (1.0, t1), (1.0, r2), (1.0, t2)], stack=True)
+        el = BeamElement(f"{spec.label} element {k + 1}", w, spec.section, l0)
+        if el.idx.size == 0:
+            continue
+        M_ref = el.mass(q_init)
+        forces.append(el)
+        mass_elements.append((el, M_ref))
+        mass_blocks.append((el.idx, el.idx, M_ref))
+    if gravity is not None:
+        s = spec.section
+        for k, (r, _) in enumerate(nodes):
+            share = 0.5 if k in (0, n) else 1.0
+            np.add.at(g_const, r.idx, r.C.T @ (share * s.rho * s.A * l0 * gravity))
+    for end, k in ((0, 0), (1, n)):
+        what = spec.ends[end]
+        if what in ("free", "clamped"):
+            continue
+        c = _lock(b, spec.label, what, nodes[k][1], None)
+        b._add_constraint(constraints, c, _ErrorOnly(spec.label))
+    for k in range(1, n):
+        b.markers[f"{spec.name}.n{k}"] = nodes[k][0]
+    s = spec.section
+    return {
+        "type": "beam", "theory": s.theory, "elements": n, "auto": spec.auto,
+        "length": spec.length, "depth": spec.depth, "slenderness": spec.length / spec.depth,
+        "shear_parameter": s.shear_parameter(spec.length), "E": s.E, "G": s.G, "A": s.A,
+        "I": s.I, "rho": s.rho, "shear_coefficient": s.kappa, "ends": list(spec.ends),
+        "warnings": list(spec.warnings), "nodes": [f"{spec.name}.n{k}" for k in range(n + 1)],
+    }
+
+
+class _ErrorOnly:
+    def __init__(self, label):
+        self.label = label
+
+    def error(self, message):
+        return CaseError(message, element=self.label)
+
+
+def _assemble_fe(b, spec, constraints, forces, mass_blocks, q_init):
+    terms = []
+    for p, t in zip(spec["interface"], spec["theta_idx"] or [None] * len(spec["interface"])):
+        pos0 = b.point_pos[p]
+        terms.append((1.0, b._affine_of(p) - Affine.constant(pos0)))
+        if spec["ndof"] == 3:
+            terms.append((1.0, Affine.select([t], [0.0])))
+    if spec["eta_idx"]:
+        terms.append((1.0, Affine.select(spec["eta_idx"])))
+    z = combine(terms, stack=True)
+    body = LinearFEBody(spec["label"], z, spec["K"])
+    if body.idx.size:
+        forces.append(body)
+        mass_blocks.append((z.idx, z.idx, z.C.T @ spec["M"] @ z.C))
+    for p, rot, t in zip(spec["interface"], spec["rotations"], spec["theta_idx"]):
+        if rot in ("free", "clamped"):
+            continue
+        theta = Affine.select([t], [0.0])
+        c = _lock(b, spec["label"], rot, theta, None)
+        b._add_constraint(constraints, c, _ErrorOnly(spec["label"]))
+    return {"type": "fe_body", "interface": list(spec["interface"]),
+            "interface_dofs": spec["ndof"], "modal_coordinates": len(spec["eta_idx"]),
+            "size": int(spec["M"].shape[0])}
