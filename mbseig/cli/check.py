@@ -16,8 +16,8 @@ def register(sub):
     add_case_arguments(p)
     p.add_argument("--modes", default=None, metavar="LIST",
                    help="mode numbers as in the modes table, e.g. 1,2 or 1-3 (default: all)")
-    p.add_argument("--amplitude", type=float, default=1e-3, metavar="EPS",
-                   help="initial deviation relative to the model's length scale (default 1e-3)")
+    p.add_argument("--amplitude", type=float, default=1e-4, metavar="EPS",
+                   help="initial deviation relative to the model's length scale (default 1e-4)")
     p.add_argument("--periods", type=float, default=20.0, metavar="N",
                    help="run length in periods of the checked mode (default 20)")
     p.add_argument("--efolds", type=float, default=3.0, metavar="E",
@@ -71,6 +71,9 @@ def run(args) -> int:
             forces = "; ".join(f"{p} ({', '.join(f'{v:.6g}' for v in f)})"
                                for p, f in r["forces"].items())
             print(f"  {r['element']}: λ = {lam}; on {forces}")
+    for rec in res.actuators:
+        print(f"actuator {rec.get('driver', '?')}: effort {rec.get('effort', float('nan')):.6g} "
+              f"{rec.get('effort_unit', '')}".rstrip())
     for p in plots:
         print(f"wrote {p}")
     if res.passed:
