@@ -42,7 +42,7 @@ _AXES = "xyz"
 _TOP_KEYS = {
     "schema_version", "title", "description", "source", "kind", "dimension", "gravity",
     "parameters", "points", "masses", "bodies", "joints", "forces", "matrices", "expected",
-    "configurations", "beams", "fe_bodies", "refinement",
+    "configurations", "report", "beams", "fe_bodies", "refinement",
 }
 
 
@@ -171,7 +171,7 @@ class _Fields:
     def __init__(self, table, label, names):
         if not isinstance(table, dict):
             raise CaseError("each element must be a table", element=label)
-        self.t, self.label, self.names, self.used = table, label, names, {"repeat"}
+        self.t, self.label, self.names, self.used = table, label, names, {"repeat", "enabled"}
 
     def error(self, message):
         return CaseError(message, element=self.label)
@@ -256,7 +256,8 @@ def _expand(section, items, params, batch=None):
             label += f" {item['name']!r}"
         rep = item.get("repeat")
         if rep is None:
-            yield item, label, params
+            if _enabled(item, label, params):
+                yield item, label, params
             continue
         if not isinstance(rep, dict) or len(rep) != 1:
             raise CaseError("repeat must be a table {index = [first, last]}", element=label)
@@ -280,7 +281,22 @@ def _expand(section, items, params, batch=None):
                                        np.arange(int(first), int(last) + 1, dtype=float), params):
             continue  # expanded at once by mbseig.case_batch
         for i in range(int(first), int(last) + 1):
-            yield item, f"{label} ({var}={i})", {**params, var: float(i)}
+            names = {**params, var: float(i)}
+            if _enabled(item, f"{label} ({var}={i})", names):
+                yield item, f"{label} ({var}={i})", names
+
+
+def _enabled(item, label, names):
+    """``enabled = expr``: the element exists only where expr ≠ 0 (e.g. set by a configuration)."""
+    if "enabled" not in item:
+        return True
+    value = item["enabled"]
+    if isinstance(value, bool):
+        return value
+    try:
+        return evaluate(value, names) != 0
+    except MbseigError as exc:
+        raise exc.located(element=f"{label}.enabled") from None
 
 
 class _Builder:
@@ -297,6 +313,9 @@ class _Builder:
         self.q_init: list[float] = []
         self.bodies: dict[str, dict] = {}
         self.markers: dict[str, Affine] = {}
+        self.named: dict[str, tuple] = {}  # element name → ("joint" | "force", index, label)
+        self.drivers: list = []  # (AngleDriver, [names it sets], fields) for inverse statics
+        self.element_body: dict[str, str] = {}  # attach / follower element label → body
 
     # -- points ------------------------------------------------------------------------
     def build(self):
@@ -391,10 +410,14 @@ class _Builder:
                                      g_const, gravity)
 
         for item, label, names in _expand("joints", self.data.get("joints", []), self.params):
+            before = len(constraints)
             self._joint(_Fields(item, label, names), constraints)
+            self._remember(item, "joint", constraints, before, label)
 
         for item, label, names in _expand("forces", self.data.get("forces", []), self.params, batch):
+            before = len(forces)
             self._force(_Fields(item, label, names), forces, g_const)
+            self._remember(item, "force", forces, before, label)
 
         mass = sp.csr_matrix((self.n, self.n))
         if mass_blocks:
@@ -404,13 +427,47 @@ class _Builder:
         if rows.size:
             mass = mass + sp.csr_matrix((vals, (rows, rows)), shape=(self.n, self.n))
         points = LazyPoints(self.point_index, self.point_pos, self.markers)
-        return Model(
-            name=self.name, source=self.source, parameters=dict(self.params), dimension=self.dim,
-            coordinate_names=tuple(self.coord_names), q_init=q0, mass=mass, g_const=g_const,
-            forces=tuple(forces), constraints=tuple(constraints), points=points,
-            bodies=self.bodies, length_scale=self.length_scale, description=self.description,
-            expected=self.expected, mass_elements=tuple(mass_elements), flexible=flexible,
-        )
+        report = {}
+        if "report" in self.data:
+            from .device import parse_report
+
+            report = parse_report(self.data["report"], self)
+
+        def make_model(forces, constraints, q_init=None, drivers=()):
+            return Model(
+                name=self.name, source=self.source, parameters=dict(self.params), dimension=self.dim,
+                coordinate_names=tuple(self.coord_names), q_init=q0 if q_init is None else q_init,
+                mass=mass, g_const=g_const, forces=tuple(forces), constraints=tuple(constraints),
+                points=points, bodies=self.bodies, length_scale=self.length_scale,
+                description=self.description, expected=self.expected, report=report,
+                drivers=tuple(drivers), mass_elements=tuple(mass_elements), flexible=flexible,
+            )
+
+        if self.drivers:
+            from .inverse_statics import resolve_drivers
+
+            pending = [(d, self._driver_targets(names, f)) for d, names, f in self.drivers]
+            forces, constraints, q_guess, records = resolve_drivers(
+                make_model, forces, constraints, pending)
+            return make_model(forces, constraints, q_guess, records)
+        return make_model(forces, constraints)
+
+    def _remember(self, item, kind, elements, before, label):
+        name = item.get("name")
+        if isinstance(name, str) and len(elements) == before + 1:
+            self.named[name] = (kind, before, label)
+
+    def _driver_targets(self, names, f):
+        """Elements named by a driver's ``sets``; names of disabled elements are skipped."""
+        declared = {item.get("name") for sec in ("joints", "forces")
+                    for item in self.data.get(sec, []) if isinstance(item, dict)}
+        targets = []
+        for nm in names:
+            if nm in self.named:
+                targets.append(self.named[nm])
+            elif nm not in declared:
+                raise f.error(f"sets unknown element {nm!r} (a named spring or distance joint)")
+        return targets
 
     def _gravity(self):
         g = self.data.get("gravity")
@@ -523,10 +580,54 @@ class _Builder:
                 local = _local_coordinates(self, body, p(self.q0))
             diff = p - self._body_point(body, local)
             c = LinearConstraint(f.label, diff, np.eye(2), np.zeros(2), self.length_scale)
+            self.element_body[f.label] = body
             self._add_constraint(constraints, c, f)
+        elif kind == "angle_driver":
+            self._angle_driver(f, constraints)
         else:
-            raise f.error(f"unknown joint type {kind!r} (distance, fixed, slider, attach)")
+            raise f.error(
+                f"unknown joint type {kind!r} (distance, fixed, slider, attach, angle_driver)")
         del name
+
+    def _angle_driver(self, f, constraints):
+        """Prescribed relative angle (driving constraint); with ``sets`` an inverse-statics
+        command (see :mod:`mbseig.inverse_statics`), otherwise a permanent constraint."""
+        from .model.driver import AngleDriver
+
+        if self.dim != 2:
+            raise f.error("angle_driver needs dimension = 2")
+        stacked, sense = self._angle_pair(f)
+        angle = f.num("angle")
+        sets = f.raw("sets", [])
+        f.done()
+        if isinstance(sets, str):
+            sets = [sets]
+        if not isinstance(sets, list) or not all(isinstance(x, str) for x in sets):
+            raise f.error("sets must be an element name or a list of names")
+        if stacked.idx.size == 0:
+            raise f.error("angle_driver between two fixed directions")
+        driver = AngleDriver(f.label, stacked, angle, sense)
+        if sets:
+            self.drivers.append((driver, sets, f))
+        else:
+            constraints.append(driver)
+
+    def _angle_pair(self, f):
+        """Stacked directions [a; b] of ``bodies = [b1 or "ground", b2]`` and the sense (±1)."""
+        bodies = f.raw("bodies")
+        if not isinstance(bodies, list) or len(bodies) != 2:
+            raise f.error("bodies must be [body1, body2]; use \"ground\" for the fixed frame")
+        dirs = []
+        for bname in bodies:
+            bname = _template(str(bname), f.names, f)
+            if bname == "ground":
+                dirs.append(Affine.constant(f.vec("ground_direction", 2, [1.0, 0.0])))
+            else:
+                dirs.append(self._body_dir(self._body(f, bname)))
+        sense_txt = f.text("sense", "ccw")
+        if sense_txt not in ("ccw", "cw"):
+            raise f.error("sense must be 'ccw' or 'cw'")
+        return combine([(1.0, dirs[0]), (1.0, dirs[1])], stack=True), (1.0 if sense_txt == "ccw" else -1.0)
 
     # -- forces --------------------------------------------------------------------------
     def _force(self, f, forces, g_const):
@@ -538,7 +639,10 @@ class _Builder:
             d0 = diff(self.q0)
             init = float(d0[0]) if self.dim == 1 else float(np.linalg.norm(d0))
             k = f.num("stiffness", 0.0 if kind == "damper" else _REQUIRED, nonnegative=True)
-            c = f.num("damping", 0.0 if kind == "spring" else _REQUIRED, nonnegative=True)
+            # active = true: a controlled actuator whose force loop may inject energy, so its
+            # damping may be negative (stability studies); passive elements must dissipate
+            active = f.flag("active", False)
+            c = f.num("damping", 0.0 if kind == "spring" else _REQUIRED, nonnegative=not active)
             l0 = f.num("free_length", init)
             f.done()
             if self.dim > 1 and l0 < 0:
@@ -589,6 +693,7 @@ class _Builder:
                 raise f.error("direction must not be zero")
             p = self._body_point(body, at)
             u = self._body_dir(body, direction / nd)
+            self.element_body[f.label] = body
             forces.append(FollowerForce(f.label, combine([(1.0, p), (1.0, u)], stack=True), mag))
         else:
             raise f.error(

@@ -50,6 +50,10 @@ class Model:
     forces, constraints : element objects (see :mod:`mbseig.model.elements`).
     points : named affine maps of every basic point and body marker, for reports and drawings.
     bodies : body name → (basic point i, basic point j).
+    report : the case's ``[report]`` table as parsed by :func:`mbseig.device.parse_report`
+        (joint angles with their ranges of motion, pins, actuator), empty when absent.
+    drivers : one record per inverse-statics driver (target angle, effort, the free length or
+        locked length it set), see :mod:`mbseig.inverse_statics`.
     mass_elements : (element, M_ref) pairs for masses that depend on the configuration
         (co-rotational beams, ``element.mass(q)`` on ``element.idx``); ``mass`` holds them as
         M_ref (at the builder's initial positions) and :meth:`mass_matrix` re-evaluates them.
@@ -72,6 +76,8 @@ class Model:
     length_scale: float = 1.0
     description: str = ""
     expected: dict = field(default_factory=dict)
+    report: dict = field(default_factory=dict)  # parsed [report] table (mbseig.device)
+    drivers: tuple = ()  # inverse-statics records (mbseig.inverse_statics)
     mass_elements: tuple = ()
     flexible: dict = field(default_factory=dict)
 

@@ -1,0 +1,83 @@
+"""Driving constraint: a prescribed relative angle between two planar directions (DESIGN §3).
+
+    Φ(q) = wrap(θ(q) − θ*),   θ = s · atan2(a × b, a · b),   s = +1 (ccw) or −1 (cw)
+
+a and b are the directions of two bodies (or a fixed ground direction and a body), exactly as in
+:class:`~mbseig.model.elements.TorsionalSpringDamper`, so a driver and a torsional spring on the
+same pair measure the same angle.  Its multiplier λ is the driving effort: the generalized force
+−Φ_qᵀλ = −λ ∇θ is a torque −λ·s on body b (and +λ·s on body a), so the torque the actuator must
+apply to hold the angle, in the sense of θ, is −λ.
+
+    Φ_q = ∇θᵀ W,   Σ λ ∇²Φ = λ Wᵀ H_θ W,   γ = −q̇ᵀ Wᵀ H_θ W q̇
+
+with W the constant matrix of the stacked direction maps [a; b] and ∇θ, H_θ the gradient and
+Hessian of θ with respect to [a; b].
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import EquilibriumError
+from .affine import Affine
+from .elements import _angle_derivatives
+
+__all__ = ["AngleDriver"]
+
+
+@dataclass(frozen=True, eq=False)
+class AngleDriver:
+    """Φ = wrap(θ(q) − θ*) on the stacked directions ``dirs`` = [a; b] (4 rows)."""
+
+    name: str
+    dirs: Affine
+    angle_target: float
+    sense: float = 1.0
+    n_eq: int = 1
+
+    @property
+    def idx(self):
+        return self.dirs.idx
+
+    def angle(self, q) -> float:
+        w = self.dirs(q)
+        a, b = w[:2], w[2:]
+        return self.sense * math.atan2(a[0] * b[1] - a[1] * b[0], a @ b)
+
+    def _derivatives(self, q):
+        w = self.dirs(q)
+        a, b = w[:2], w[2:]
+        if a @ a == 0.0 or b @ b == 0.0:
+            raise EquilibriumError("direction of zero length: angle undefined", element=self.name)
+        ga, Ha = _angle_derivatives(a)
+        gb, Hb = _angle_derivatives(b)
+        g = self.sense * np.concatenate([-ga, gb])
+        H = np.zeros((4, 4))
+        H[:2, :2] = -self.sense * Ha
+        H[2:, 2:] = self.sense * Hb
+        return g, H
+
+    def phi(self, q):
+        d = self.angle(q) - self.angle_target
+        return np.array([(d + math.pi) % (2 * math.pi) - math.pi])
+
+    def jac(self, q):
+        g, _ = self._derivatives(q)
+        return (g @ self.dirs.C)[None, :]
+
+    def hess(self, q, lam):
+        _, H = self._derivatives(q)
+        W = self.dirs.C
+        return lam[0] * (W.T @ H @ W)
+
+    def gamma(self, q, qd):
+        _, H = self._derivatives(q)
+        wd = self.dirs.rate(qd)
+        return np.array([-(wd @ H @ wd)])
+
+    def scale(self):
+        """Typical magnitude of Φ (an angle): 1 rad."""
+        return 1.0

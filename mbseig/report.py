@@ -1,0 +1,461 @@
+"""Stability reports: ``report.md`` and a self-contained ``report.html`` per case.
+
+For each configuration (all of the case's ``[configurations]`` with ``all_configs``): the model
+summary, the equilibrium (posture, range-of-motion flags, pin reactions, constraint forces,
+actuator effort), the mode table with verdict and margins, the mechanism at equilibrium with
+each mode shape superposed, the pole map and the time-domain check of every mode
+(:mod:`mbseig.timedomain`).  Then the studies declared in ``[[report.studies]]``:
+
+- ``sweep``: a parameter swept over ``range`` with ``count`` points on ``config`` (optionally
+  one line per value of ``lines = {name = [values]}``); its stability boundaries
+  (:func:`mbseig.sweep.run_sweep`) and the parameter value at which the equilibrium leaves the
+  range of motion (Brent's method on the smallest joint margin, same ``xtol``).
+- ``compare = "constraint_stiffness"``: the eigenvalues of ``config`` with and without the
+  constraint-force stiffness Σ λ ∇²Φ.
+
+Output is deterministic: no dates or timings; figures are PNGs without metadata; numbers are
+formatted at fixed precision.  The HTML embeds every figure as a base64 data URI; the PNGs are
+also written next to report.md, which links them.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import math
+from pathlib import Path
+
+import numpy as np
+
+from .errors import CaseError
+
+__all__ = ["build_report", "render_markdown", "render_html", "write_report"]
+
+
+# ---------------------------------------------------------------------------------------------
+# blocks: ("h1"|"h2"|"h3"|"p"|"pre", text) | ("table", header, rows) | ("img", path, caption)
+def _fmt(x, digits=6):
+    if x is None:
+        return "–"
+    if isinstance(x, str):
+        return x
+    if isinstance(x, (bool, np.bool_)):
+        return "yes" if x else "no"
+    x = float(x)
+    if not math.isfinite(x):
+        return "–"
+    if x == 0:
+        return "0"
+    return f"{x:.{digits}g}"
+
+
+def _config_blocks(case, config, out_dir, *, run_check, stem):
+    from . import plots
+    from .analysis import analyze
+    from .device import reactions
+
+    a = analyze(case, config=config)
+    model, eq, lin, md = a.model, a.eq, a.linear, a.modes
+    tag = config or "base"
+    blocks = [("h2", f"Configuration {tag}" + (f": {_describe(case, config)}" if config else ""))]
+    blocks.append(("h3", "Model"))
+    blocks.append(("table", ["quantity", "value"], [
+        ["coordinates", str(model.n)],
+        ["constraints", str(model.n_constraints)],
+        ["redundant constraints", f"{eq.n_redundant}" + (f" ({'; '.join(eq.redundant)})" if eq.redundant else "")],
+        ["degrees of freedom", str(lin.dof)],
+        ["equilibrium residual", f"{eq.residual:.1e} ({eq.iterations} Newton iterations)"],
+        ["eigensolver", f"{md.solver} ({md.solver_reason})"],
+        ["parameters", ", ".join(f"{k} = {_fmt(v, 5)}" for k, v in model.parameters.items()
+                                 if k in _SHOWN_PARAMS or not _SHOWN_PARAMS)],
+    ]))
+    rep = reactions(model, eq)
+    blocks.append(("h3", "Equilibrium"))
+    if rep["posture"]:
+        blocks.append(("table", ["joint", "flexion [deg]", "range [deg]", "margin [deg]", "in range"],
+                       [[p["name"], _fmt(p["angle_deg"], 6),
+                         "–" if p["range_deg"] is None else f"{p['range_deg'][0]:g} … {p['range_deg'][1]:g}",
+                         _fmt(p["margin_deg"], 4), "yes" if p["in_range"] else "**NO**"]
+                        for p in rep["posture"]]))
+        flags = rep["out_of_range"]
+        blocks.append(("p", "Range of motion: " + ("all joints inside." if not flags else
+                                                    "OUTSIDE for " + ", ".join(flags) + ".")))
+    for d in rep["drivers"]:
+        sets = "; ".join(
+            f"{s['element']}: " + (f"free length {s['free_length'] * 1e3:.6g} mm, length "
+                                   f"{s['length'] * 1e3:.6g} mm, tension {s['tension']:.6g} N"
+                                   if "free_length" in s else f"locked at {s['length'] * 1e3:.6g} mm")
+            for s in d["sets"])
+        blocks.append(("p", f"Inverse statics ({d['driver']}): commanded angle "
+                            f"{math.degrees(d['angle_target']):.6g} deg needs an effort of "
+                            f"{d['effort']:.6g} {d['effort_unit']}; {sets}."))
+    if rep["actuator"]:
+        blocks.append(("table", ["actuator element", "kind", "length [mm]", "tension [N]"],
+                       [[r["element"], r["kind"], _fmt(r["length"] * 1e3, 6), _fmt(r["tension"], 6)]
+                        for r in rep["actuator"]]))
+    if rep["pins"]:
+        blocks.append(("table", ["pin (force on the outboard bodies)", "point", "Fx [N]", "Fy [N]", "|F| [N]"],
+                       [[p["name"], p["point"], _fmt(p["force"][0], 5), _fmt(p["force"][1], 5),
+                         _fmt(p["magnitude"], 5)] for p in rep["pins"]]))
+    rows = []
+    for c in rep["constraints"]:
+        carried = ("axial force " + _fmt(c["axial_force"], 5) + " N (tension +)" if "axial_force" in c
+                   else "force " + ", ".join(_fmt(x, 5) for x in c["force"]) + " N" if "force" in c
+                   else "torque " + _fmt(c.get("torque"), 5) + " N m")
+        rows.append([c["element"], ", ".join(_fmt(x, 6) for x in c["multipliers"]), carried])
+    blocks.append(("table", ["constraint", "multiplier λ", "reaction"], rows))
+
+    blocks.append(("h3", f"Modes — verdict: {md.verdict}"))
+    rows = []
+    for k in range(len(md)):
+        s = md.eigenvalues[k]
+        margin = md.delta[k] - md.tolerance[k]
+        rows.append([str(k + 1), f"{s.real:.6g}", f"{s.imag:.6g}", _fmt(md.freq_hz[k], 6),
+                     _fmt(md.zeta[k], 4), _fmt(md.delta[k], 5), f"{margin:.4g}", md.stability[k],
+                     md.kind[k], ", ".join(n for n, _ in md.dominant[k][:3])])
+    blocks.append(("table", ["#", "Re s [1/s]", "Im s [rad/s]", "f [Hz]", "ζ", "δ [1/s]",
+                             "margin δ − tol", "stability", "kind", "dominant"], rows))
+    min_margin = float(np.min(md.delta - md.tolerance)) if len(md) else math.nan
+    blocks.append(("p", f"Stability margin: the least-damped mode has δ = "
+                        f"{float(np.min(md.delta)):.5g} 1/s (ζ = {float(md.zeta[np.argmin(md.delta)]):.4g}); "
+                        f"δ − tol = {min_margin:.4g} (tol per mode: max(10 κ η, 1e-12 |s|))."))
+    labels = [f"mode {k + 1}: {md.freq_hz[k]:.4g} Hz, ζ = {md.zeta[k]:.3g}" for k in range(len(md))]
+    img = plots.mechanism_modes(model, eq.q, md.shapes, labels,
+                                out_dir / f"{stem}_{tag}_shapes.png",
+                                title=f"{tag}: equilibrium (black) and mode shapes (±, red/blue)")
+    blocks.append(("img", img, f"{tag}: mechanism at equilibrium with each mode shape superposed"))
+    img = plots.pole_map(md.eigenvalues, out_dir / f"{stem}_{tag}_poles.png",
+                         title=f"{tag}: pole map (numbers = mode)", stability=md.stability)
+    blocks.append(("img", img, f"{tag}: pole map"))
+    blocks += _check_blocks(a, run_check)
+    summary = {"config": tag, "dof": lin.dof, "verdict": md.verdict,
+               "least_delta": float(np.min(md.delta)) if len(md) else math.nan,
+               "least_zeta": float(md.zeta[np.argmin(md.delta)]) if len(md) else math.nan,
+               "freqs": [float(x) for x in md.freq_hz],
+               "posture": {p["name"]: p["angle_deg"] for p in rep["posture"]},
+               "out_of_range": rep["out_of_range"],
+               "actuator": [r["tension"] for r in rep["actuator"]]}
+    return blocks, summary
+
+
+_SHOWN_PARAMS: set = set()
+
+
+def _describe(case, config):
+    import tomllib
+
+    data = tomllib.loads(Path(case).read_text())
+    return str(data.get("configurations", {}).get(config, {}).get("description", ""))
+
+
+def _check_blocks(a, run_check):
+    blocks = [("h3", "Time-domain check")]
+    if not run_check:
+        blocks.append(("p", "Time-domain check not run (report built with --no-check)."))
+        return blocks
+    try:
+        from .timedomain import check_modes
+    except ImportError:
+        blocks.append(("p", "Time-domain check unavailable: this installation has no "
+                            "mbseig.timedomain module; run `mbseig check` once it is installed."))
+        return blocks
+    res = check_modes(a.model, a.eq, a.linear, a.modes)
+    rows = []
+    for m in res.modes:
+        if m.skipped:
+            rows.append([str(m.index), m.kind, _fmt(m.predicted_delta), "–", "–",
+                         _fmt(m.predicted_omega), "–", "–", f"skipped ({m.skipped})"])
+            continue
+        rows.append([str(m.index), m.kind, _fmt(m.predicted_delta), _fmt(m.measured_delta),
+                     f"{m.rel_error_delta:.1e}", _fmt(m.predicted_omega, 8),
+                     _fmt(m.measured_omega, 8), f"{m.rel_error_omega:.1e}",
+                     "pass" if m.passed else "**FAIL**"])
+    tol = res.tolerances
+    blocks.append(("p", f"Each mode is excited alone in the nonlinear model ({res.integrator}, "
+                        f"rtol {tol['ode_rtol']:g}) and its modal coordinate fitted; tolerances: δ "
+                        f"{tol['delta_rtol']:g} relative, ω {tol['omega_rtol']:g} relative. "
+                        f"Result: {'all passed' if res.passed else 'FAILED for ' + str(res.failed)}."))
+    blocks.append(("table", ["#", "kind", "δ predicted", "δ measured", "err", "ω predicted",
+                             "ω measured", "err", "result"], rows))
+    return blocks
+
+
+# ---------------------------------------------------------------------------------------------
+def _study_blocks(case, study, out_dir, stem, jobs):
+    from . import plots  # noqa: F401  (sweep outputs use it)
+    from .sweep import run_sweep
+
+    kind = "compare" if "compare" in study else "sweep"
+    config = study.get("config")
+    title = study.get("title", f"{kind} on {config}")
+    blocks = [("h2", title)]
+    if kind == "compare":
+        return blocks + _compare_blocks(case, config), {"title": title}
+    name = study["sweep"]
+    lo, hi = study["range"]
+    values = np.linspace(float(lo), float(hi), int(study["count"]))
+    axes = [(name, values)]
+    for lname, lvals in study.get("lines", {}).items():
+        axes.append((lname, np.asarray(lvals, dtype=float)))
+    res = run_sweep(case, axes, config=config, jobs=jobs, xtol_rel=float(study.get("xtol_rel", 1e-10)))
+    sdir = out_dir / f"{stem}_{config}_{name}"
+    from .sweep import write_outputs
+
+    paths = write_outputs(res, sdir)
+    xtol = res.tolerances["xtol"]
+    rows, crit = [], []
+    for l, line in enumerate(res.lines):
+        bs = [b for b in res.boundaries if b["line"] == l]
+        first_loss = next((b for b in bs if b["stability"] == "loss"), None)
+        rom = _rom_exit(case, config, line, name, values, res.points[l], xtol)
+        label = ", ".join(f"{k} = {v:g}" for k, v in line.items()) or "–"
+        rows.append([label,
+                     "stable over the range" if first_loss is None else f"{first_loss['value']:.8g}",
+                     "–" if first_loss is None else first_loss["kind"],
+                     "–" if first_loss is None else f"{first_loss['eigenvalue'][1] / (2 * math.pi):.5g}",
+                     "inside over the range" if rom is None else f"{rom['value']:.8g} ({rom['joint']})"])
+        crit.append({"line": line, "critical": None if first_loss is None else first_loss["value"],
+                     "kind": None if first_loss is None else first_loss["kind"], "rom": rom})
+    blocks.append(("p", f"{name} from {values[0]:g} to {values[-1]:g} ({len(values)} points per line) on "
+                        f"{config}; modes tracked by MAC; boundaries by Brent's method on δ + tol to "
+                        f"xtol = {xtol:.3g}; range-of-motion exit by Brent's method on the smallest "
+                        f"joint margin to the same xtol."))
+    blocks.append(("table", ["line", f"critical {name}", "instability", "frequency at onset [Hz]",
+                             f"{name} where the posture leaves the range of motion"], rows))
+    for p in paths:
+        if p.suffix == ".png":
+            blocks.append(("img", p, f"{title}: {p.stem.replace('_', ' ')}"))
+    return blocks, {"title": title, "parameter": name, "config": config, "critical": crit}
+
+
+def _rom_exit(case, config, line, name, values, points, xtol):
+    """First parameter value where a joint leaves its range of motion (None if never)."""
+    from scipy.optimize import brentq
+
+    from .case import load_case
+    from .device import posture
+    from .statics import equilibrium
+
+    def margin(p):
+        model = load_case(case, config=config, **{**line, name: p})
+        eq = equilibrium(model)
+        rows = [r for r in posture(model, eq.q) if r["margin_deg"] is not None]
+        worst = min(rows, key=lambda r: r["margin_deg"]) if rows else None
+        return (math.inf, None) if worst is None else (worst["margin_deg"], worst["name"])
+
+    for k in range(len(values) - 1):
+        if points[k].get("error") or points[k + 1].get("error"):
+            continue
+        if not points[k]["out_of_range"] and points[k + 1]["out_of_range"]:
+            root = brentq(lambda p: margin(p)[0], values[k], values[k + 1], xtol=xtol)
+            joint = points[k + 1]["out_of_range"][0]
+            return {"value": float(root), "joint": joint}
+    if points and not points[0].get("error") and points[0]["out_of_range"]:
+        return {"value": float(values[0]), "joint": points[0]["out_of_range"][0]}
+    return None
+
+
+def _compare_blocks(case, config):
+    from .case import load_case
+    from .linear import linearize
+    from .modal import modes
+    from .statics import equilibrium
+
+    model = load_case(case, config=config)
+    eq = equilibrium(model)
+    with_h = modes(*_mpq(linearize(model, eq)))
+    without = modes(*_mpq(linearize(model, eq, constraint_stiffness=False)))
+    rows = []
+    for k in range(max(len(with_h), len(without))):
+        a = with_h.eigenvalues[k] if k < len(with_h) else None
+        b = without.eigenvalues[k] if k < len(without) else None
+        rel = abs(a - b) / abs(a) if a is not None and b is not None and abs(a) > 0 else None
+        rows.append([str(k + 1), "–" if a is None else f"{a.real:.6g} {a.imag:+.6g}i",
+                     "–" if b is None else f"{b.real:.6g} {b.imag:+.6g}i",
+                     "–" if rel is None else f"{rel:.3g}"])
+    lam_max = float(np.max(np.abs(eq.lam))) if eq.lam.size else 0.0
+    return [("p", f"Eigenvalues of {config} with the constraint-force stiffness Σ λ ∇²Φ (correct) "
+                  f"and without it (the common omission); largest multiplier |λ| = {lam_max:.4g}. "
+                  f"Verdict with: {with_h.verdict}; without: {without.verdict}."),
+            ("table", ["#", "s with Σλ∇²Φ", "s without", "|Δs|/|s|"], rows)]
+
+
+def _mpq(lin):
+    return lin.M, lin.P, lin.Q
+
+
+# ---------------------------------------------------------------------------------------------
+def build_report(case, *, configs=None, out_dir, run_check=True, jobs=None, studies=True):
+    """Blocks of the report of ``case`` for ``configs`` (list of names; [None] for the base)."""
+    from .case import load_case
+
+    case = str(case)
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    stem = Path(case).stem
+    configs = configs or [None]
+    base = load_case(case, config=configs[0])
+    blocks = [("h1", f"Stability report: {stem}"),
+              ("p", base.description or ""),
+              ("p", f"Case file: `{Path(case).name}`. Configurations: "
+                    + ", ".join(c or "base" for c in configs) + ". Regenerate with `mbseig report "
+                    + f"cases/{Path(case).name}" + (" --all-configs" if len(configs) > 1 else "") + "`.")]
+    summaries, cfg_blocks = [], []
+    for c in configs:
+        b, s = _config_blocks(case, c, out_dir, run_check=run_check, stem=stem)
+        cfg_blocks += b
+        summaries.append(s)
+    study_blocks, study_sums = [], []
+    if studies:
+        for st in base.report.get("studies", []):
+            if st.get("config") not in configs and not (len(configs) > 1):
+                continue
+            b, s = _study_blocks(case, st, out_dir, stem, jobs)
+            study_blocks += b
+            study_sums.append(s)
+    if len(configs) > 1:
+        blocks += _comparison(summaries, study_sums)
+    return blocks + cfg_blocks + study_blocks
+
+
+def _comparison(summaries, study_sums):
+    rows = []
+    for s in summaries:
+        crit = []
+        for st in study_sums:
+            if st.get("config") == s["config"] and "critical" in st:
+                for c in st["critical"]:
+                    where = ", ".join(f"{k} = {v:g}" for k, v in c["line"].items())
+                    val = "none in range" if c["critical"] is None else f"{c['critical']:.6g}"
+                    crit.append(f"{st['parameter']}* = {val}" + (f" ({where})" if where else ""))
+        rows.append([s["config"], str(s["dof"]), s["verdict"], _fmt(s["least_delta"], 5),
+                     _fmt(s["least_zeta"], 4), ", ".join(f"{f:.4g}" for f in s["freqs"]),
+                     ", ".join(f"{k} {v:.2f}" for k, v in s["posture"].items()),
+                     ", ".join(s["out_of_range"]) or "none",
+                     ", ".join(f"{t:.4g}" for t in s["actuator"]) or "–",
+                     "; ".join(crit) or "–"])
+    blocks = [("h2", "Comparison of the configurations"),
+              ("table", ["config", "DOF", "verdict", "least δ [1/s]", "its ζ", "frequencies [Hz]",
+                         "posture [deg]", "outside ROM", "actuator tension [N]",
+                         "critical parameters"], rows)]
+    blocks += _findings(study_sums)
+    return blocks
+
+
+def _findings(study_sums):
+    """What the follower-load study says about damping (the destabilizing-damping paradox)."""
+    out = []
+    for st in study_sums:
+        crit = st.get("critical") or []
+        lines = [c for c in crit if "damping_scale" in c["line"] and c["critical"] is not None]
+        if len(lines) < 2:
+            continue
+        by = sorted(lines, key=lambda c: -c["line"]["damping_scale"])
+        full, rest = by[0], by[1:]
+        text = [f"{st['parameter']}* = {c['critical']:.5g} at damping scale "
+                f"{c['line']['damping_scale']:g}" for c in by]
+        zero = next((c for c in by if c["line"]["damping_scale"] == 0), None)
+        small = [c for c in rest if c["line"]["damping_scale"] > 0]
+        lowered = all(c["critical"] < full["critical"] for c in small)
+        msg = ("Critical load against joint damping: " + "; ".join(text) + ". ")
+        if lowered and small:
+            msg += ("Reducing the damping lowers the critical load, and as the damping tends to zero "
+                    "the critical load does not return to the undamped value")
+            if zero is not None:
+                lim = min(c["critical"] for c in small)
+                msg += (f" ({lim:.5g} for the smallest damping vs {zero['critical']:.5g} with none)"
+                        if abs(lim - zero["critical"]) > 1e-6 * zero["critical"] else "")
+            msg += (": the destabilizing effect of small damping on a follower-loaded (circulatory) "
+                    "system. A design that relies on the joints' damping for its margin loses it "
+                    "when the damping is small.")
+        else:
+            msg += "Smaller damping does not lower the critical load over these scales."
+        out.append(("p", msg))
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+def render_markdown(blocks, out_dir) -> str:
+    out_dir = Path(out_dir)
+    lines = []
+    for b in blocks:
+        kind = b[0]
+        if kind in ("h1", "h2", "h3"):
+            lines += ["#" * int(kind[1]) + " " + b[1], ""]
+        elif kind == "p":
+            if b[1]:
+                lines += [b[1], ""]
+        elif kind == "pre":
+            lines += ["```", b[1], "```", ""]
+        elif kind == "table":
+            head, rows = b[1], b[2]
+            lines.append("| " + " | ".join(head) + " |")
+            lines.append("|" + "|".join("---" for _ in head) + "|")
+            for r in rows:
+                lines.append("| " + " | ".join(str(x).replace("|", "\\|") for x in r) + " |")
+            lines.append("")
+        elif kind == "img":
+            rel = Path(b[1]).relative_to(out_dir).as_posix()
+            lines += [f"![{b[2]}]({rel})", ""]
+    return "\n".join(lines).rstrip() + "\n"
+
+
+_CSS = """body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;color:#222}
+table{border-collapse:collapse;margin:0.6em 0;font-size:0.85em}td,th{border:1px solid #bbb;padding:2px 6px}
+th{background:#eee}img{max-width:100%;border:1px solid #ddd}figure{margin:1em 0}
+figcaption{font-size:0.85em;color:#555}code{background:#f4f4f4}"""
+
+
+def _inline(text):
+    t = html.escape(text)
+    parts = t.split("`")
+    t = "".join(f"<code>{p}</code>" if i % 2 else p for i, p in enumerate(parts))
+    parts = t.split("**")
+    return "".join(f"<strong>{p}</strong>" if i % 2 else p for i, p in enumerate(parts))
+
+
+def render_html(blocks, title) -> str:
+    out = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
+           f"<title>{html.escape(title)}</title>", f"<style>{_CSS}</style></head><body>"]
+    for b in blocks:
+        kind = b[0]
+        if kind in ("h1", "h2", "h3"):
+            out.append(f"<{kind}>{_inline(b[1])}</{kind}>")
+        elif kind == "p":
+            if b[1]:
+                out.append(f"<p>{_inline(b[1])}</p>")
+        elif kind == "pre":
+            out.append(f"<pre>{html.escape(b[1])}</pre>")
+        elif kind == "table":
+            out.append("<table><tr>" + "".join(f"<th>{_inline(h)}</th>" for h in b[1]) + "</tr>")
+            for r in b[2]:
+                out.append("<tr>" + "".join(f"<td>{_inline(str(x))}</td>" for x in r) + "</tr>")
+            out.append("</table>")
+        elif kind == "img":
+            data = base64.b64encode(Path(b[1]).read_bytes()).decode("ascii")
+            out.append(f'<figure><img src="data:image/png;base64,{data}" alt="{html.escape(b[2])}">'
+                       f"<figcaption>{_inline(b[2])}</figcaption></figure>")
+    out.append("</body></html>")
+    return "\n".join(out) + "\n"
+
+
+def write_report(case, *, out_dir=None, configs=None, all_configs=False, run_check=True,
+                 jobs=None, studies=True):
+    """Write report.md and report.html (default directory reports/<case>); returns their paths."""
+    import tomllib
+
+    case = Path(case)
+    if all_configs:
+        try:
+            data = tomllib.loads(case.read_text())
+        except (OSError, tomllib.TOMLDecodeError) as exc:
+            raise CaseError(f"cannot read case: {exc}", file=str(case)) from None
+        configs = sorted(data.get("configurations", {})) or [None]
+    out = Path(out_dir) if out_dir else Path("reports") / case.stem
+    blocks = build_report(case, configs=configs, out_dir=out, run_check=run_check, jobs=jobs,
+                          studies=studies)
+    md = out / "report.md"
+    md.write_text(render_markdown(blocks, out))
+    page = out / "report.html"
+    page.write_text(render_html(blocks, f"Stability report: {case.stem}"))
+    return md, page

@@ -1,0 +1,101 @@
+#!/usr/bin/env python3
+"""Open a report.html in headless Chromium: screenshot it and check that no image is broken.
+
+    python scripts/check_report_html.py reports/hand_device/report.html [--screenshot out.png]
+
+Checks (exit 1 on failure): every <img> is an embedded PNG data URI that decodes (no browser
+needed), and in Chromium every image has naturalWidth > 0 after load (the DOM is dumped after a
+small inline script writes the count of broken images into the page title).
+"""
+
+from __future__ import annotations
+
+import argparse
+import base64
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+         "--disable-component-update", "--no-first-run", "--hide-scrollbars"]
+
+
+def find_chromium():
+    for name in ("chromium", "chromium-browser", "google-chrome", "chrome"):
+        path = shutil.which(name)
+        if path:
+            return path
+    return None
+
+
+def check_embedded(html: str) -> list[str]:
+    """Problems with the <img> tags: not a PNG data URI, or not decodable."""
+    import io
+
+    import matplotlib.image as mpimg
+
+    problems = []
+    srcs = re.findall(r'<img[^>]*\bsrc="([^"]*)"', html)
+    if not srcs:
+        problems.append("no <img> in the page")
+    for k, src in enumerate(srcs):
+        if not src.startswith("data:image/png;base64,"):
+            problems.append(f"image {k}: not an embedded PNG ({src[:40]!r})")
+            continue
+        data = base64.b64decode(src.split(",", 1)[1], validate=True)
+        if not data.startswith(PNG_SIGNATURE):
+            problems.append(f"image {k}: bad PNG signature")
+            continue
+        img = mpimg.imread(io.BytesIO(data), format="png")
+        if img.shape[0] < 10 or img.shape[1] < 10:
+            problems.append(f"image {k}: decoded to {img.shape}")
+    return problems, len(srcs)
+
+
+def check_in_browser(page: Path, screenshot: Path, chromium: str, width=1200, height=3000):
+    """(number of images, number broken) as seen by Chromium; writes the screenshot."""
+    html = page.read_text()
+    probe = ("<script>window.addEventListener('load',()=>{const im=[...document.images];"
+             "document.title='IMAGES '+im.length+' BROKEN '+im.filter(i=>!(i.complete&&i.naturalWidth>0)).length;});</script>")
+    with tempfile.TemporaryDirectory() as tmp:
+        probed = Path(tmp) / "probe.html"
+        probed.write_text(html.replace("</body>", probe + "</body>"))
+        profile = Path(tmp) / "profile"
+        dom = subprocess.run([chromium, *FLAGS, f"--user-data-dir={profile}",
+                              "--virtual-time-budget=5000", "--dump-dom", probed.as_uri()],
+                             capture_output=True, text=True, timeout=120)
+        m = re.search(r"<title>IMAGES (\d+) BROKEN (\d+)</title>", dom.stdout)
+        subprocess.run([chromium, *FLAGS, f"--user-data-dir={profile}2",
+                        f"--screenshot={screenshot}", f"--window-size={width},{height}",
+                        page.resolve().as_uri()], capture_output=True, timeout=120)
+    if not m:
+        raise RuntimeError("chromium did not run the probe script:\n" + dom.stderr[-2000:])
+    return int(m.group(1)), int(m.group(2))
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("html", type=Path)
+    ap.add_argument("--screenshot", type=Path, default=None)
+    args = ap.parse_args(argv)
+    html = args.html.read_text()
+    problems, n = check_embedded(html)
+    print(f"{n} embedded images; {len(problems)} problems")
+    for p in problems:
+        print("  " + p)
+    chromium = find_chromium()
+    if chromium is None:
+        print("chromium not found: browser check skipped")
+        return 1 if problems else 0
+    shot = args.screenshot or args.html.with_name("screenshot.png")
+    total, broken = check_in_browser(args.html, shot, chromium)
+    print(f"chromium: {total} images, {broken} broken; screenshot {shot}")
+    return 1 if problems or broken or total != n else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
