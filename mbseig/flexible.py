@@ -35,7 +35,7 @@ from .model.affine import Affine, combine
 from .model.beams import THEORIES, BeamElement, BeamSection, RotationLock, section_properties
 
 __all__ = ["BeamTheoryWarning", "EB_SLENDERNESS", "MIN_SLENDERNESS", "AUTO_START_ELEMENTS",
-           "LinearFEBody", "allocate", "assemble"]
+           "LinearFEBody", "allocate", "assemble", "craig_bampton", "export_fe_body"]
 
 EB_SLENDERNESS = 10.0  # below this, Euler–Bernoulli neglects shear that matters
 MIN_SLENDERNESS = 5.0  # below this, no beam theory is adequate
@@ -371,6 +371,7 @@ def _assemble_beam(b, spec, q_init, forces, constraints, mass_blocks, mass_eleme
         "shear_parameter": s.shear_parameter(spec.length), "E": s.E, "G": s.G, "A": s.A,
         "I": s.I, "rho": s.rho, "shear_coefficient": s.kappa, "ends": list(spec.ends),
         "warnings": list(spec.warnings), "nodes": [f"{spec.name}.n{k}" for k in range(n + 1)],
+        "points": list(spec.points),
     }
 
 
@@ -405,3 +406,81 @@ def _assemble_fe(b, spec, constraints, forces, mass_blocks, q_init):
     return {"type": "fe_body", "interface": list(spec["interface"]),
             "interface_dofs": spec["ndof"], "modal_coordinates": len(spec["eta_idx"]),
             "size": int(spec["M"].shape[0])}
+
+
+# ---------------------------------------------------------------------------------------------
+def craig_bampton(M, K, boundary, n_modes=None):
+    """Craig–Bampton reduction of (M, K) keeping the ``boundary`` dofs physical.
+
+        q = T [u_b; η],   T = ┌ I    0 ┐,   Ψ = −K_ii⁻¹ K_ib (static constraint modes),
+                              └ Ψ    Φ ┘    Φ: the lowest ``n_modes`` fixed-interface modes
+
+    (all of them when None: then T is square and the reduction exact).  Returns (Tᵀ M T, Tᵀ K T, T)
+    with the boundary dofs first, in the order given.
+    """
+    import scipy.linalg as sla
+
+    M, K = np.asarray(M, dtype=float), np.asarray(K, dtype=float)
+    n = M.shape[0]
+    b = np.asarray(boundary, dtype=np.intp)
+    i = np.setdiff1d(np.arange(n), b)
+    Kii, Kib = K[np.ix_(i, i)], K[np.ix_(i, b)]
+    Psi = -np.linalg.solve(Kii, Kib)
+    k = i.size if n_modes is None else min(int(n_modes), i.size)
+    _, Phi = sla.eigh(Kii, M[np.ix_(i, i)], subset_by_index=[0, k - 1]) if k else (None, np.zeros((i.size, 0)))
+    T = np.zeros((n, b.size + k))
+    T[b, :b.size] = np.eye(b.size)
+    T[np.ix_(i, np.arange(b.size))] = Psi
+    T[np.ix_(i, np.arange(b.size, b.size + k))] = Phi
+    Mr, Kr = T.T @ M @ T, T.T @ K @ T
+    return 0.5 * (Mr + Mr.T), 0.5 * (Kr + Kr.T), T
+
+
+def export_fe_body(model, interface, path, *, n_modes=None, q=None, lam=None):
+    """Write a model (typically one free-free beam) as a Craig–Bampton FE body.
+
+    interface : point names; each contributes (P.x, P.y, θ) with θ the angle coordinate of the
+        beam node at P.  The matrices are M(q) and K(q) + Σλ∇²Φ at q (default the initial
+        positions), on the model's coordinates when it has no constraints.  ``path`` ending in
+        .npz gets arrays ``M`` and ``K``; ending in .mtx gives ``<stem>_M.mtx`` and
+        ``<stem>_K.mtx`` (MatrixMarket).  Returns the written file names.
+    """
+    from pathlib import Path
+
+    if model.n_constraints:
+        raise CaseError("export_fe_body needs a model without constraints (a free body)",
+                        element="export")
+    q = model.q_init if q is None else q
+    names = list(model.coordinate_names)
+    beams = (model.flexible or {}).get("bodies", {})
+    boundary = []
+    for p in interface:
+        for ax in ("x", "y"):
+            if f"{p}.{ax}" not in names:
+                raise CaseError(f"interface point {p!r} has no free coordinate {p}.{ax}",
+                                element="export")
+            boundary.append(names.index(f"{p}.{ax}"))
+        theta = [f"{nm}.n{0 if r['points'][0] == p else r['elements']}.theta"
+                 for nm, r in beams.items() if r.get("type") == "beam" and p in r["points"]]
+        theta = [t for t in theta if t in names]
+        if len(theta) != 1:
+            raise CaseError(f"interface point {p!r} must be the end of exactly one beam with a "
+                            "free rotation", element="export")
+        boundary.append(names.index(theta[0]))
+    M = model.mass_matrix(q).toarray()
+    K = model.force_jacobians(q)[0].toarray()
+    Mr, Kr, _ = craig_bampton(M, K, boundary, n_modes)
+    path = Path(path)
+    if path.suffix == ".npz":
+        np.savez(path, M=Mr, K=Kr)
+        return [str(path)]
+    if path.suffix == ".mtx":
+        import scipy.io
+
+        out = []
+        for key, A in (("M", Mr), ("K", Kr)):
+            f = path.with_name(f"{path.stem}_{key}.mtx")
+            scipy.io.mmwrite(str(f), A, symmetry="symmetric")
+            out.append(str(f))
+        return out
+    raise CaseError(f"export to .npz or .mtx, got {path.name!r}", element="export")

@@ -99,12 +99,13 @@ def refine_analysis(path, *, config=None, params=None, request=None, solver="aut
     req = dict(fl.get("refinement") or {})
     req.update({k: v for k, v in (request or {}).items() if v is not None})
     if req.get("modes") is None and req.get("f_max") is None:
-        raise CaseError("refinement needs the modes of interest (a count or f_max)",
-                        element="refinement")
+        raise CaseError("refinement needs the modes of interest: [refinement] modes or f_max, "
+                        "or --refine-modes / --refine-fmax", file=str(path), element="refinement")
     accuracy = float(req.get("accuracy", 1e-3))
     max_el = int(req.get("max_elements", 256))
     if not accuracy > 0:
-        raise CaseError(f"accuracy must be positive, got {accuracy:g}", element="refinement")
+        raise CaseError(f"accuracy must be positive, got {accuracy:g}", file=str(path),
+                        element="refinement")
     bodies = fl.get("bodies", {})
     auto = [nm for nm, r in bodies.items() if r.get("type") == "beam" and r.get("auto")]
     data = tomllib.loads(path.read_bytes().decode("utf-8"))

@@ -28,6 +28,7 @@ from .errors import EquilibriumError, MbseigError
 
 __all__ = ["Equilibrium", "equilibrium", "constraint_rank"]
 
+NONMONOTONE_MEMORY = 5  # merits the line search compares against (1: monotone)
 DENSE_LIMIT = 4000  # augmented size up to which the Newton step is a dense SVD least-squares solve
 
 
@@ -102,6 +103,7 @@ def _equilibrium(model, *, tol, max_iter, rank_tol, q_init):
 
     r1, r2, fr, cr, Phi_q = residuals(q, lam)
     it = 0
+    recent = []  # merits of the last NONMONOTONE_MEMORY iterates
     while max(fr, cr) > tol:
         if it >= max_iter:
             raise _failure(model, q, r1, r2, fr, cr, max_iter)
@@ -112,7 +114,11 @@ def _equilibrium(model, *, tol, max_iter, rank_tol, q_init):
         rhs = np.concatenate([r1, -r2])
         step = _solve(A, rhs)
         dq, dl = step[:n], step[n:]
-        merit = max(fr, cr)
+        # non-monotone line search (Grippo, Lampariello & Lucidi 1986): a step is accepted when
+        # it improves on the worst of the last few merits, so that a stiff elastic member
+        # (a beam's EA stretched by a step's linearized rotation) does not stall Newton
+        recent = (recent + [max(fr, cr)])[-NONMONOTONE_MEMORY:]
+        merit = max(recent)
         alpha = 1.0
         for _ in range(40):
             qt, lt = q + alpha * dq, lam + alpha * dl

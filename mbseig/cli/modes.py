@@ -12,13 +12,57 @@ def register(sub):
     add_case_arguments(p)
     p.add_argument("--solver", default="auto", choices=["auto", *SOLVERS],
                    help="eigensolver path (default: chosen by structure)")
+    p.add_argument("--refine-modes", type=int, default=None, metavar="K",
+                   help='refine elements = "auto" beams until the lowest K modes converge')
+    p.add_argument("--refine-fmax", type=float, default=None, metavar="HZ",
+                   help='refine elements = "auto" beams until the modes below HZ converge')
+    p.add_argument("--accuracy", type=float, default=None, metavar="A",
+                   help="relative accuracy of the refined modes (default: the case's, else 1e-3)")
     p.add_argument("--reactions", action="store_true",
                    help="also print the constraint multipliers (joint reactions) at equilibrium")
     p.set_defaults(run=run)
 
 
+def _refine_request(args):
+    """{"modes", "f_max", "accuracy"} from --refine-modes/--refine-fmax/--accuracy, or None."""
+    if args.refine_modes is None and args.refine_fmax is None:
+        if args.accuracy is None:
+            return None
+    if args.refine_modes is not None and args.refine_modes < 1:
+        raise CaseError(f"--refine-modes must be a positive integer, got {args.refine_modes}")
+    for name, v in (("--refine-fmax", args.refine_fmax), ("--accuracy", args.accuracy)):
+        if v is not None and not v > 0:
+            raise CaseError(f"{name} must be positive, got {v:g}")
+    return {"modes": args.refine_modes, "f_max": args.refine_fmax, "accuracy": args.accuracy}
+
+
+def _print_flexible(a):
+    bodies = (getattr(a.model, "flexible", None) or {}).get("bodies") or {}
+    ref = a.refinement
+    for nm, r in bodies.items():
+        if r.get("type") != "beam":
+            print(f"FE body {nm}: {r['size']} coordinates, interface {', '.join(r['interface'])}")
+            continue
+        line = (f"beam {nm}: {r['theory']}, slenderness L/d = {r['slenderness']:.4g}, "
+                f"{r['elements']} elements")
+        if ref is not None and nm in ref.beams:
+            b = ref.beams[nm]
+            err = b["estimated_error"]
+            line += (f" (refined: estimated error {err:.2g}" if err is not None else " (refined")
+            line += ")" if b["converged"] else ", NOT converged)"
+        print(line)
+        for w in r.get("warnings", ()):
+            print(f"  warning: {w}")
+    if ref is not None:
+        what = f"lowest {ref.modes}" if ref.modes else ""
+        if ref.f_max:
+            what += (" and " if what else "") + f"below {ref.f_max:g} Hz"
+        print(f"refinement: modes {what} to {ref.accuracy:g}; estimated error "
+              f"{ref.estimated_error:.2g} after {ref.solves} solves")
+
+
 def run(args) -> int:
-    a = analyze(args.case, solver=args.solver, **case_kwargs(args))
+    a = analyze(args.case, solver=args.solver, refine=_refine_request(args), **case_kwargs(args))
     if args.json:
         out = modes_json(a)
         if args.reactions:
@@ -34,6 +78,7 @@ def run(args) -> int:
         print("redundant: " + "; ".join(eq.redundant))
     print(f"equilibrium: residual {eq.residual:.2e} after {eq.iterations} Newton iterations")
     print(f"solver: {a.modes.solver} ({a.modes.solver_reason})")
+    _print_flexible(a)
     print(a.modes.table())
     print(f"verdict: {a.modes.verdict}")
     if args.reactions:
