@@ -238,3 +238,20 @@ def test_bad_beam_input(tmp_path, edit, message):
     with pytest.raises(CaseError, match=message) as info:
         mbseig.load_case(write_case(tmp_path, text))
     assert "beams[0] 'beam'" in str(info.value) and "case.toml" in str(info.value)
+
+
+def test_cli_refine_options_extend_json(capsys):
+    import json
+
+    from mbseig.cli import main
+
+    path = str(CASES / "cantilever_beam.toml")
+    assert main(["modes", path, "--json", "--refine-modes", "2", "--accuracy", "1e-2"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["refinement"]["modes"] == 2 and out["refinement"]["accuracy"] == 1e-2
+    assert out["refinement"]["estimated_error"] <= 1e-2
+    beam = out["flexible_bodies"]["beam"]
+    assert beam["theory"] == "euler-bernoulli" and beam["slenderness"] == pytest.approx(100.0)
+    assert beam["elements"] == out["refinement"]["beams"]["beam"]["elements"]
+    assert main(["modes", path, "--refine-modes", "0"]) == 2
+    assert "--refine-modes must be a positive integer" in capsys.readouterr().err
