@@ -202,6 +202,9 @@ class _Fields:
         return x
 
     def vec(self, key, size, default=_REQUIRED):
+        if key not in self.t and default is not _REQUIRED:
+            self.used.add(key)
+            return None if default is None else np.asarray(default, dtype=float)
         value = self.raw(key, default)
         if value is None:
             return None
