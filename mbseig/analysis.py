@@ -48,8 +48,9 @@ def analyze(path, *, config=None, params=None, solver="auto", constraint_stiffne
     try:
         eq = equilibrium(model)
         lin = linearize(model, eq, constraint_stiffness=constraint_stiffness)
+        extra = {} if lin.constraint_jacobian is None else {"constraints": lin.constraint_jacobian}
         md = modes(lin.M, lin.P, lin.Q, solver=solver, N=lin.N,
-                   coordinate_names=lin.coordinate_names, **(modes_options or {}))
+                   coordinate_names=lin.coordinate_names, **extra, **(modes_options or {}))
     except MbseigError as exc:
         raise exc.located(file=model.source) from None
     return Analysis(model, eq, lin, md)

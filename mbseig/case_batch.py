@@ -116,7 +116,10 @@ def vector_template(text, names, var, ivals):
         v = vector_evaluate(part, names, var, ivals)
         if not np.all(v == np.round(v)) or np.any(np.abs(v) > 1e15):
             raise _Decline
-        cols.append(v.astype(np.int64).astype(str).tolist())
+        cols.append(list(map(str, v.astype(np.int64).tolist())))
+    if len(parts) == 3:  # one placeholder: "prefix{expr}suffix"
+        pre, suf = parts[0], parts[2]
+        return [pre + s + suf for s in cols[1]]
     cols = [c for c in cols if c is not None]
     return ["".join(t) for t in zip(*cols)] if len(cols) > 1 else cols[0]
 
@@ -156,6 +159,8 @@ class Batcher:
         self.g_const = None
         self.gravity = None
         self.forces = None
+        self._rows: dict[str, int] = {}  # point name → row of the index/position tables
+        self._idx_chunks, self._pos_chunks, self._n_rows, self._tables = [], [], 0, None
 
     def bind(self, g_const, forces, gravity):
         self.g_const, self.forces, self.gravity = g_const, forces, gravity
@@ -199,17 +204,30 @@ class Batcher:
             b.q_init += pos.ravel().tolist()
         b.point_index.update(zip(names, idx))
         b.point_pos.update(zip(names, pos))
+        self._register(names, idx, pos)
+
+    def _register(self, names, idx, pos):
+        start = self._n_rows
+        self._rows.update(zip(names, range(start, start + len(names))))
+        self._idx_chunks.append(np.asarray(idx, np.intp).reshape(len(names), -1))
+        self._pos_chunks.append(np.asarray(pos, float).reshape(len(names), -1))
+        self._n_rows += len(names)
+        self._tables = None
 
     def _point_rows(self, refs, params, var, ivals):
         """(idx, pos) arrays (nb, dim) of templated basic-point names."""
         b = self.b
         names = vector_template(refs, params, var, ivals)
-        try:
-            idx = np.array([b.point_index[nm] for nm in names], dtype=np.intp).reshape(ivals.size, b.dim)
-            pos = np.array([b.point_pos[nm] for nm in names], dtype=float).reshape(ivals.size, b.dim)
-        except KeyError:
-            raise _Decline from None
-        return idx, pos
+        missing = [nm for nm in set(names) if nm not in self._rows]
+        if missing:  # points added one at a time by mbseig.case
+            if any(nm not in b.point_index for nm in missing):
+                raise _Decline
+            self._register(missing, [b.point_index[nm] for nm in missing],
+                           [b.point_pos[nm] for nm in missing])
+        if self._tables is None:
+            self._tables = (np.concatenate(self._idx_chunks), np.concatenate(self._pos_chunks))
+        rows = np.fromiter(map(self._rows.__getitem__, names), dtype=np.intp, count=len(names))
+        return self._tables[0][rows], self._tables[1][rows]
 
     def _masses(self, item, label, var, ivals, params):
         if set(item) - {"point", "mass", "repeat"}:

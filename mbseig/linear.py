@@ -28,6 +28,8 @@ from .statics import Equilibrium
 
 __all__ = ["LinearModel", "linearize", "null_space_basis"]
 
+SPARSE_MIN = 5000  # coordinates above which linearize keeps M, P, Q sparse by default
+
 
 @dataclass(frozen=True, eq=False)
 class LinearModel:
@@ -52,9 +54,12 @@ class LinearModel:
     n_constraints: int = 0
     constraint_stiffness: bool = True
     tolerances: dict = field(default_factory=dict)
+    constraint_jacobian: object = None  # sparse Φ_q when M, P, Q stay in full coordinates
 
     @property
     def dof(self) -> int:
+        if self.constraint_jacobian is not None:
+            return self.M.shape[0] - self.rank
         return self.M.shape[0]
 
     @property
@@ -92,12 +97,16 @@ def null_space_basis(Phi_q, n, rank_tol):
 
 
 def linearize(model, eq: Equilibrium, *, rank_tol: float = 1e-10,
-              constraint_stiffness: bool = True) -> LinearModel:
+              constraint_stiffness: bool = True, sparse: bool | None = None) -> LinearModel:
     """Linear model about ``eq`` (see module docstring).
 
     rank_tol : relative singular-value threshold for null Φ_q.
     constraint_stiffness : include H(λ₀).  ``False`` reproduces the common mistake of dropping
         the constraint-force stiffness; it exists to measure that error, never for production.
+    sparse : keep M, P, Q sparse (default: when the model has more than ``SPARSE_MIN``
+        coordinates).  Without constraints N is the sparse identity; with constraints no
+        null-space basis is formed: M, P, Q stay in full coordinates and ``constraint_jacobian``
+        holds Φ_q(q₀) for the bordered pencil of :mod:`mbseig.sparse` (N is None).
     """
     if isinstance(model, LinearCase):
         return LinearModel(M=model.M, P=model.P, Q=model.Q, N=np.eye(model.n), q0=np.zeros(model.n),
@@ -107,6 +116,15 @@ def linearize(model, eq: Equilibrium, *, rank_tol: float = 1e-10,
     K, C = model.force_jacobians(q0)
     if constraint_stiffness and model.n_constraints:
         K = K + model.constraint_hessian(q0, lam0)
+    if model.n > SPARSE_MIN if sparse is None else sparse:
+        G = model.phi_q(q0) if model.n_constraints else None
+        N = sp.identity(model.n, format="csr") if G is None else None
+        return LinearModel(
+            M=model.mass_matrix(q0).tocsr(), P=C.tocsr(), Q=K.tocsr(), N=N, q0=q0, lam0=lam0,
+            coordinate_names=model.coordinate_names, name=model.name, parameters=model.parameters,
+            rank=eq.rank, n_constraints=model.n_constraints,
+            constraint_stiffness=constraint_stiffness,
+            tolerances={"rank_tol": rank_tol, "sparse": True}, constraint_jacobian=G)
     N, rank = null_space_basis(model.phi_q(q0), model.n, rank_tol)
     Md, Cd, Kd = (A.toarray() for A in (model.mass_matrix(q0), C, K))
     if model.n_constraints == 0:

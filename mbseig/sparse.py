@@ -161,21 +161,23 @@ def _companion_partial(Mb, Pb, Qb, k, sigma, scale, ncv, maxiter, tol):
 def _eta(Mb, Pb, Qb, s, X, norms):
     nM, nP, nQ = norms
     R = (Mb @ X) * s**2 + (Pb @ X) * s + Qb @ X
-    den = (np.abs(s) ** 2 * nM + np.abs(s) * nP + nQ) * np.linalg.norm(X, axis=0)
+    den = (np.abs(s) ** 2 * nM + np.abs(s) * nP + nQ) * _colnorm(X)
+    rn = _colnorm(R)
     with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(den > 0, np.linalg.norm(R, axis=0) / den, np.inf)
+        return np.where(den > 0, rn / den, np.where(rn == 0, 0.0, np.inf))
 
 
-def _kappa(Mb, Pb, s, X, Y, norms):
+def _kappa(Mb, Pb, s, X, Yc, norms):
+    """κ with Yc the conjugated left vectors (yᴴ = Ycᵀ)."""
     nM, nP, nQ = norms
-    num = (np.abs(s) ** 2 * nM + np.abs(s) * nP + nQ) * np.linalg.norm(X, axis=0) * np.linalg.norm(Y, axis=0)
-    den = np.abs(np.einsum("ij,ij->j", Y.conj(), (Mb @ X) * (2 * s) + Pb @ X))
+    num = (np.abs(s) ** 2 * nM + np.abs(s) * nP + nQ) * _colnorm(X) * _colnorm(Yc)
+    den = np.abs(np.einsum("ij,ij->j", Yc, (Mb @ X) * (2 * s) + Pb @ X))
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(den > 0, num / den, np.inf)
 
 
 def _unit(X):
-    nrm = np.linalg.norm(X, axis=0)
+    nrm = _colnorm(X)
     nrm[nrm == 0] = 1.0
     return X / nrm
 
@@ -247,53 +249,84 @@ def solve_partial(M, P, Q, *, n_modes: int | None = None, target: float | None =
         if k > limit:
             raise SolverError(f"{want} modes asked of a problem with {nb} unknowns: use the dense path")
         if symmetric_path:
-            sig = omega_t**2
-            w, V, sig = _undamped_partial(Mb, Qb, k, sig, scale / max(norms[0], 1e-300), ncv, maxiter,
-                                          arpack_tol)
-            alpha, beta = extras.get("alpha", 0.0), extras.get("beta", 0.0)
-            s, X1, *_ = _from_undamped(w, V, alpha, beta)
-            X2 = X1
-            Y = X1.conj()
+            w, V, sig = _undamped_partial(Mb, Qb, k, omega_t**2, scale / max(norms[0], 1e-300), ncv,
+                                          maxiter, arpack_tol)
             found = np.sqrt(np.abs(w))
             radius = np.max(np.abs(w - sig))
-            done_band = band is None or (radius >= max(sig - lo**2, hi**2 - sig) or k >= limit)
+            done_band = band is None or radius >= max(sig - lo**2, hi**2 - sig) or k >= limit
         else:
             sig = 1j * omega_t if omega_t else 0.0
             s, X1, X2, sig = _companion_partial(Mb, Pb, Qb, k, sig, w_scale, ncv, maxiter, arpack_tol)
-            Y = None
-            found = np.abs(s)
-            done_band = band is None or np.max(found) > hi
+            done_band = band is None or np.max(np.abs(s)) > hi
         if done_band:
             break
         if want >= max_modes:
             raise SolverError(f"band {band!r} holds more than max_modes = {max_modes} modes")
         want = min(2 * want, max_modes)
-    X1, X2 = _unit(X1), _unit(X2)
-    e1, e2 = _eta(Mb, Pb, Qb, s, X1, norms), _eta(Mb, Pb, Qb, s, X2, norms)
-    take2 = e2 < e1
-    X = np.where(take2[None, :], X2, X1)
-    eta = np.minimum(e1, e2)
-    if not symmetric_path:
+    if symmetric_path:
+        if band is not None:
+            inside = (found >= lo) & (found <= hi)
+            w, V = w[inside], V[:, inside]
+        s, X, eta, kappa = _undamped_pairs(Mb, Pb, Qb, w, V, extras, norms)
+        take2 = np.zeros(0, bool)
+    else:
+        X1, X2 = _unit(X1), _unit(X2)
+        e1, e2 = _eta(Mb, Pb, Qb, s, X1, norms), _eta(Mb, Pb, Qb, s, X2, norms)
+        take2 = e2 < e1
+        X = X1
+        X[:, take2] = X2[:, take2]
+        del X1, X2
+        eta = np.minimum(e1, e2)
         s, X, eta = _select(s, X, eta, want if band is None else None, omega_t, band)
-        Y = X.conj()
         symmetric_all = all(_is_sym(A, sym_tol) for A in (Mb, Pb, Qb))
-        if left and not symmetric_all:
-            Y = _left_vectors(Mb, Pb, Qb, s, k, sig, ncv, maxiter, arpack_tol, w_scale)
-    elif band is not None:
-        inside = (found >= lo) & (found <= hi)
-        keep = np.concatenate([inside, inside])  # _from_undamped returns [s₊, s₋]
-        s, X, Y, eta = s[keep], X[:, keep], Y[:, keep], eta[keep]
-    kappa = _kappa(Mb, Pb, s, X, _unit(Y), norms)
+        Yc = X if symmetric_all or not left else \
+            _left_vectors(Mb, Pb, Qb, s, k, sig, ncv, maxiter, arpack_tol, w_scale).conj()
+        kappa = _kappa(Mb, Pb, s, X, Yc, norms)
     bad = eta > verify_tol
     if np.any(bad):
         worst = ", ".join(f"{z.real:.6g}{z.imag:+.6g}j (η={e:.1e})" for z, e in zip(s[bad][:5], eta[bad][:5]))
         raise SolverError(f"{name}: {int(bad.sum())} returned pairs fail the backward-error check "
                           f"η ≤ {verify_tol:g}: {worst}")
-    Xq = _unit(X[:n])
+    Xq = _unit(X[:n]) if m else X
     return QEPSolution(s, Xq, eta, kappa, name, reason, 0, norms,
                        {**extras, "shift": complex(sig) if np.iscomplex(sig) else float(np.real(sig)),
                         "n_requested": want, "arpack_k": k, "n_constraint_rows": m,
                         "verify_tol": verify_tol, "second_half_vectors": int(np.sum(take2))})
+
+
+def _colnorm(X):
+    if np.iscomplexobj(X):
+        return np.sqrt(np.einsum("ij,ij->j", X.real, X.real) + np.einsum("ij,ij->j", X.imag, X.imag))
+    return np.sqrt(np.einsum("ij,ij->j", X, X))
+
+
+def _undamped_pairs(Mb, Pb, Qb, w, V, extras, norms):
+    """s₊, s₋ of every undamped mode (ω², v) with real vectors, η and κ in real arithmetic.
+
+    With y = x = v (symmetric M, P, Q):  κ = (|s|²‖M‖ + |s|‖P‖ + ‖Q‖)‖v‖² / |2s vᵀMv + vᵀPv|.
+    """
+    s, _, _, _, _ = _from_undamped(w, np.zeros((0, w.size)), extras.get("alpha", 0.0),
+                                   extras.get("beta", 0.0))
+    V = V / _colnorm(V)
+    MV, PV, QV = Mb @ V, Pb @ V, Qb @ V
+    nM, nP, nQ = norms
+    a, b = np.einsum("ij,ij->j", V, MV), np.einsum("ij,ij->j", V, PV)
+    k = w.size
+    rn = np.empty(2 * k)
+    for half in (slice(0, k), slice(k, 2 * k)):  # s₊ then s₋, both with the vectors V
+        sh = s[half]
+        s2 = sh * sh
+        Rr = MV * s2.real + PV * sh.real + QV
+        Ri = MV * s2.imag + PV * sh.imag
+        rn[half] = np.sqrt(np.einsum("ij,ij->j", Rr, Rr) + np.einsum("ij,ij->j", Ri, Ri))
+        del Rr, Ri
+    weight = np.abs(s) ** 2 * nM + np.abs(s) * nP + nQ
+    with np.errstate(divide="ignore", invalid="ignore"):
+        eta = np.where(weight > 0, rn / weight, np.where(rn == 0, 0.0, np.inf))
+        den = np.abs(2 * s * np.concatenate([a, a]) + np.concatenate([b, b]))
+        kappa = np.where(den > 0, weight / den, np.inf)
+    VV = np.concatenate([V, V], axis=1)
+    return s, VV, eta, kappa
 
 
 def _select(s, X, eta, count, omega_t, band):

@@ -2,16 +2,26 @@
 
 from __future__ import annotations
 
+import math
+
 from ..analysis import analyze, modes_json
+from ..errors import CaseError
 from ..qep import SOLVERS
+from ..sparse import PARTIAL_SOLVERS
 from .common import add_case_arguments, case_kwargs, print_json
 
 
 def register(sub):
     p = sub.add_parser("modes", help="solve the modes and classify their stability")
     add_case_arguments(p)
-    p.add_argument("--solver", default="auto", choices=["auto", *SOLVERS],
+    p.add_argument("--solver", default="auto", choices=["auto", *SOLVERS, *PARTIAL_SOLVERS],
                    help="eigensolver path (default: chosen by structure)")
+    p.add_argument("--n-modes", type=int, default=None, metavar="K",
+                   help="only the K modes nearest the target (sparse shift-invert path, large models)")
+    p.add_argument("--target-hz", type=float, default=None, metavar="F",
+                   help="with --n-modes: the modes nearest F Hz (default 0: the lowest)")
+    p.add_argument("--band-hz", type=float, nargs=2, default=None, metavar=("F1", "F2"),
+                   help="every mode with F1 <= omega_n/2pi <= F2 (sparse shift-invert path)")
     p.add_argument("--refine-modes", type=int, default=None, metavar="K",
                    help='refine elements = "auto" beams until the lowest K modes converge')
     p.add_argument("--refine-fmax", type=float, default=None, metavar="HZ",
@@ -21,6 +31,19 @@ def register(sub):
     p.add_argument("--reactions", action="store_true",
                    help="also print the constraint multipliers (joint reactions) at equilibrium")
     p.set_defaults(run=run)
+
+
+def _partial_options(args) -> dict:
+    opts = {}
+    if args.n_modes is not None:
+        if args.n_modes < 1:
+            raise CaseError(f"--n-modes must be a positive integer, got {args.n_modes}")
+        opts["n_modes"] = args.n_modes
+    if args.target_hz is not None:
+        opts["target"] = 2 * math.pi * args.target_hz
+    if args.band_hz is not None:
+        opts["band"] = tuple(2 * math.pi * f for f in args.band_hz)
+    return opts
 
 
 def _refine_request(args):
@@ -62,7 +85,8 @@ def _print_flexible(a):
 
 
 def run(args) -> int:
-    a = analyze(args.case, solver=args.solver, refine=_refine_request(args), **case_kwargs(args))
+    a = analyze(args.case, solver=args.solver, modes_options=_partial_options(args) or None,
+                refine=_refine_request(args), **case_kwargs(args))
     if args.json:
         out = modes_json(a)
         if args.reactions:
