@@ -265,10 +265,15 @@ def _compare_blocks(case, config):
     eq = equilibrium(model)
     with_h = modes(*_mpq(linearize(model, eq)))
     without = modes(*_mpq(linearize(model, eq, constraint_stiffness=False)))
+    from scipy.optimize import linear_sum_assignment
+
+    # pair each eigenvalue with its nearest counterpart (listings differ when a pair turns real)
+    sa, sb = with_h.all_eigenvalues, without.all_eigenvalues
+    ia, ib = linear_sum_assignment(np.abs(sa[:, None] - sb[None, :]))
+    pairs = sorted(((sa[i], sb[j]) for i, j in zip(ia, ib) if sa[i].imag >= 0),
+                   key=lambda p: (abs(p[0]), p[0].imag))
     rows = []
-    for k in range(max(len(with_h), len(without))):
-        a = with_h.eigenvalues[k] if k < len(with_h) else None
-        b = without.eigenvalues[k] if k < len(without) else None
+    for k, (a, b) in enumerate(pairs):
         rel = abs(a - b) / abs(a) if a is not None and b is not None and abs(a) > 0 else None
         rows.append([str(k + 1), "–" if a is None else f"{a.real:.6g} {a.imag:+.6g}i",
                      "–" if b is None else f"{b.real:.6g} {b.imag:+.6g}i",

@@ -19,7 +19,8 @@ never used.
 Boundaries.  A tracked eigenvalue is unstable where h = δ + tol < 0, with δ = −Re s and tol the
 per-eigenvalue stability tolerance of :mod:`mbseig.modal` (``safety`` κ max(η, ε), ``stability_rtol``
 |s|).  Where h changes sign between two grid points, the crossing is located by Brent's method on
-h(p) (each evaluation re-solves the model and picks the eigenvalue matching the track by MAC) to
+h(p) (each evaluation re-solves the model and picks the eigenvalue matching the track by MAC; where
+several match within ``AMBIGUOUS_MAC``, as the partners of a collision do, the least stable one) to
 ``xtol = xtol_rel · |stop − start|``; conjugate duplicates are merged.  For a damped crossing the
 root is δ = −tol, within tol/|dδ/dp| of δ = 0; for an undamped flutter onset (δ ≡ 0 before the
 collision) it is the collision itself to O(tol²).
@@ -43,6 +44,7 @@ __all__ = ["parse_range", "SweepResult", "run_sweep", "evaluate_point", "mac_mat
 
 CONJUGATE_PENALTY = 2.0
 DISTANCE_WEIGHT = 1e-3
+AMBIGUOUS_MAC = 0.05
 
 
 def parse_range(text: str):
@@ -186,16 +188,28 @@ def boundary_residual(case, config, params, axis, p, ref_s, ref_shape, *, safety
     s, X, tol = pt["eigenvalues"], pt["shapes"], pt["tol"]
     scale = max(abs(ref_s), float(np.max(np.abs(s))), 1e-300)
     cost = _match_cost(np.array([ref_s]), ref_shape[:, None], s, X, scale)[0]
-    c = int(np.argmin(cost))
+    # near a collision (flutter onset) the two partners have nearly equal shapes: among the
+    # eigenvalues matching within AMBIGUOUS_MAC, the least stable one decides
+    cand = np.flatnonzero(cost <= cost.min() + AMBIGUOUS_MAC)
+    h = -s[cand].real + tol[cand]
+    c = int(cand[np.argmin(h)])
     return float(-s[c].real + tol[c]), complex(s[c])
 
 
-def locate_boundary(case, config, params, axis, lo, hi, ref_s, ref_shape, xtol, *, safety=10.0,
-                    stability_rtol=1e-12):
-    """Brent's method on h(p) = δ + tol of the tracked eigenvalue in [lo, hi] (a pure function)."""
+def locate_boundary(case, config, params, axis, lo, hi, ref_s, ref_shape, xtol, h_lo=None,
+                    h_hi=None, *, safety=10.0, stability_rtol=1e-12):
+    """Brent's method on h(p) = δ + tol of the tracked eigenvalue in [lo, hi] (a pure function).
+
+    h_lo, h_hi : the tracked values at the bracket ends (from the grid), so that the bracket's
+    signs are those the tracker saw even where h is at the level of the tolerance.
+    """
     from scipy.optimize import brentq
 
     def h(p):
+        if p == lo and h_lo is not None:
+            return h_lo
+        if p == hi and h_hi is not None:
+            return h_hi
         return boundary_residual(case, config, params, axis, p, ref_s, ref_shape, safety=safety,
                                  stability_rtol=stability_rtol)[0]
 
@@ -411,7 +425,8 @@ def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None,
                         continue
                     searches.append(((l, j, k), (case, config, {**fixed, **line}, axis0,
                                                  float(values0[k]), float(values0[k + 1]),
-                                                 complex(S[k, j]), shapes[(k, j)], xtol), opts))
+                                                 complex(S[k, j]), shapes[(k, j)], xtol,
+                                                 float(a), float(b)), opts))
         found = runner.map(locate_boundary, [(a, kw) for _, a, kw in searches], "boundaries")
     boundaries = []
     for ((l, j, k), _, _), res in zip(searches, found):
@@ -434,6 +449,7 @@ def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None,
                        tolerances={"xtol": xtol, "xtol_rel": xtol_rel, "safety": safety,
                                    "stability_rtol": stability_rtol,
                                    "conjugate_penalty": CONJUGATE_PENALTY,
+                                   "ambiguous_mac": AMBIGUOUS_MAC,
                                    "distance_weight": DISTANCE_WEIGHT},
                        runner=runner.kind)
 

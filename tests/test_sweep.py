@@ -139,3 +139,25 @@ def test_mac_matrix_invariant_to_phase():
     rng = np.random.default_rng(0)
     a = rng.standard_normal((5, 2)) + 1j * rng.standard_normal((5, 2))
     np.testing.assert_allclose(np.diag(mac_matrix(a, a * np.exp(0.7j))), 1.0, rtol=1e-14)
+
+
+def test_undamped_flutter_onset_of_the_device():
+    """C4 without damping: flutter starts where the two eigenvalues μ of M⁻¹Q (s² = −μ) collide,
+    i.e. where the 2×2 discriminant (a − d)²/4 + b c vanishes (independent root, xtol 1e-12).
+    The sweep's boundary (tracked by MAC, Brent on δ + tol) must agree to 1e-7."""
+    import mbseig
+    from conftest import CASES
+
+    case = CASES / "hand_device.toml"
+
+    def disc(f):
+        m = mbseig.load_case(case, config="C4", f=f, damping_scale=0.0)
+        lin = mbseig.linearize(m, mbseig.equilibrium(m))
+        A = np.linalg.solve(lin.M, lin.Q)
+        return (A[0, 0] - A[1, 1]) ** 2 / 4 + A[0, 1] * A[1, 0]
+
+    f_ref = brentq(disc, 1.5, 2.0, xtol=1e-12)
+    res = run_sweep(case, [("f", np.linspace(1.5, 2.0, 3))], config="C4",
+                    fixed={"damping_scale": "0"}, jobs=1)
+    assert len(res.boundaries) == 1 and res.boundaries[0]["kind"] == "flutter"
+    assert res.boundaries[0]["value"] == pytest.approx(f_ref, abs=1e-7)
