@@ -118,7 +118,9 @@ def modes(M, P, Q, *, solver: str = "auto", N=None, coordinate_names=None,
     # a complex pair is listed once (ω > 0; real LAPACK drivers return exact conjugates) and a
     # real eigenvalue on its own; a rigid-body mode (s = 0, double when P x = 0) is listed once
     # per independent vector: as many as the rank of the rigid eigenvectors.
-    listed = (~rigid) & (s_all.imag >= 0)
+    # a pair whose |ω| is within its tolerance counts as two real eigenvalues (a defective or
+    # nearly defective double root, e.g. critical damping) and is listed twice, ω ≥ 0 each
+    listed = (~rigid) & ((s_all.imag >= 0) | (np.abs(s_all.imag) <= tol_all))
     rigid_idx = np.flatnonzero(rigid)
     if rigid_idx.size:
         R = sol.vectors[:, rigid_idx]
@@ -129,6 +131,11 @@ def modes(M, P, Q, *, solver: str = "auto", N=None, coordinate_names=None,
     sel = np.flatnonzero(listed)
     s = s_all[sel]
     eta, kappa, X = sol.backward_error[sel], sol.condition[sel], sol.vectors[:, sel]
+    flip = s.imag < 0  # the lower member of a near-real pair: listed as its conjugate
+    if np.any(flip):
+        s = np.where(flip, np.conj(s), s)
+        X = X.astype(complex)
+        X[:, flip] = np.conj(X[:, flip])
     err, tol, is_rigid = err_all[sel], tol_all[sel], rigid[sel]
     delta, omega = 0.0 - s.real, s.imag  # 0.0 − x: no negative zeros in reports
     wn = np.abs(s)

@@ -1,0 +1,229 @@
+"""Cases where a naive method gets the stability verdict wrong, and what mbseig says instead.
+
+Each function returns a :class:`FailCase`: the system, the naive method and its answer, mbseig's
+answer, and the reference (closed form or a theorem) that decides which one is right.  They are
+asserted in ``tests/test_failures.py`` and tabulated by ``mbseig bench`` (section "Stability
+where methods fail" of reports/benchmarks.md).
+
+Naive methods, as commonly written:
+
+* ``naive_companion``: A = [[0, I], [−M⁻¹Q, −M⁻¹P]] with M⁻¹ formed explicitly, no scaling,
+  ``numpy.linalg.eig``; then
+* ``naive_verdict``: Re s > 0 unstable, Re s < 0 stable, exactly 0 critical (no tolerance).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["FailCase", "ALL", "naive_companion", "naive_verdict", "run_all"]
+
+CASES = Path(__file__).resolve().parent.parent / "cases"
+
+
+@dataclass
+class FailCase:
+    name: str
+    naive_method: str
+    naive: str  # the naive method's answer
+    mbseig: str  # mbseig's answer
+    reference: str  # the truth and its source
+    naive_wrong: bool
+    mbseig_right: bool
+    data: dict = field(default_factory=dict)
+
+
+def naive_companion(M, P, Q):
+    """Eigenvalues of [[0, I], [−M⁻¹Q, −M⁻¹P]] (explicit inverse, unscaled, LAPACK geev)."""
+    n = M.shape[0]
+    Mi = np.linalg.inv(M)
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-Mi @ Q, -Mi @ P]])
+    return np.linalg.eigvals(A)
+
+
+def naive_verdict(s):
+    re = np.real(s)
+    return "unstable" if np.any(re > 0) else "critical" if np.any(re == 0) else "stable"
+
+
+# ---------------------------------------------------------------------------------------------
+def pendulum_constraint_stiffness():
+    import mbseig
+
+    model = mbseig.load_case(CASES / "pendulum.toml")
+    eq = mbseig.equilibrium(model)
+    wrong = mbseig.linearize(model, eq, constraint_stiffness=False)
+    right = mbseig.linearize(model, eq)
+    mw = mbseig.modes(wrong.M, wrong.P, wrong.Q)
+    mr = mbseig.modes(right.M, right.P, right.Q)
+    exact = np.sqrt(9.81 / 1.0)
+    return FailCase(
+        "pendulum: constraint-force stiffness", "linearize without Σλ∇²Φ",
+        f"ω = {mw.omega_n[0]:.3g} rad/s ({mw.kind[0]})", f"ω = {mr.omega_n[0]:.10g} rad/s ({mr.kind[0]})",
+        f"ω = √(g/l) = {exact:.10g} rad/s (closed form)",
+        naive_wrong=abs(mw.omega_n[0] - exact) > 0.5 * exact,
+        mbseig_right=abs(mr.omega_n[0] - exact) <= 1e-10 * exact,
+        data={"omega_naive": float(mw.omega_n[0]), "omega_mbseig": float(mr.omega_n[0]), "exact": exact})
+
+
+def four_bar_constraint_stiffness():
+    import mbseig
+
+    model = mbseig.load_case(CASES / "four_bar.toml")
+    eq = mbseig.equilibrium(model)
+    wrong = mbseig.linearize(model, eq, constraint_stiffness=False)
+    right = mbseig.linearize(model, eq)
+    ww = mbseig.modes(wrong.M, wrong.P, wrong.Q).omega_n[0]
+    wr = mbseig.modes(right.M, right.P, right.Q).omega_n[0]
+    shift = (ww - wr) / wr
+    return FailCase(
+        "loaded four-bar: constraint-force stiffness", "linearize without Σλ∇²Φ",
+        f"ω = {ww:.6g} rad/s ({100 * shift:+.2f} %)", f"ω = {wr:.6g} rad/s",
+        "independent 1-DOF reduction (tests/test_four_bar.py)",
+        naive_wrong=abs(shift) > 1e-3, mbseig_right=True,
+        data={"omega_naive": float(ww), "omega_mbseig": float(wr), "shift": float(shift)})
+
+
+def ziegler_matrices(load, c=1.0, l=1.0, m=1.0):
+    """Ziegler's double pendulum (masses 2m, m; springs c; follower force at the tip):
+
+        M = m l² [[3, 1], [1, 1]],   Q = [[2c − F l, F l − c], [−c, c]]   (non-symmetric)
+
+    Flutter for F > F_cr = (7/2 − √2) c/l (Ziegler 1952; Bolotin 1963, Nonconservative Problems).
+    """
+    M = m * l**2 * np.array([[3.0, 1.0], [1.0, 1.0]])
+    Q = np.array([[2 * c - load * l, load * l - c], [-c, c]])
+    return M, np.zeros((2, 2)), Q
+
+
+ZIEGLER_CRITICAL = 3.5 - np.sqrt(2.0)
+
+
+def ziegler_follower():
+    import scipy.linalg as sla
+
+    import mbseig
+
+    load = 2.2  # c/l; above F_cr = 2.0858
+    M, P, Q = ziegler_matrices(load)
+    md = mbseig.modes(M, P, Q)
+    w2 = sla.eigh(0.5 * (Q + Q.T), M, eigvals_only=True)  # symmetric part forced into eigh
+    naive_kind = "divergence" if np.any(w2 < 0) else "oscillatory"
+    below = mbseig.modes(*ziegler_matrices(1.9))
+    return FailCase(
+        "Ziegler pendulum, follower load 2.2 c/l", "eigh on the symmetric part of Q",
+        f"{naive_kind} (real s), static buckling at F = 2 c/l",
+        f"{md.verdict}: {', '.join(sorted(set(md.kind)))}; at F = 1.9 c/l: {below.verdict}",
+        f"flutter above F_cr = (7/2 − √2) c/l = {ZIEGLER_CRITICAL:.4f} c/l (Ziegler 1952)",
+        naive_wrong=naive_kind != "flutter",
+        mbseig_right=("flutter" in md.kind and below.verdict == "critical"),
+        data={"kinds": list(md.kind)})
+
+
+def badly_scaled(n=12, seed=4, damping=1e-7):
+    """Masses 1e-6…1 kg, springs 1e3…1e9 N/m (shuffled), light dashpots.  M, K, C symmetric
+    positive definite ⇒ every mode decays (Re s < 0): the energy-dissipation theorem."""
+    import mbseig
+
+    M, C, K = badly_scaled_matrices(n, seed, damping)
+    naive = mbseig.modes(M, C, K, solver="qz", scale=False)  # the unscaled companion pencil
+    s_naive = naive.all_eigenvalues
+    s_comp = naive_companion(M, C, K)
+    md = mbseig.modes(M, C, K)
+    return FailCase(
+        "badly scaled chain (m 1e-6…1 kg, k 1e3…1e9 N/m, c = 1e-7 N s/m)",
+        "QZ on the unscaled companion pencil + Re s > 0 rule",
+        f"{naive_verdict(s_naive)} (max Re s = {s_naive.real.max():.3g}); "
+        f"explicit M⁻¹ companion (geev balances): {naive_verdict(s_comp)}",
+        f"{md.verdict} ({md.solver}; min δ = {md.delta.min():.3g} > tol, max η = {md.backward_error.max():.1e})",
+        "stable: M, K, C symmetric positive definite (energy dissipation)",
+        naive_wrong=naive_verdict(s_naive) != "stable", mbseig_right=md.verdict == "stable",
+        data={"max_re_naive": float(s_naive.real.max()), "min_delta": float(md.delta.min())})
+
+
+def badly_scaled_matrices(n=12, seed=4, damping=1e-7):
+    rng = np.random.default_rng(seed)
+    m = np.logspace(-6, 0, n)
+    k = np.logspace(3, 9, n + 1)[rng.permutation(n + 1)]
+    c = np.where(np.arange(n + 1) % 2 == 0, damping, 0.0) + damping / 10
+
+    def chain(v):
+        return np.diag(v[:-1] + v[1:]) - np.diag(v[1:-1], 1) - np.diag(v[1:-1], -1)
+
+    return np.diag(m), chain(c), chain(k)
+
+
+def large_undamped(n=400):
+    import mbseig
+
+    k, m = 1000.0, 1.0
+    K = 2 * k * np.eye(n) - k * np.eye(n, k=1) - k * np.eye(n, k=-1)
+    M = m * np.eye(n)
+    s_naive = naive_companion(M, np.zeros((n, n)), K)
+    md = mbseig.modes(M, np.zeros((n, n)), K, solver="companion")
+    n_pos = int(np.sum(s_naive.real > 0))
+    return FailCase(
+        f"undamped chain, n = {n} (general companion path)", "naive companion + Re s > 0 rule",
+        f"{naive_verdict(s_naive)} ({n_pos} eigenvalues with Re s > 0, max {s_naive.real.max():.2g})",
+        f"{md.verdict} (|δ| ≤ tol, largest tol {md.tolerance.max():.2g} rad/s)",
+        "critical: undamped, ω_j = 2√(k/m) sin(jπ/(2(n+1))) (closed form)",
+        naive_wrong=naive_verdict(s_naive) != "critical", mbseig_right=md.verdict == "critical",
+        data={"n_positive": n_pos})
+
+
+def repeated_and_defective():
+    """Isotropic 2-D oscillator (ω double), critically damped SDOF (s = −1 defective),
+    free-free chain (rigid mode), massless middle point (singular M)."""
+    import mbseig
+
+    out = {}
+    # repeated: two identical uncoupled oscillators k = 4, m = 1 → ω = 2 twice
+    md = mbseig.modes(np.eye(2), np.zeros((2, 2)), 4 * np.eye(2))
+    out["repeated"] = (len(md), list(md.omega_n), md.verdict)
+    ok_rep = len(md) == 2 and np.allclose(md.omega_n, 2.0, rtol=1e-12) and md.verdict == "critical"
+    # defective: s² + 2s + 1 = 0 → s = −1 (double, one eigenvector)
+    md = mbseig.modes(np.eye(1), 2 * np.eye(1), np.eye(1))
+    out["defective"] = (len(md), list(md.eigenvalues), list(md.kind), md.verdict)
+    ok_def = (len(md) == 2 and np.allclose(md.eigenvalues, -1.0, atol=1e-7)
+              and md.kind == ["overdamped", "overdamped"] and md.verdict == "stable")
+    # rigid body: free-free chain of 3 (ω = 0, √(k/m), √(3k/m))
+    K = np.array([[1.0, -1, 0], [-1, 2, -1], [0, -1, 1]])
+    md = mbseig.modes(np.eye(3), np.zeros((3, 3)), K)
+    s_naive = naive_companion(np.eye(3), np.zeros((3, 3)), K)
+    out["rigid"] = (len(md), list(md.kind), naive_verdict(s_naive))
+    ok_rig = (len(md) == 3 and md.kind.count("rigid-body") == 1
+              and np.allclose(md.omega_n[1:], [1.0, np.sqrt(3.0)], rtol=1e-12))
+    # singular mass: wall–m–(massless)–m–wall with springs k: ω² = k/m, 2k/m (static condensation)
+    M = np.diag([1.0, 0.0, 1.0])
+    K = np.array([[2.0, -1, 0], [-1, 2, -1], [0, -1, 2]])
+    md = mbseig.modes(M, np.zeros((3, 3)), K)
+    try:
+        naive_companion(M, np.zeros((3, 3)), K)
+        naive_singular = "ran"
+    except np.linalg.LinAlgError:
+        naive_singular = "LinAlgError: singular M"
+    out["singular_mass"] = (len(md), list(md.omega_n), md.n_infinite, md.solver)
+    ok_sing = len(md) == 2 and np.allclose(md.omega_n, [np.sqrt(1.5 - 0.5), np.sqrt(1.5 + 0.5)], rtol=1e-10)
+    return FailCase(
+        "repeated, defective, rigid-body, massless point", "naive companion / counting",
+        f"rigid chain: {out['rigid'][2]} (s = 0 split into ±real); massless point: {naive_singular}",
+        f"ω = 2 twice; s = −1 twice (overdamped, stable); 1 rigid-body + 2 modes; "
+        f"massless point: 2 modes, {out['singular_mass'][2]} infinite dropped ({out['singular_mass'][3]})",
+        "closed forms: ω = √(k/m) double; s = −1 double; ω = 0, 1, √3; ω² = k/m, 2k/m",
+        naive_wrong=out["rigid"][2] != "critical" or naive_singular != "ran",
+        mbseig_right=ok_rep and ok_def and ok_rig and ok_sing, data=out)
+
+
+ALL = [pendulum_constraint_stiffness, four_bar_constraint_stiffness, ziegler_follower,
+       badly_scaled, large_undamped, repeated_and_defective]
+
+
+def run_all():
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return [f() for f in ALL]
