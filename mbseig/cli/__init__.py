@@ -15,7 +15,7 @@ from ..errors import MbseigError
 
 __all__ = ["main", "SUBCOMMANDS"]
 
-SUBCOMMANDS = ["linearize", "modes", "check", "sweep", "report"]
+SUBCOMMANDS = ["linearize", "modes", "check", "sweep", "report", "bench"]
 
 
 def build_parser() -> argparse.ArgumentParser:
