@@ -115,6 +115,11 @@ def modes(M, P, Q, *, solver: str = "auto", N=None, coordinate_names=None,
     tol_all = np.maximum.reduce([safety * err_all, stability_rtol * np.abs(s_all),
                                  np.full(s_all.size, stability_atol)])
     rigid = np.abs(s_all) <= tol_all
+    # structured paths know Re s far better than κη (δ = (α + βω²)/2 from an accurate ω²)
+    re_err = getattr(sol, "real_error", None)
+    tol_re = tol_all if re_err is None else np.maximum.reduce(
+        [safety * np.minimum(err_all, re_err), stability_rtol * np.abs(s_all),
+         np.full(s_all.size, stability_atol)])
     # a complex pair is listed once (ω > 0; real LAPACK drivers return exact conjugates) and a
     # real eigenvalue on its own; a rigid-body mode (s = 0, double when P x = 0) is listed once
     # per independent vector: as many as the rank of the rigid eigenvectors.
@@ -136,18 +141,18 @@ def modes(M, P, Q, *, solver: str = "auto", N=None, coordinate_names=None,
         s = np.where(flip, np.conj(s), s)
         X = X.astype(complex)
         X[:, flip] = np.conj(X[:, flip])
-    err, tol, is_rigid = err_all[sel], tol_all[sel], rigid[sel]
+    err, tol, tol_s, is_rigid = err_all[sel], tol_all[sel], tol_re[sel], rigid[sel]
     delta, omega = 0.0 - s.real, s.imag  # 0.0 − x: no negative zeros in reports
     wn = np.abs(s)
     order = np.lexsort((omega, delta, wn))
-    s, eta, kappa, X, err, tol, delta, omega, wn, is_rigid = (
-        a[..., order] for a in (s, eta, kappa, X, err, tol, delta, omega, wn, is_rigid))
+    s, eta, kappa, X, err, tol, tol_s, delta, omega, wn, is_rigid = (
+        a[..., order] for a in (s, eta, kappa, X, err, tol, tol_s, delta, omega, wn, is_rigid))
     stability, kind = [], []
     for k in range(s.size):
         if is_rigid[k]:
             st, kd = "critical", "rigid-body"
         else:
-            st = "stable" if delta[k] > tol[k] else "unstable" if delta[k] < -tol[k] else "critical"
+            st = "stable" if delta[k] > tol_s[k] else "unstable" if delta[k] < -tol_s[k] else "critical"
             if abs(omega[k]) <= tol[k]:
                 kd = "overdamped" if delta[k] > 0 else "divergence"
             else:
@@ -182,7 +187,7 @@ def modes(M, P, Q, *, solver: str = "auto", N=None, coordinate_names=None,
     return Modes(
         eigenvalues=s, delta=delta, omega_n=wn, omega_d=omega, freq_hz=omega / (2 * np.pi),
         zeta=zeta, stability=stability, kind=kind, backward_error=eta, condition=kappa,
-        error_estimate=err, tolerance=tol, vectors=X, shapes=shapes, dominant=dominant,
+        error_estimate=err, tolerance=tol_s, vectors=X, shapes=shapes, dominant=dominant,
         verdict=verdict, solver=sol.solver, solver_reason=sol.reason, n_infinite=sol.n_infinite,
         all_eigenvalues=s_all,
         tolerances={"stability_rtol": stability_rtol, "stability_atol": stability_atol,

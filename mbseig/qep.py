@@ -33,7 +33,8 @@ import scipy.sparse as sp
 
 from .errors import SolverError
 
-__all__ = ["QEPSolution", "solve_qep", "choose_solver", "SOLVERS", "backward_errors"]
+__all__ = ["QEPSolution", "solve_qep", "choose_solver", "SOLVERS", "backward_errors",
+           "proportional_real_error"]
 
 EPS = np.finfo(float).eps
 
@@ -52,6 +53,23 @@ class QEPSolution:
     n_infinite: int = 0
     norms: tuple = (0.0, 0.0, 0.0)
     details: dict = field(default_factory=dict)
+    real_error: object = None  # error bound of Re s where the path knows it better than κη
+
+
+def proportional_real_error(s, kappa, eta, norms, alpha, beta, fit_residual):
+    """Error bound of Re s on the proportional path, oscillatory roots (Re s = −(α + βω²)/2).
+
+    ω² = −s s̄ for the pair; its error is at most 2|s|·κη (first order, undamped pencil), so
+    |Δ Re s| ≤ |β| |s| κη + κ |s| ‖P − αM − βQ‖ / w(s) + ε |α + βω²|, w(s) the η weight.
+    Real (overdamped) roots get no bound here (κη applies).
+    """
+    nM, nP, nQ = norms
+    weight = np.abs(s) ** 2 * nM + np.abs(s) * nP + nQ
+    ke = kappa * np.maximum(eta, EPS)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        fit = np.where(weight > 0, kappa * np.abs(s) * fit_residual / weight, np.inf)
+    err = np.abs(beta) * np.abs(s) * ke + fit + EPS * 2 * np.abs(s.real)
+    return np.where(np.abs(s.imag) > 0, err, np.inf)
 
 
 def _dense(A):
@@ -292,6 +310,11 @@ def solve_qep(M, P, Q, *, solver: str = "auto", sym_tol: float = 1e-13,
     if Y is None:  # y = x̄: exact for symmetric M, P, Q (see ``left``)
         Y = X.conj()
     kappa = _conditions(M, P, Q, s, X, _unit(Y), norms, pick(MX1, MX2), pick(PX1, PX2))
+    real_error = None
+    if name == "proportional":
+        fit = np.linalg.norm(P - opts["alpha"] * M - opts["beta"] * Q)
+        real_error = proportional_real_error(s, kappa, eta, norms, opts["alpha"], opts["beta"], fit)
     return QEPSolution(s, X, eta, kappa, name, reason, n_inf, norms,
                        {**details, "second_half_vectors": int(np.sum(take2)),
-                        "left_vectors": bool(opts["left"]) if name in ("companion", "qz") else False})
+                        "left_vectors": bool(opts["left"]) if name in ("companion", "qz") else False},
+                       real_error)

@@ -34,7 +34,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .errors import SolverError
-from .qep import QEPSolution, _from_undamped
+from .qep import QEPSolution, _from_undamped, proportional_real_error
 
 __all__ = ["solve_partial", "PARTIAL_SOLVERS", "sparse_structure"]
 
@@ -288,10 +288,16 @@ def solve_partial(M, P, Q, *, n_modes: int | None = None, target: float | None =
         raise SolverError(f"{name}: {int(bad.sum())} returned pairs fail the backward-error check "
                           f"η ≤ {verify_tol:g}: {worst}")
     Xq = _unit(X[:n]) if m else X
+    real_error = None
+    if name == "partial-proportional":
+        a, b = extras["alpha"], extras["beta"]
+        fit = _fro((P - a * M - b * Q).tocsr())
+        real_error = proportional_real_error(s, kappa, eta, norms, a, b, fit)
     return QEPSolution(s, Xq, eta, kappa, name, reason, 0, norms,
                        {**extras, "shift": complex(sig) if np.iscomplex(sig) else float(np.real(sig)),
                         "n_requested": want, "arpack_k": k, "n_constraint_rows": m,
-                        "verify_tol": verify_tol, "second_half_vectors": int(np.sum(take2))})
+                        "verify_tol": verify_tol, "second_half_vectors": int(np.sum(take2))},
+                       real_error)
 
 
 def _colnorm(X):

@@ -284,3 +284,17 @@ def test_batch_declines_and_keeps_messages(tmp_path, monkeypatch):
     with pytest.raises(CaseError) as slow:
         mbseig.load_case(path)
     assert str(fast.value) == str(slow.value) and "unknown point 'q2'" in str(fast.value)
+
+
+def test_lightly_damped_large_chain_is_stable():
+    """chain_damped, n = 20000: δ₁ = (c/2k) ω₁² ≈ 6e-9 (closed form) is below the normwise bound
+    κη ≈ 8e-9 of s₁ but far above the proportional path's bound on Re s (≈ 3e-14):
+    verdict stable, as the case file states.  δ to rtol 1e-7: ω₁² carries an absolute error of
+    order ε·ω_max² ≈ 1e-12, relative 4e-8 on ω₁² ≈ 2.5e-5."""
+    model = mbseig.load_case(CASES / "chain_damped.toml", n=20000)
+    lin = mbseig.linearize(model, mbseig.equilibrium(model))
+    md = mbseig.modes(lin.M, lin.P, lin.Q, n_modes=5)
+    w = closed_form_omega(20000)[:5]
+    np.testing.assert_allclose(md.delta, (0.5 / 2000.0) * w**2, rtol=1e-7)
+    assert md.verdict == "stable" and np.all(md.tolerance < 1e-3 * md.delta)
+    assert md.error_estimate[0] > md.delta[0]  # the normwise bound alone could not decide
