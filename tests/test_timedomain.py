@@ -137,6 +137,19 @@ def test_ziegler_flutter_load():
     assert above.verdict == "unstable" and "flutter" in above.kind
 
 
+def test_linear_gyroscopic_case():
+    """A linear case is integrated as given (M ẍ + P ẋ + Q x = 0).  Closed form (case file):
+    s = ±i|ω₀ − Ω|, ±i(ω₀ + Ω); the gyroscopic P makes each mode a circular whirl in one sense,
+    so the signed phase slope of η is checked, not only its size."""
+    a, r = run_check(CASES / "rotating_mass.toml")
+    p = a.model.parameters
+    w = sorted([abs(p["omega0"] - p["Omega"]), p["omega0"] + p["Omega"]])
+    assert r.passed and [m.index for m in r.modes] == [1, 2]
+    for m, wk in zip(r.modes, w):
+        assert m.measured_omega == pytest.approx(wk, rel=1e-4)
+        assert abs(m.measured_delta) <= 1e-5 * wk
+
+
 # ---- a wrong linearization fails --------------------------------------------------------------
 def test_wrong_linearization_fails_on_four_bar():
     a = analyze(CASES / "four_bar.toml")
