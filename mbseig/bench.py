@@ -397,7 +397,7 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
     sections = sections or all_sections
     cfg = {
         "quick": quick, "repeats": repeats, "threads": threads,
-        "dense_sizes": [10, 30, 100] if quick else [10, 30, 100, 300, 1000, 3000],
+        "dense_sizes": [10, 30, 100] if quick else [10, 30, 100, 300, 1000],
         "qz_max": 100 if quick else 300, "naive_max": 100 if quick else 1000,
         "general_max": 100 if quick else 3000,
         "structured_sizes": [100] if quick else [300, 1000, 3000],

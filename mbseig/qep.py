@@ -103,14 +103,24 @@ def _rayleigh_fit(M, P, Q, tol):
     return None
 
 
-def choose_solver(M, P, Q, *, sym_tol=1e-13, rayleigh_tol=1e-12):
-    """(name, reason, extras) of the path ``auto`` takes for these matrices."""
-    symmetric = _is_symmetric(M, sym_tol) and _is_symmetric(Q, sym_tol)
-    L = _cholesky(0.5 * (M + M.T)) if _is_symmetric(M, sym_tol) else None
+def choose_solver(M, P, Q, *, sym_tol=1e-13, rayleigh_tol=1e-12, memo=None):
+    """(name, reason, extras) of the path ``auto`` takes for these matrices.
+
+    memo : optional dict that caches the symmetry tests (keys "M", "P", "Q") for the caller.
+    """
+    memo = {} if memo is None else memo
+
+    def sym(key, A):
+        if key not in memo:
+            memo[key] = _is_symmetric(A, sym_tol)
+        return memo[key]
+
+    symmetric = sym("M", M) and sym("Q", Q)
+    L = _cholesky(0.5 * (M + M.T)) if sym("M", M) else None
     if symmetric and L is not None:
         if not np.any(P):
             return "eigh", "P = 0, M and Q symmetric, M positive definite", {}
-        if _is_symmetric(P, sym_tol):
+        if sym("P", P):
             ab = _rayleigh_fit(M, P, Q, rayleigh_tol)
             if ab is not None:
                 return ("proportional", f"P = {ab[0]:.6g} M + {ab[1]:.6g} Q (Rayleigh damping)",
@@ -141,27 +151,39 @@ def _eta_products(ops, s, X, norms):
     M, P, Q = ops
     nM, nP, nQ = norms
     MX, PX = M @ X, P @ X
-    R = MX * s**2 + PX * s + Q @ X
-    rn = np.linalg.norm(R, axis=0)
-    denom = (np.abs(s) ** 2 * nM + np.abs(s) * nP + nQ) * np.linalg.norm(X, axis=0)
+    R = MX * s  # Horner, in place: (M X s + P X) s + Q X
+    R += PX
+    R *= s
+    R += Q @ X
+    rn = _colnorm(R)
+    denom = (np.abs(s) ** 2 * nM + np.abs(s) * nP + nQ) * _colnorm(X)
     with np.errstate(divide="ignore", invalid="ignore"):
         eta = np.where(denom > 0, rn / denom, np.where(rn == 0, 0.0, np.inf))
     return eta, MX, PX
 
 
-def _conditions(M, P, Q, s, X, Y, norms, MX=None, PX=None):
+def _colnorm(X):
+    """Column 2-norms without complex temporaries."""
+    if np.iscomplexobj(X):
+        return np.sqrt(np.einsum("ij,ij->j", X.real, X.real) + np.einsum("ij,ij->j", X.imag, X.imag))
+    return np.sqrt(np.einsum("ij,ij->j", X, X))
+
+
+def _conditions(M, P, Q, s, X, Y, norms, MX=None, PX=None, Yc=None):
+    """κ per pair; ``Yc`` may give the conjugated left vectors directly (yᴴ = Ycᵀ)."""
     nM, nP, nQ = norms
-    num = (np.abs(s) ** 2 * nM + np.abs(s) * nP + nQ) * np.linalg.norm(X, axis=0) * np.linalg.norm(Y, axis=0)
+    Yc = Y.conj() if Yc is None else Yc
+    num = (np.abs(s) ** 2 * nM + np.abs(s) * nP + nQ) * _colnorm(X) * _colnorm(Yc)
     MX = M @ X if MX is None else MX
     PX = P @ X if PX is None else PX
-    den = np.abs(np.einsum("ij,ij->j", Y.conj(), MX * (2 * s) + PX))
+    den = np.abs(np.einsum("ij,ij->j", Yc, MX * (2 * s) + PX))
     with np.errstate(divide="ignore", invalid="ignore"):
         kappa = num / den
     return np.where(den > 0, kappa, np.inf)
 
 
 def _unit(X):
-    nrm = np.linalg.norm(X, axis=0)
+    nrm = _colnorm(X)
     nrm[nrm == 0] = 1.0
     return X / nrm
 
@@ -200,21 +222,33 @@ def _from_undamped(w, V, alpha, beta):
 
 def _solve_companion(M, P, Q, opts):
     n = M.shape[0]
-    L = sla.cholesky(0.5 * (M + M.T), lower=True)
-    Linv_Q = sla.solve_triangular(L, Q, lower=True)
-    Qt = sla.solve_triangular(L, Linv_Q.T, lower=True).T  # L⁻¹ Q L⁻ᵀ
-    Linv_P = sla.solve_triangular(L, P, lower=True)
-    Pt = sla.solve_triangular(L, Linv_P.T, lower=True).T
+    dM = np.diagonal(M).copy()
+    if np.count_nonzero(M) == np.count_nonzero(dM) and np.all(dM > 0):  # lumped (diagonal) M
+        l = np.sqrt(dM)
+        Qt = Q / np.outer(l, l)
+        Pt = P / np.outer(l, l)
+        back = lambda Y: Y / l[:, None]  # L⁻ᵀ y with L = diag(√m)
+    else:
+        L = sla.cholesky(0.5 * (M + M.T), lower=True)
+        Linv_Q = sla.solve_triangular(L, Q, lower=True)
+        Qt = sla.solve_triangular(L, Linv_Q.T, lower=True).T  # L⁻¹ Q L⁻ᵀ
+        Linv_P = sla.solve_triangular(L, P, lower=True)
+        Pt = sla.solve_triangular(L, Linv_P.T, lower=True).T
+        back = lambda Y: sla.solve_triangular(L.T, Y, lower=False)  # L⁻ᵀ y
     gamma = np.sqrt(np.linalg.norm(Qt) / np.sqrt(n)) if np.any(Qt) else 1.0
     gamma = gamma if gamma > 0 else 1.0
-    A = np.block([[np.zeros((n, n)), np.eye(n)], [-Qt / gamma**2, -Pt / gamma]])
+    A = np.zeros((2 * n, 2 * n), order="F")
+    A[:n, n:] = np.eye(n)
+    A[n:, :n] = Qt
+    A[n:, :n] *= -1.0 / gamma**2
+    A[n:, n:] = Pt
+    A[n:, n:] *= -1.0 / gamma
     if opts.get("left", True):
         mu, W, Z = sla.eig(A, left=True, right=True, overwrite_a=True, check_finite=False)
     else:
         mu, Z = sla.eig(A, left=False, right=True, overwrite_a=True, check_finite=False)
         W = None
     s = gamma * mu
-    back = lambda Y: sla.solve_triangular(L.T, Y, lower=False)  # L⁻ᵀ y
     X1 = back(Z[:n])
     X2 = back(Z[n:]) / np.where(mu != 0, mu, 1.0)
     Y = back(W[n:]) if W is not None else None
@@ -276,7 +310,8 @@ def solve_qep(M, P, Q, *, solver: str = "auto", sym_tol: float = 1e-13,
         raise SolverError(f"M, P, Q must be square and of one size, got {M.shape}, {P.shape}, {Q.shape}")
     if not all(np.all(np.isfinite(A)) for A in (M, P, Q)):
         raise SolverError("M, P and Q must be finite")
-    name, reason, extras = choose_solver(M, P, Q, sym_tol=sym_tol, rayleigh_tol=rayleigh_tol)
+    memo = {}
+    name, reason, extras = choose_solver(M, P, Q, sym_tol=sym_tol, rayleigh_tol=rayleigh_tol, memo=memo)
     if solver != "auto":
         if solver not in SOLVERS:
             raise SolverError(f"unknown solver {solver!r} (auto, {', '.join(SOLVERS)})")
@@ -291,7 +326,8 @@ def solve_qep(M, P, Q, *, solver: str = "auto", sym_tol: float = 1e-13,
         name, reason = solver, f"requested ({reason})"
     norms = (np.linalg.norm(M), np.linalg.norm(P), np.linalg.norm(Q))
     if left == "auto":
-        left = not all(_is_symmetric(A, sym_tol) for A in (M, P, Q))
+        left = not all(memo[k] if k in memo else _is_symmetric(A, sym_tol)
+                       for k, A in (("M", M), ("Q", Q), ("P", P)))
     opts = {**extras, "scale": scale, "left": bool(left)}
     if n == 0:
         e = np.zeros(0)
@@ -299,17 +335,20 @@ def solve_qep(M, P, Q, *, solver: str = "auto", sym_tol: float = 1e-13,
     out = SOLVERS[name](M, P, Q, opts)
     s, X1, X2, Y, n_inf = out[:5]
     details = out[5] if len(out) > 5 else {}
-    X1, X2 = _unit(X1), _unit(X2)
+    X1, X2 = np.ascontiguousarray(_unit(X1)), np.ascontiguousarray(_unit(X2))  # fast sparse products
     ops = tuple(_fast_operand(A) for A in (M, P, Q))
     e1, MX1, PX1 = _eta_products(ops, s, X1, norms)
     e2, MX2, PX2 = _eta_products(ops, s, X2, norms)
     take2 = e2 < e1
-    pick = lambda a, b: np.where(take2[None, :], b, a)
-    X = pick(X1, X2)
+    X, MX, PX = X1, MX1, PX1  # the better half per column, in place
+    for a, b in ((X, X2), (MX, MX2), (PX, PX2)):
+        a[:, take2] = b[:, take2]
+    del X2, MX2, PX2
     eta = np.minimum(e1, e2)
     if Y is None:  # y = x̄: exact for symmetric M, P, Q (see ``left``)
-        Y = X.conj()
-    kappa = _conditions(M, P, Q, s, X, _unit(Y), norms, pick(MX1, MX2), pick(PX1, PX2))
+        kappa = _conditions(M, P, Q, s, X, None, norms, MX, PX, Yc=X)
+    else:
+        kappa = _conditions(M, P, Q, s, X, _unit(Y), norms, MX, PX)
     real_error = None
     if name == "proportional":
         fit = np.linalg.norm(P - opts["alpha"] * M - opts["beta"] * Q)
