@@ -64,8 +64,10 @@ Verdict per mode::
     rel_error.delta = |δ_m − δ_p| / max(|δ_p|, (zero_delta_tol / delta_rtol) |s_p|)
     passed          = rel_error.omega ≤ omega_rtol  and  rel_error.delta ≤ delta_rtol
 
-so an undamped mode passes when |δ_m| ≤ zero_delta_tol·|s_p|.  Rigid-body modes are skipped with
-a reason.
+so an undamped mode passes when |δ_m| ≤ zero_delta_tol·|s_p|.  Rigid-body modes (s = 0) are not
+fitted (the reason is recorded); instead a static probe of the nonlinear model checks that it
+offers no restoring force along them (see :func:`_probe_rigid`), so a linearization that turns an
+oscillation into a rigid-body mode cannot pass either.
 """
 
 from __future__ import annotations
@@ -308,7 +310,9 @@ def simulate(dynamics: ForwardDynamics, u0, v0, t_eval, *, segment_samples: int,
 class ModeCheck:
     """Predicted vs measured δ, ω of one listed mode (1-based ``index`` as in the modes table).
 
-    ``skipped`` holds the reason when the mode was not simulated (then ``passed`` is None).
+    ``skipped`` holds the reason when the mode was not simulated; a rigid-body mode is then
+    probed statically (``probe_omega`` = ω_eff against ``probe_reference`` = ω_ref) and
+    ``passed`` is the probe's verdict (None for a mode neither simulated nor probed).
     Arrays ``t``, ``eta`` (modal coordinate) and ``response`` (the dominant coordinate's
     deviation, named ``coordinate``) are kept for plots.
     """
@@ -336,6 +340,8 @@ class ModeCheck:
     nfev: int = 0
     elapsed: float = 0.0
     coordinate: str = ""
+    probe_omega: float = math.nan
+    probe_reference: float = math.nan
     t: np.ndarray = field(default_factory=lambda: np.zeros(0))
     eta: np.ndarray = field(default_factory=lambda: np.zeros(0, complex))
     response: np.ndarray = field(default_factory=lambda: np.zeros(0))
@@ -364,6 +370,8 @@ class ModeCheck:
             "nfev": int(self.nfev),
             "elapsed": float(self.elapsed),
             "coordinate": self.coordinate,
+            "probe": None if math.isnan(self.probe_omega) else {
+                "omega_eff": float(self.probe_omega), "omega_ref": float(self.probe_reference)},
         }
 
 
@@ -371,7 +379,7 @@ class ModeCheck:
 class CheckResult:
     """Outcome of :func:`check_modes`: one :class:`ModeCheck` per requested mode.
 
-    ``passed`` is True when no simulated mode failed (skipped modes do not fail); ``tolerances``
+    ``passed`` is True when no mode failed (neither a fit nor a rigid-body probe); ``tolerances``
     records every tolerance and option used; ``reactions`` are the equilibrium constraint
     reactions (see :func:`reaction_forces`) and ``actuators`` the inverse-statics driver records
     (effort per actuator, :mod:`mbseig.inverse_statics`) of the model, if it has any.
@@ -416,9 +424,16 @@ class CheckResult:
         rows = [head, "-" * len(head)]
         for m in self.modes:
             if m.skipped:
-                rows.append(f"{m.index:>3} {m.kind:<11} {m.predicted_delta:>12.6g} {'':>12} "
-                            f"{'':>9} {m.predicted_omega:>12.6g} {'':>12} {'':>9}  skip    "
-                            f"({m.skipped})")
+                if math.isnan(m.probe_omega):
+                    rows.append(f"{m.index:>3} {m.kind:<11} {m.predicted_delta:>12.6g} {'':>12} "
+                                f"{'':>9} {m.predicted_omega:>12.6g} {'':>12} {'':>9}  skip    "
+                                f"({m.skipped})")
+                else:
+                    rel = m.probe_omega / m.probe_reference if m.probe_reference else math.inf
+                    rows.append(f"{m.index:>3} {m.kind:<11} {m.predicted_delta:>12.6g} {'':>12} "
+                                f"{'':>9} {m.predicted_omega:>12.6g} {m.probe_omega:>12.6g} "
+                                f"{rel:>9.2e}  {'pass' if m.passed else 'FAIL':<6}  (static "
+                                f"probe: restoring ω_eff vs ω_ref {m.probe_reference:.4g})")
                 continue
             rows.append(
                 f"{m.index:>3} {m.kind:<11} {m.predicted_delta:>12.6g} {m.measured_delta:>12.6g} "
@@ -461,8 +476,8 @@ def parse_mode_list(text: str, n_modes: int) -> list:
 def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
                 periods: float = 20.0, efolds: float = 3.0, samples_per_period: int = 40,
                 min_samples: int = 400, delta_rtol: float = 1e-2, omega_rtol: float = 1e-3,
-                zero_delta_tol: float = 1e-5, method: str = "DOP853", ode_rtol: float = 1e-10,
-                mass_tol: float = 1e-12) -> CheckResult:
+                zero_delta_tol: float = 1e-5, rigid_tol: float = 1e-3, method: str = "DOP853",
+                ode_rtol: float = 1e-10, mass_tol: float = 1e-12) -> CheckResult:
     """Prove the listed ``modes`` (predicted from ``lin``) against the nonlinear ``model``.
 
     indices : 1-based mode numbers (default: all listed modes).
@@ -471,6 +486,7 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
         ``efolds`` e-folding times 1/|δ|; a real mode runs ``efolds`` e-folding times 1/|s|.
     samples_per_period, min_samples : output sampling of the modal coordinate.
     delta_rtol, omega_rtol, zero_delta_tol : pass/fail tolerances (see the module docstring).
+    rigid_tol : a rigid-body mode passes when the probed ω_eff ≤ rigid_tol · ω_ref.
     method, ode_rtol : integrator and its relative tolerance; absolute tolerances are ode_rtol
         times the smallest expected deviation.
     mass_tol : relative eigenvalue of Nᵀ M N below which the model counts as massless.
@@ -478,7 +494,8 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
     t_start = time.perf_counter()
     for nm, val in (("amplitude", amplitude), ("periods", periods), ("efolds", efolds),
                     ("delta_rtol", delta_rtol), ("omega_rtol", omega_rtol),
-                    ("zero_delta_tol", zero_delta_tol), ("ode_rtol", ode_rtol)):
+                    ("zero_delta_tol", zero_delta_tol), ("rigid_tol", rigid_tol),
+                    ("ode_rtol", ode_rtol)):
         if not (isinstance(val, (int, float)) and math.isfinite(val) and val > 0):
             raise CaseError(f"must be a positive number, got {val!r}", element=nm)
     n_modes = len(modes)
@@ -506,8 +523,12 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
         base = dict(index=k, kind=kind, eigenvalue=s, predicted_delta=float(modes.delta[j]),
                     predicted_omega=float(modes.omega_d[j]))
         if kind == "rigid-body":
-            results.append(ModeCheck(**base, skipped="rigid-body mode (s = 0): no decay rate or "
-                                                      "frequency to measure"))
+            w_eff, w_ref = _probe_rigid(dyn, Mr, N, modes.vectors[:, j], amplitude * length,
+                                        modes, eq, length)
+            results.append(ModeCheck(
+                **base, skipped="rigid-body mode (s = 0): no decay rate or frequency to fit; "
+                                "probed statically", probe_omega=w_eff, probe_reference=w_ref,
+                passed=bool(w_eff <= rigid_tol * w_ref)))
             continue
         t0 = time.perf_counter()
         try:
@@ -523,7 +544,8 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
     return CheckResult(
         name=model.name, parameters=dict(model.parameters), modes=tuple(results),
         tolerances={"delta_rtol": delta_rtol, "omega_rtol": omega_rtol,
-                    "zero_delta_tol": zero_delta_tol, "amplitude": amplitude, "periods": periods,
+                    "zero_delta_tol": zero_delta_tol, "rigid_tol": rigid_tol,
+                    "amplitude": amplitude, "periods": periods,
                     "efolds": efolds, "samples_per_period": samples_per_period,
                     "min_samples": min_samples, "ode_rtol": ode_rtol, "mass_tol": mass_tol,
                     "projection_tol": dyn.projection_tol, "length_scale": length},
@@ -598,6 +620,34 @@ def _check_one(dyn, Mr, Pr, Qr, N, s, x, names, base, o):
         fit_residual=resid, fit_amplitude=eta0, constraint_drift=sim.constraint_drift,
         velocity_drift=sim.velocity_drift, max_projection=sim.max_projection, nfev=sim.nfev,
         coordinate=names[jmax], t=sim.t, eta=eta, response=sim.u[jmax])
+
+
+def _probe_rigid(dyn, Mr, N, x, a, modes, eq, length):
+    """(ω_eff, ω_ref) for a listed rigid-body mode: does the nonlinear model really offer no
+    restoring force along it?
+
+    The reduced accelerations at q₀ ± a N x̂ (projected onto the constraints, q̇ = 0) give by
+    central differences k_eff = −x̂ᵀM_r(ẍ₊ − ẍ₋) / (2a x̂ᵀM_r x̂) and ω_eff = √|k_eff|; the
+    O(a²) offset of the projected start from a curved rigid motion is even in a and cancels.
+    ω_ref, the model's own frequency scale, is the largest |s| of its other listed modes or
+    √(force scale / (length · largest mass)), whichever is larger.  A linearization that drops a
+    stiffness (the pendulum without Σλ∇²Φ) reports a rigid-body mode that fails this probe.
+    """
+    x = x.real if np.linalg.norm(x.real) >= np.linalg.norm(x.imag) else x.imag
+    full = N @ x
+    x = x / full[int(np.argmax(np.abs(full)))]
+    acc = []
+    for sign in (1.0, -1.0):
+        u, _, _, _ = dyn.project(sign * a * (N @ x), np.zeros(dyn.n))
+        qdd, _ = dyn.acceleration(dyn.q0 + u, np.zeros(dyn.n))
+        acc.append(N.T @ qdd)
+    k_eff = -(x @ Mr @ (acc[0] - acc[1])) / (2 * a * (x @ Mr @ x))
+    w_eff = math.sqrt(abs(k_eff))
+    others = [abs(s) for s, kd in zip(modes.eigenvalues, modes.kind) if kd != "rigid-body"]
+    m_max = float(np.max(np.abs(np.diag(dyn.M)), initial=0.0)) or 1.0
+    f_scale = float(getattr(eq, "tolerances", {}).get("force_scale", 0.0) or 0.0)
+    w_ref = max(max(others, default=0.0), math.sqrt(f_scale / (length * m_max)))
+    return w_eff, w_ref
 
 
 def _fit_exponential(t, eta):

@@ -165,13 +165,34 @@ def test_wrong_linearization_fails_on_four_bar():
 
 
 # ---- skipped, massless, redundant -------------------------------------------------------------
-def test_rigid_body_mode_skipped():
+def test_rigid_body_mode_skipped_and_probed():
+    """A true rigid-body mode (free-free chain translation) is not fitted (reason given); the
+    static probe finds no restoring force (exactly zero for a translation of linear springs)."""
     a, r = run_check(CASES / "chain_free_free.toml", params={"n": 3}, indices=[1, 2])
     assert a.modes.kind[0] == "rigid-body"
-    assert r.modes[0].passed is None and "rigid-body" in r.modes[0].skipped
+    m = r.modes[0]
+    assert "rigid-body" in m.skipped and m.passed is True
+    assert m.probe_omega <= 1e-9 * m.probe_reference
     assert r.modes[1].passed and r.passed
     out = r.to_dict()["modes"][0]
-    assert out["measured"]["delta"] is None and out["skipped"]
+    assert out["measured"]["delta"] is None and out["skipped"] and out["probe"]["omega_eff"] >= 0
+
+
+def test_wrong_linearization_fails_on_pendulum():
+    """Without Σλ∇²Φ the pendulum's mode is predicted rigid-body (DESIGN §4); it is not fitted,
+    but the static probe of the nonlinear model finds the restoring frequency √(g/l) (closed
+    form, central differences of O(ε²) = 1e-8 accuracy, asserted to 1e-6) and the check fails."""
+    for path, n in (("pendulum.toml", 1), ("double_pendulum.toml", 2)):
+        a = analyze(CASES / path)
+        wrong = mbseig.linearize(a.model, a.eq, constraint_stiffness=False)
+        md = mbseig.modes(wrong.M, wrong.P, wrong.Q, N=wrong.N)
+        assert md.kind == ["rigid-body"] * n
+        r = check_modes(a.model, a.eq, wrong, md)
+        assert not r.passed and r.failed == list(range(1, n + 1))
+    a = analyze(CASES / "pendulum.toml")
+    wrong = mbseig.linearize(a.model, a.eq, constraint_stiffness=False)
+    r = check_modes(a.model, a.eq, wrong, mbseig.modes(wrong.M, wrong.P, wrong.Q, N=wrong.N))
+    assert r.modes[0].probe_omega == pytest.approx(math.sqrt(G), rel=1e-6)
 
 
 MASSLESS = """
@@ -310,6 +331,6 @@ def test_cli_three_dof_device_reactions_and_actuator(capsys):
     path = CASES / "hand_device.toml"
     assert main(["check", str(path)]) == 0
     out = capsys.readouterr().out
-    assert "check: passed (3 simulated, 0 skipped)" in out
+    assert "check: passed (3 simulated, 0 rigid-body probed, 0 skipped)" in out
     assert "joints[1] 'guide'" in out and "bodies[3] 'rod' (rigid length)" in out
     assert "actuator joints[3] 'MCP command': effort" in out

@@ -77,7 +77,9 @@ def run(args) -> int:
     for p in plots:
         print(f"wrote {p}")
     if res.passed:
-        print(f"check: passed ({len(sim)} simulated, {len(res.modes) - len(sim)} skipped)")
+        probed = sum(1 for m in res.modes if m.skipped and m.passed is not None)
+        print(f"check: passed ({len(sim)} simulated, {probed} rigid-body probed, "
+              f"{len(res.modes) - len(sim) - probed} skipped)")
         return 0
     print(f"check: FAILED for mode(s) {', '.join(str(k) for k in res.failed)}")
     return 1
