@@ -198,11 +198,22 @@ def _partial_worker(kind, n, n_modes):
         md = mbseig.modes(lin.M, P, lin.Q, N=lin.N, coordinate_names=lin.coordinate_names, n_modes=n_modes)
     t4 = time.perf_counter()
     err = rel_error(md.eigenvalues, chain_exact(n)[: n_modes + 5]) if kind == "proportional" else math.nan
-    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # MB
+    rss = _peak_rss_mb(resource)
     print(json.dumps({"kind": kind, "n": n, "load": t1 - t0, "equilibrium": t2 - t1, "linearize": t3 - t2,
                       "modes": t4 - t3, "total": t4 - t0, "rss_mb": rss, "error": err,
                       "eta": float(md.backward_error.max()), "solver": md.solver,
                       "n_listed": len(md), "verdict": md.verdict}))
+
+
+def _peak_rss_mb(resource):
+    """Peak resident memory of this process (VmHWM: ru_maxrss would inherit the parent's peak)."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return float(line.split()[1]) / 1024.0
+    except OSError:
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
 def bench_partial(sizes, repeats, general_max, threads, log, n_modes=20):

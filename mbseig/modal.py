@@ -32,7 +32,7 @@ from .qep import EPS, solve_qep
 __all__ = ["Modes", "modes", "STABILITY_ORDER"]
 
 STABILITY_ORDER = {"stable": 0, "critical": 1, "unstable": 2}
-DENSE_MAX = 20000  # sparse input above this size needs a partial-spectrum request
+DENSE_MAX = 5000  # sparse input above this size needs a partial-spectrum request
 
 
 @dataclass(frozen=True, eq=False)
@@ -108,7 +108,8 @@ def modes(M, P, Q, *, solver: str = "auto", N=None, coordinate_names=None,
     else:
         if sp.issparse(M) and M.shape[0] > DENSE_MAX:
             raise SolverError(f"{M.shape[0]} unknowns is beyond the dense path (limit {DENSE_MAX}): "
-                              f"ask for a partial spectrum (n_modes=, target= or band=)")
+                              f"ask for a partial spectrum (n_modes=, target= or band=; "
+                              f"mbseig modes --n-modes K or --band-hz F1 F2)")
         sol = solve_qep(M, P, Q, solver=solver, **solver_options)
     s_all = sol.eigenvalues
     err_all = sol.condition * np.maximum(sol.backward_error, EPS)

@@ -116,7 +116,11 @@ def choose_solver(M, P, Q, *, sym_tol=1e-13, rayleigh_tol=1e-12, memo=None):
         return memo[key]
 
     symmetric = sym("M", M) and sym("Q", Q)
-    L = _cholesky(0.5 * (M + M.T)) if sym("M", M) else None
+    d = np.diagonal(M)
+    if np.count_nonzero(M) == np.count_nonzero(d):  # diagonal M: positive definite iff d > 0
+        L = True if np.all(d > 0) else None
+    else:
+        L = _cholesky(0.5 * (M + M.T)) if sym("M", M) else None
     if symmetric and L is not None:
         if not np.any(P):
             return "eigh", "P = 0, M and Q symmetric, M positive definite", {}
@@ -218,6 +222,49 @@ def _from_undamped(w, V, alpha, beta):
     s = np.concatenate([s1, s2])
     X = np.concatenate([V, V], axis=1).astype(complex)
     return s, X, X, X, 0
+
+
+def _undamped_eigh(M, Q):
+    """(ω², V) of Q v = ω² M v, M-orthonormal V; a diagonal M is scaled out (standard eigh)."""
+    Qs = 0.5 * (Q + Q.T)
+    d = np.diagonal(M).copy()
+    if np.count_nonzero(M) == np.count_nonzero(d) and np.all(d > 0):
+        l = np.sqrt(d)
+        w, U = sla.eigh(Qs / np.outer(l, l), check_finite=False)
+        return w, U / l[:, None]
+    return sla.eigh(Qs, 0.5 * (M + M.T), check_finite=False)
+
+
+def _colnorm_real(V):
+    return np.sqrt(np.einsum("ij,ij->j", V, V))
+
+
+def undamped_pairs(M, P, Q, w, V, alpha, beta, norms):
+    """s₊, s₋ of each undamped mode (ω², v) with s² + (α + βω²)s + ω² = 0; η and κ in real
+    arithmetic on the n real vectors (M, P, Q symmetric: y = x, κ = w(s)‖v‖²/|2s vᵀMv + vᵀPv|).
+
+    Returns (s, X, η, κ) with s = [s₊, s₋] and X = [V, V] (real, unit columns).
+    """
+    s = _from_undamped(w, np.zeros((0, w.size)), alpha, beta)[0]
+    V = V / _colnorm_real(V)
+    MV, PV, QV = M @ V, P @ V, Q @ V
+    nM, nP, nQ = norms
+    a, b = np.einsum("ij,ij->j", V, MV), np.einsum("ij,ij->j", V, PV)
+    k = w.size
+    rn = np.empty(2 * k)
+    for half in (slice(0, k), slice(k, 2 * k)):  # s₊ then s₋, both with the vectors V
+        sh = s[half]
+        s2 = sh * sh
+        Rr = MV * s2.real + PV * sh.real + QV
+        Ri = MV * s2.imag + PV * sh.imag
+        rn[half] = np.sqrt(np.einsum("ij,ij->j", Rr, Rr) + np.einsum("ij,ij->j", Ri, Ri))
+        del Rr, Ri
+    weight = np.abs(s) ** 2 * nM + np.abs(s) * nP + nQ
+    with np.errstate(divide="ignore", invalid="ignore"):
+        eta = np.where(weight > 0, rn / weight, np.where(rn == 0, 0.0, np.inf))
+        den = np.abs(2 * s * np.concatenate([a, a]) + np.concatenate([b, b]))
+        kappa = np.where(den > 0, weight / den, np.inf)
+    return s, np.concatenate([V, V], axis=1), eta, kappa
 
 
 def _solve_companion(M, P, Q, opts):
@@ -332,6 +379,16 @@ def solve_qep(M, P, Q, *, solver: str = "auto", sym_tol: float = 1e-13,
     if n == 0:
         e = np.zeros(0)
         return QEPSolution(e.astype(complex), np.zeros((0, 0), complex), e, e, name, reason, 0, norms)
+    if name in ("eigh", "proportional"):  # real undamped modes: checks in real arithmetic
+        w, V = _undamped_eigh(M, Q)
+        ops = tuple(_fast_operand(A) for A in (M, P, Q))
+        s, X, eta, kappa = undamped_pairs(*ops, w, V, opts.get("alpha", 0.0), opts.get("beta", 0.0), norms)
+        real_error = None
+        if name == "proportional":
+            fit = np.linalg.norm(P - opts["alpha"] * M - opts["beta"] * Q)
+            real_error = proportional_real_error(s, kappa, eta, norms, opts["alpha"], opts["beta"], fit)
+        return QEPSolution(s, X, eta, kappa, name, reason, 0, norms,
+                           {"second_half_vectors": 0, "left_vectors": False}, real_error)
     out = SOLVERS[name](M, P, Q, opts)
     s, X1, X2, Y, n_inf = out[:5]
     details = out[5] if len(out) > 5 else {}

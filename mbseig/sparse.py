@@ -34,7 +34,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .errors import SolverError
-from .qep import QEPSolution, _from_undamped, proportional_real_error
+from .qep import QEPSolution, proportional_real_error, undamped_pairs
 
 __all__ = ["solve_partial", "PARTIAL_SOLVERS", "sparse_structure"]
 
@@ -267,7 +267,8 @@ def solve_partial(M, P, Q, *, n_modes: int | None = None, target: float | None =
         if band is not None:
             inside = (found >= lo) & (found <= hi)
             w, V = w[inside], V[:, inside]
-        s, X, eta, kappa = _undamped_pairs(Mb, Pb, Qb, w, V, extras, norms)
+        s, X, eta, kappa = undamped_pairs(Mb, Pb, Qb, w, V, extras.get("alpha", 0.0),
+                                          extras.get("beta", 0.0), norms)
         take2 = np.zeros(0, bool)
     else:
         X1, X2 = _unit(X1), _unit(X2)
@@ -304,35 +305,6 @@ def _colnorm(X):
     if np.iscomplexobj(X):
         return np.sqrt(np.einsum("ij,ij->j", X.real, X.real) + np.einsum("ij,ij->j", X.imag, X.imag))
     return np.sqrt(np.einsum("ij,ij->j", X, X))
-
-
-def _undamped_pairs(Mb, Pb, Qb, w, V, extras, norms):
-    """s₊, s₋ of every undamped mode (ω², v) with real vectors, η and κ in real arithmetic.
-
-    With y = x = v (symmetric M, P, Q):  κ = (|s|²‖M‖ + |s|‖P‖ + ‖Q‖)‖v‖² / |2s vᵀMv + vᵀPv|.
-    """
-    s, _, _, _, _ = _from_undamped(w, np.zeros((0, w.size)), extras.get("alpha", 0.0),
-                                   extras.get("beta", 0.0))
-    V = V / _colnorm(V)
-    MV, PV, QV = Mb @ V, Pb @ V, Qb @ V
-    nM, nP, nQ = norms
-    a, b = np.einsum("ij,ij->j", V, MV), np.einsum("ij,ij->j", V, PV)
-    k = w.size
-    rn = np.empty(2 * k)
-    for half in (slice(0, k), slice(k, 2 * k)):  # s₊ then s₋, both with the vectors V
-        sh = s[half]
-        s2 = sh * sh
-        Rr = MV * s2.real + PV * sh.real + QV
-        Ri = MV * s2.imag + PV * sh.imag
-        rn[half] = np.sqrt(np.einsum("ij,ij->j", Rr, Rr) + np.einsum("ij,ij->j", Ri, Ri))
-        del Rr, Ri
-    weight = np.abs(s) ** 2 * nM + np.abs(s) * nP + nQ
-    with np.errstate(divide="ignore", invalid="ignore"):
-        eta = np.where(weight > 0, rn / weight, np.where(rn == 0, 0.0, np.inf))
-        den = np.abs(2 * s * np.concatenate([a, a]) + np.concatenate([b, b]))
-        kappa = np.where(den > 0, weight / den, np.inf)
-    VV = np.concatenate([V, V], axis=1)
-    return s, VV, eta, kappa
 
 
 def _select(s, X, eta, count, omega_t, band):
