@@ -217,8 +217,53 @@ def repeated_and_defective():
         mbseig_right=ok_rep and ok_def and ok_rig and ok_sing, data=out)
 
 
+def dissipative_integrator(steps_per_period=10, periods=20):
+    """Ziegler's pendulum at F = 2.2 c/l has a flutter mode s = σ + iω with σ > 0.  Backward
+    Euler with h = T/10 multiplies it by 1/(1 − hs) per step; |1 − hs| > 1 here, so the
+    simulated flutter decays: the time domain says stable.  mbseig's time-domain check
+    (DOP853, rtol 1e-10, on the nonlinear case) measures the growth."""
+    import mbseig
+
+    M, P, Q = ziegler_matrices(2.2)
+    n = M.shape[0]
+    Mi = np.linalg.inv(M)
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-Mi @ Q, -Mi @ P]])
+    lam, Vec = np.linalg.eig(A)
+    k = int(np.argmax(lam.real))  # the flutter eigenvalue
+    s = lam[k]
+    h = 2 * np.pi / abs(s.imag) / steps_per_period
+    step = np.linalg.inv(np.eye(2 * n) - h * A)
+    z = Vec[:, k].real.copy()
+    z0 = np.linalg.norm(z)
+    for _ in range(steps_per_period * periods):
+        z = step @ z
+    growth = np.linalg.norm(z) / z0
+    naive_delta = np.log(abs(1 - h * s)) / h  # apparent δ of the discrete flutter mode
+    try:
+        from . import timedomain
+
+        model = mbseig.load_case(CASES / "ziegler_pendulum.toml", config="flutter")
+        eq = mbseig.equilibrium(model)
+        lin = mbseig.linearize(model, eq)
+        md = mbseig.modes(lin.M, lin.P, lin.Q, N=lin.N)
+        res = timedomain.check_modes(model, eq, lin, md)
+        flut = [m for m in res.modes if m.predicted_delta < 0 and not m.skipped]
+        measured = flut[0].measured_delta if flut else float("nan")
+        td = f"δ measured {measured:+.4g} (predicted {flut[0].predicted_delta:+.4g}): unstable" if flut else "no flutter mode checked"
+        right = bool(flut) and measured < 0 and flut[0].passed
+    except ImportError:
+        td, right, measured = "mbseig.timedomain not available", False, float("nan")
+    return FailCase(
+        "time domain: Ziegler pendulum past the flutter load", "backward Euler, 10 steps per period",
+        f"response ×{growth:.2g} after {periods} periods (apparent δ = {naive_delta:+.3g}): looks stable",
+        f"mbseig check (DOP853, rtol 1e-10): {td}",
+        f"flutter, Re s = {s.real:+.4g} (eigenvalue of the linear model)",
+        naive_wrong=growth < 1, mbseig_right=right,
+        data={"growth": float(growth), "naive_delta": float(naive_delta), "measured_delta": float(measured)})
+
+
 ALL = [pendulum_constraint_stiffness, four_bar_constraint_stiffness, ziegler_follower,
-       badly_scaled, large_undamped, repeated_and_defective]
+       badly_scaled, large_undamped, repeated_and_defective, dissipative_integrator]
 
 
 def run_all():
