@@ -21,9 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import EquilibriumError
 from .affine import Affine
-from .elements import _angle_derivatives
+from .elements import relative_angle
 
 __all__ = ["AngleDriver"]
 
@@ -43,21 +42,10 @@ class AngleDriver:
         return self.dirs.idx
 
     def angle(self, q) -> float:
-        w = self.dirs(q)
-        a, b = w[:2], w[2:]
-        return self.sense * math.atan2(a[0] * b[1] - a[1] * b[0], a @ b)
+        return relative_angle(self.dirs, q, self.sense, self.name)[0]
 
     def _derivatives(self, q):
-        w = self.dirs(q)
-        a, b = w[:2], w[2:]
-        if a @ a == 0.0 or b @ b == 0.0:
-            raise EquilibriumError("direction of zero length: angle undefined", element=self.name)
-        ga, Ha = _angle_derivatives(a)
-        gb, Hb = _angle_derivatives(b)
-        g = self.sense * np.concatenate([-ga, gb])
-        H = np.zeros((4, 4))
-        H[:2, :2] = -self.sense * Ha
-        H[2:, 2:] = self.sense * Hb
+        _, g, H = relative_angle(self.dirs, q, self.sense, self.name)
         return g, H
 
     def phi(self, q):

@@ -211,6 +211,24 @@ def _angle_derivatives(v):
     return grad, hess
 
 
+def relative_angle(dirs: Affine, q, sense: float, name: str):
+    """θ = sense · atan2(a × b, a · b) of the stacked directions [a; b] = ``dirs(q)``, with its
+    gradient g and Hessian H with respect to [a; b] (4-vectors, 4×4), shared by the torsional
+    spring and the angle driver so that both measure the same angle the same way."""
+    w = dirs(q)
+    a, b = w[:2], w[2:]
+    if a @ a == 0.0 or b @ b == 0.0:
+        raise EquilibriumError("direction of zero length: angle undefined", element=name)
+    ga, Ha = _angle_derivatives(a)
+    gb, Hb = _angle_derivatives(b)
+    g = sense * np.concatenate([-ga, gb])
+    H = np.zeros((4, 4))
+    H[:2, :2] = -sense * Ha
+    H[2:, 2:] = sense * Hb
+    theta = sense * math.atan2(a[0] * b[1] - a[1] * b[0], a @ b)
+    return theta, g, H
+
+
 @dataclass(frozen=True, eq=False)
 class TorsionalSpringDamper:
     """Torsional spring-damper on the relative angle between two planar directions.
@@ -232,23 +250,11 @@ class TorsionalSpringDamper:
         return self.dirs.idx
 
     def angle(self, q):
-        w = self.dirs(q)
-        a, b = w[:2], w[2:]
-        return self.sense * math.atan2(a[0] * b[1] - a[1] * b[0], a @ b)
+        return relative_angle(self.dirs, q, self.sense, self.name)[0]
 
     def _parts(self, q, qd):
-        w = self.dirs(q)
         W = self.dirs.C
-        a, b = w[:2], w[2:]
-        if a @ a == 0.0 or b @ b == 0.0:
-            raise EquilibriumError("direction of zero length: angle undefined", element=self.name)
-        ga, Ha = _angle_derivatives(a)
-        gb, Hb = _angle_derivatives(b)
-        g = self.sense * np.concatenate([-ga, gb])
-        H = np.zeros((4, 4))
-        H[:2, :2] = -self.sense * Ha
-        H[2:, 2:] = self.sense * Hb
-        theta = self.angle(q)
+        theta, g, H = relative_angle(self.dirs, q, self.sense, self.name)
         dtheta = (theta - self.angle0 + math.pi) % (2 * math.pi) - math.pi
         wd = W @ qd[self.idx]
         theta_dot = g @ wd
