@@ -298,3 +298,19 @@ def test_lightly_damped_large_chain_is_stable():
     np.testing.assert_allclose(md.delta, (0.5 / 2000.0) * w**2, rtol=1e-7)
     assert md.verdict == "stable" and np.all(md.tolerance < 1e-3 * md.delta)
     assert md.error_estimate[0] > md.delta[0]  # the normwise bound alone could not decide
+
+
+def test_linearize_cli_large_model_sparse_output(tmp_path, capsys):
+    """Above SPARSE_MIN coordinates `mbseig linearize` writes CSR parts (npz, JSON) instead of
+    dense matrices; they rebuild the stiffness of the chain (2k on the diagonal, −k beside)."""
+    out = tmp_path / "lin.npz"
+    args = ["linearize", str(CASES / "chain_damped.toml"), "--param", "n=6000"]
+    assert main([*args, "--out", str(out)]) == 0
+    with np.load(out) as z:
+        Q = sp.csr_matrix((z["Q_data"], z["Q_indices"], z["Q_indptr"]), shape=tuple(z["Q_shape"]))
+    assert Q.shape == (6000, 6000) and Q.nnz == 3 * 6000 - 2
+    np.testing.assert_allclose(Q.diagonal(), 2000.0)
+    capsys.readouterr()
+    assert main([*args, "--json"]) == 0
+    js = json.loads(capsys.readouterr().out)
+    assert js["M"]["format"] == "csr" and js["dof"] == 6000 and "A" not in js

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..case import load_case
 from ..errors import CaseError
@@ -25,11 +26,38 @@ def register(sub):
 
 def _arrays(model, eq, lin):
     arrays = {"M": lin.M, "P": lin.P, "Q": lin.Q, "N": lin.N, "q0": lin.q0, "lam0": lin.lam0}
+    if getattr(lin, "constraint_jacobian", None) is not None:  # large constrained model: Φ_q, no N
+        arrays["G"] = lin.constraint_jacobian
+    arrays = {k: v for k, v in arrays.items() if v is not None}
+    if sp.issparse(lin.M):
+        return arrays  # large model kept sparse (mbseig.linear.SPARSE_MIN): no dense state matrix
     try:
         arrays["A"] = lin.state_matrix()
     except np.linalg.LinAlgError:
         pass  # singular M: no first-order state matrix (descriptor form only)
     return arrays
+
+
+def _json_value(v):
+    """A dense array as nested lists; a sparse one as its CSR parts."""
+    if sp.issparse(v):
+        v = v.tocsr()
+        return {"format": "csr", "shape": list(v.shape), "data": v.data.tolist(),
+                "indices": v.indices.tolist(), "indptr": v.indptr.tolist()}
+    return v.tolist()
+
+
+def _npz_arrays(arrays):
+    """Sparse matrices as ``K_data, K_indices, K_indptr, K_shape`` (CSR parts)."""
+    out = {}
+    for k, v in arrays.items():
+        if sp.issparse(v):
+            v = v.tocsr()
+            out.update({f"{k}_data": v.data, f"{k}_indices": v.indices, f"{k}_indptr": v.indptr,
+                        f"{k}_shape": np.array(v.shape)})
+        else:
+            out[k] = v
+    return out
 
 
 def run(args) -> int:
@@ -49,7 +77,7 @@ def run(args) -> int:
     if args.out:
         _write(Path(args.out), arrays, meta)
     if args.json:
-        print_json({**meta, **{k: v.tolist() for k, v in arrays.items()}})
+        print_json({**meta, **{k: _json_value(v) for k, v in arrays.items()}})
     else:
         print(f"case {model.name}: {model.n} coordinates, {lin.n_constraints} constraints "
               f"({eq.n_redundant} redundant), {lin.dof} DOF; equilibrium residual "
@@ -68,7 +96,7 @@ def _write(path, arrays, meta):
         raise CaseError(f"output must end in {', '.join(FORMATS)}", file=str(path), element="--out")
     try:
         if path.suffix == ".npz":
-            np.savez(path, coordinate_names=np.array(meta["coordinate_names"]), **arrays)
+            np.savez(path, coordinate_names=np.array(meta["coordinate_names"]), **_npz_arrays(arrays))
         elif path.suffix == ".mat":
             import scipy.io
 
@@ -78,6 +106,6 @@ def _write(path, arrays, meta):
 
             from ..analysis import jsonable
 
-            path.write_text(json.dumps(jsonable({**meta, **{k: v.tolist() for k, v in arrays.items()}})))
+            path.write_text(json.dumps(jsonable({**meta, **{k: _json_value(v) for k, v in arrays.items()}})))
     except OSError as exc:
         raise CaseError(f"cannot write: {exc.strerror or exc}", file=str(path), element="--out") from None
