@@ -99,13 +99,15 @@ def test_boundary_matches_independent_root(tmp_path):
 
 
 def test_identical_on_every_runner(tmp_path):
-    """Serial, local processes and (if installed) Dask give bit-identical JSON."""
+    """Serial, local processes and a Dask LocalCluster give bit-identical JSON
+    (dask[distributed] is part of the test extra)."""
     case = _case(tmp_path, FLUTTER, "flutter.toml")
     axes = [("c", np.linspace(1.0, -1.0, 4))]
     serial = json.dumps(run_sweep(case, axes, jobs=1).to_json())
     procs = json.dumps(run_sweep(case, axes, jobs=2).to_json())
     assert serial == procs
-    distributed = pytest.importorskip("distributed")
+    import distributed
+
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
                                   dashboard_address=None) as cluster, distributed.Client(cluster) as client:
         dask = run_sweep(case, axes, scheduler=client)
