@@ -375,7 +375,8 @@ def bench_timedomain(log):
     md = mbseig.modes(lin.M, lin.P, lin.Q, N=lin.N, coordinate_names=lin.coordinate_names)
     settings = [("DOP853 rtol 1e-10 (default)", "DOP853", 1e-10),
                 ("DOP853 rtol 1e-4 (loose explicit)", "DOP853", 1e-4),
-                ("Radau rtol 1e-3 (loose implicit)", "Radau", 1e-3)]
+                ("Radau rtol 1e-3 (loose implicit)", "Radau", 1e-3),
+                ("BDF rtol 1e-3 (low-order implicit)", "BDF", 1e-3)]
     for label, method, rtol in settings:
         if method not in getattr(timedomain, "INTEGRATORS", (method,)):
             continue

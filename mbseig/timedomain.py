@@ -35,7 +35,8 @@ the undamped pendulum shows an apparent δ/ω = 3.0e-12 whether the run lasts 20
 (ω error 6.5e-10), seven orders below the check's ``zero_delta_tol = 1e-5`` (asserted ≤ 1e-8 in
 tests/test_timedomain.py).  Implicit L-stable methods (Radau, BDF) damp under-resolved motion;
 Radau is offered (``method=``) for stiff models, where it damps only the unresolved fast modes
-that the modal projection discards.  A symplectic scheme (RATTLE) would be energy-neutral but is
+that the modal projection discards; BDF (variable order 1–5) is offered to measure what a
+low-order implicit method does to the measured δ (``mbseig bench``).  A symplectic scheme (RATTLE) would be energy-neutral but is
 second order and does not help with the damped and non-conservative forces the check must also
 handle.
 
@@ -95,7 +96,7 @@ __all__ = [
 ]
 
 #: integrators offered through ``method=`` (scipy.integrate.solve_ivp names)
-INTEGRATORS = ("DOP853", "Radau")
+INTEGRATORS = ("DOP853", "Radau", "BDF")
 
 
 # ---------------------------------------------------------------------------------------------
