@@ -7,13 +7,16 @@ For an eigenvalue s_k = −δ_k + iω_k:  ω_n = |s|,  ζ = δ/|s|,  f = ω/2π,
     tol_k = max(safety · κ_k · max(η_k, ε),  stability_rtol · |s_k|,  stability_atol)
 
 where κ_k·η_k is the first-order error bound of s_k (absolute condition number times backward
-error, see :mod:`mbseig.qep`).  So "δ = 0" means "zero within the numerical error of this
-eigenvalue", and every tolerance is recorded per mode.  Kinds: ``rigid-body`` (|s| ≤ tol),
+error, see :mod:`mbseig.qep`).  The structured paths (``eigh``, ``proportional``) compute
+δ = (α + βω²)/2 from an accurate ω² and supply a sharper bound of the error of Re s, which
+replaces κ·η in the δ test (not in the rigid-body and real tests).  So "δ = 0" means "zero within
+the numerical error of this eigenvalue", and the tolerance of each verdict is recorded per mode.  Kinds: ``rigid-body`` (|s| ≤ tol),
 ``oscillatory`` (complex, δ ≥ −tol), ``flutter`` (complex, δ < −tol), ``overdamped`` (real,
 negative), ``divergence`` (real, positive); |ω| ≤ tol counts as real.
 
-Listing: a complex-conjugate pair once (ω > 0), real eigenvalues each; sorted by ω_n, then δ,
-then ω (deterministic).
+Listing: a complex-conjugate pair once (ω > 0), real eigenvalues each (a pair with |ω| within
+its tolerance, e.g. critical damping, counts as two real eigenvalues), a rigid-body mode once per
+independent vector; sorted by ω_n, then δ, then ω (deterministic).
 """
 
 from __future__ import annotations
