@@ -89,7 +89,8 @@ def _equilibrium(model, *, tol, max_iter, rank_tol, q_init):
     cscale = model.constraint_scales()
     Phi_q = model.phi_q(q)
     g = model.generalized_force(q)
-    lam = _min_norm_multipliers(Phi_q, g)
+    large = n + m > DENSE_LIMIT
+    lam = _multipliers(Phi_q, g, rank_tol, large, check=False)[0]
     K, _ = model.force_jacobians(q)
     force_scale = _force_scale(model, g, K, Phi_q, lam)
 
@@ -136,10 +137,9 @@ def _equilibrium(model, *, tol, max_iter, rank_tol, q_init):
         q, lam, r1, r2, fr, cr, Phi_q = qt, lt, r1t, r2t, frt, crt, Phi_qt
 
     g = model.generalized_force(q)
-    lam = _min_norm_multipliers(Phi_q, g)
+    lam, rank, rank_method = _multipliers(Phi_q, g, rank_tol, large, check=True)
     r1, r2, fr, cr, Phi_q = residuals(q, lam)
-    rank, _ = constraint_rank(Phi_q, rank_tol)
-    redundant = _redundant_rows(model, Phi_q, rank)
+    redundant = _redundant_rows(model, Phi_q, rank) if not large else []
     reactions, k = [], 0
     for c in model.constraints:
         reactions.append((c.name, lam[k:k + c.n_eq].copy()))
@@ -149,7 +149,7 @@ def _equilibrium(model, *, tol, max_iter, rank_tol, q_init):
         iterations=it, rank=rank, n_redundant=m - rank, redundant=tuple(redundant),
         reactions=tuple(reactions),
         tolerances={"tol": tol, "max_iter": max_iter, "rank_tol": rank_tol,
-                    "force_scale": force_scale},
+                    "force_scale": force_scale, "rank_method": rank_method},
     )
 
 
@@ -161,10 +161,33 @@ def _force_scale(model, g, K, Phi_q, lam):
     return s if s > 0 else 1.0
 
 
-def _min_norm_multipliers(Phi_q, g):
-    if Phi_q.shape[0] == 0:
-        return np.zeros(0)
-    return sla.lstsq(Phi_q.toarray().T, g, lapack_driver="gelsd")[0]
+def _multipliers(Phi_q, g, rank_tol, large, *, check):
+    """(λ, rank of Φ_q, how the rank was found) with λ the least-squares solution of Φ_qᵀλ = g.
+
+    Dense (size up to DENSE_LIMIT): SVD, so λ is the minimum-norm solution and the rank is
+    revealed by the singular values.  Large models: the normal equations Φ_q Φ_qᵀ λ = Φ_q g by
+    sparse LU; that needs independent constraints, so a pivot below rank_tol² of the largest
+    (the square, since Φ_qΦ_qᵀ squares the singular values) raises instead of guessing.
+    """
+    m = Phi_q.shape[0]
+    if m == 0:
+        return np.zeros(0), 0, "none"
+    if not large:
+        lam = sla.lstsq(Phi_q.toarray().T, g, lapack_driver="gelsd")[0]
+        rank = constraint_rank(Phi_q, rank_tol)[0] if check else m
+        return lam, rank, "SVD of Φ_q"
+    A = (Phi_q @ Phi_q.T).tocsc()
+    try:
+        lu = spla.splu(A)
+    except RuntimeError:
+        lu = None
+    pivots = np.abs(lu.U.diagonal()) if lu is not None else np.zeros(1)
+    if lu is None or pivots.min() <= rank_tol**2 * pivots.max():
+        raise EquilibriumError(
+            f"redundant constraints in a model of {Phi_q.shape[1]} coordinates and {m} constraints: "
+            f"above the dense limit of {DENSE_LIMIT} the constraints must be independent",
+            element="equilibrium")
+    return lu.solve(Phi_q @ g), m, "sparse LU of Φ_q Φ_qᵀ (independent constraints verified by its pivots)"
 
 
 def _solve(A, rhs):
