@@ -70,12 +70,11 @@ def jsonable(x):
 def modes_json(a: Analysis) -> dict:
     """The fixed ``mbseig modes --json`` object (extra keys only extend it)."""
     md, lin, eq, model = a.modes, a.linear, a.eq, a.model
-    n_constraints = 0 if isinstance(model, LinearCase) else model.n_constraints
     out = {
         "case": model.name,
         "parameters": dict(model.parameters),
         "n_coordinates": int(model.n),
-        "n_constraints": int(n_constraints),
+        "n_constraints": int(model.n_constraints),
         "n_redundant": int(eq.n_redundant),
         "dof": int(lin.dof),
         "solver": md.solver,

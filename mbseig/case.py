@@ -67,6 +67,11 @@ class LinearCase:
     def coordinate_names(self):
         return tuple(f"x{k + 1}" for k in range(self.n))
 
+    @property
+    def n_constraints(self) -> int:
+        """Always 0: the matrices are already in independent coordinates."""
+        return 0
+
 
 # ---------------------------------------------------------------------------------------------
 def parse_param_overrides(items) -> dict:

@@ -27,6 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .case import LinearCase
+
 from .errors import CaseError
 
 __all__ = ["build_report", "render_markdown", "render_html", "write_report"]
@@ -69,8 +71,11 @@ def _config_blocks(case, config, out_dir, *, run_check, stem):
         ["parameters", ", ".join(f"{k} = {_fmt(v, 5)}" for k, v in model.parameters.items()
                                  if k in _SHOWN_PARAMS or not _SHOWN_PARAMS)],
     ]))
-    rep = reactions(model, eq)
-    blocks.append(("h3", "Equilibrium"))
+    linear_case = isinstance(model, LinearCase)  # matrices only: no posture, reactions or drawing
+    rep = (dict(posture=[], out_of_range=[], drivers=[], actuator=[], pins=[], constraints=[])
+           if linear_case else reactions(model, eq))
+    if not linear_case:
+        blocks.append(("h3", "Equilibrium"))
     if rep["posture"]:
         blocks.append(("table", ["joint", "flexion [deg]", "range [deg]", "margin [deg]", "in range"],
                        [[p["name"], _fmt(p["angle_deg"], 6),
@@ -103,7 +108,8 @@ def _config_blocks(case, config, out_dir, *, run_check, stem):
                    else "force " + ", ".join(_fmt(x, 5) for x in c["force"]) + " N" if "force" in c
                    else "torque " + _fmt(c.get("torque"), 5) + " N m")
         rows.append([c["element"], ", ".join(_fmt(x, 6) for x in c["multipliers"]), carried])
-    blocks.append(("table", ["constraint", "multiplier λ", "reaction"], rows))
+    if rows:
+        blocks.append(("table", ["constraint", "multiplier λ", "reaction"], rows))
 
     blocks.append(("h3", f"Modes — verdict: {md.verdict}"))
     rows = []
@@ -120,10 +126,11 @@ def _config_blocks(case, config, out_dir, *, run_check, stem):
                         f"{float(np.min(md.delta)):.5g} 1/s (ζ = {float(md.zeta[np.argmin(md.delta)]):.4g}); "
                         f"δ − tol = {min_margin:.4g} (tol per mode: max(10 κ η, 1e-12 |s|))."))
     labels = [f"mode {k + 1}: {md.freq_hz[k]:.4g} Hz, ζ = {md.zeta[k]:.3g}" for k in range(len(md))]
-    img = plots.mechanism_modes(model, eq.q, md.shapes, labels,
-                                out_dir / f"{stem}_{tag}_shapes.png",
-                                title=f"{tag}: equilibrium (black) and mode shapes (±, red/blue)")
-    blocks.append(("img", img, f"{tag}: mechanism at equilibrium with each mode shape superposed"))
+    if not linear_case:
+        img = plots.mechanism_modes(model, eq.q, md.shapes, labels,
+                                    out_dir / f"{stem}_{tag}_shapes.png",
+                                    title=f"{tag}: equilibrium (black) and mode shapes (±, red/blue)")
+        blocks.append(("img", img, f"{tag}: mechanism at equilibrium with each mode shape superposed"))
     img = plots.pole_map(md.eigenvalues, out_dir / f"{stem}_{tag}_poles.png",
                          title=f"{tag}: pole map (numbers = mode)", stability=md.stability)
     blocks.append(("img", img, f"{tag}: pole map"))
@@ -312,7 +319,7 @@ def build_report(case, *, configs=None, out_dir, run_check=True, jobs=None, stud
         summaries.append(s)
     study_blocks, study_sums = [], []
     if studies:
-        for st in base.report.get("studies", []):
+        for st in getattr(base, "report", {}).get("studies", []):  # a linear case has no [report]
             if st.get("config") not in configs and not (len(configs) > 1):
                 continue
             b, s = _study_blocks(case, st, out_dir, stem, jobs)

@@ -55,3 +55,17 @@ def test_committed_report_in_headless_chromium(tmp_path):
                                                        height=1200)
     assert total >= 13 and broken == 0
     assert (tmp_path / "shot.png").stat().st_size > 10_000
+
+
+def test_report_on_a_linear_case(tmp_path):
+    """A linear case has no mechanism: the report keeps the model, modes, pole map and check,
+    and leaves out posture, reactions and the drawing (it used to fail on the missing fields)."""
+    from conftest import CASES
+
+    from mbseig.report import write_report
+
+    md_path, html_path = write_report(CASES / "rotating_mass.toml", out_dir=tmp_path)
+    text = md_path.read_text()
+    assert "### Modes — verdict: critical" in text  # closed form: gyroscopically stable, δ = 0
+    assert "### Equilibrium" not in text and "_shapes.png" not in text
+    assert "_poles.png" in text and html_path.exists()

@@ -95,7 +95,7 @@ def run(args) -> int:
         print_json(out)
         return 0
     m, eq, lin = a.model, a.eq, a.linear
-    n_c = getattr(m, "n_constraints", 0)
+    n_c = m.n_constraints
     print(f"case {m.name}: {m.n} coordinates, {n_c} constraints ({eq.n_redundant} redundant), "
           f"{lin.dof} DOF")
     if eq.redundant:
