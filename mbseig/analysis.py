@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .case import LinearCase, load_case
+from .case import load_case
 from .errors import MbseigError
 from .linear import LinearModel, linearize
 from .modal import Modes, modes

@@ -102,7 +102,7 @@ class _ShiftLU:
 
 
 def _bordered(M, P, Q, G):
-    n, m = M.shape[0], G.shape[0]
+    m = G.shape[0]
     nQ, nG = _fro(Q), _fro(G)
     c = nQ / nG if nG > 0 and nQ > 0 else 1.0
     Z = sp.csr_matrix((m, m))

@@ -15,7 +15,6 @@ import numpy as np
 import pytest
 from conftest import CASES
 
-import mbseig
 from mbseig.analysis import analyze
 
 A_LEN, B_LEN, C_LEN = 0.3, 1.0, 0.8

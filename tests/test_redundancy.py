@@ -4,7 +4,6 @@ import numpy as np
 import pytest
 from conftest import CASES, write_case
 
-import mbseig
 from mbseig.analysis import analyze
 
 

@@ -4,7 +4,6 @@ The browser test needs Chromium and is skipped without it; the embedded-image ch
 """
 
 import sys
-from pathlib import Path
 
 import pytest
 from conftest import CASES, ROOT

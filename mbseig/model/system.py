@@ -14,7 +14,6 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from .affine import Affine
 from .batched import coo_sum
 
 __all__ = ["Model"]
