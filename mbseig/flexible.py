@@ -182,11 +182,11 @@ def _beam_spec(b, f, mesh_override):
     slender = length / depth
     if theory == "euler-bernoulli" and slender < EB_SLENDERNESS:
         spec.warnings.append(
-            f"Euler–Bernoulli theory at slenderness L/d = {slender:.3g} < {EB_SLENDERNESS:g}: "
+            f"Euler–Bernoulli theory at slenderness L/d = {slender:.6g} < {EB_SLENDERNESS:g}: "
             "shear deformation and rotary inertia matter; use theory = \"timoshenko\"")
     if slender < MIN_SLENDERNESS:
         spec.warnings.append(
-            f"slenderness L/d = {slender:.3g} < {MIN_SLENDERNESS:g}: beam theory is inaccurate "
+            f"slenderness L/d = {slender:.6g} < {MIN_SLENDERNESS:g}: beam theory is inaccurate "
             "for so stubby a body; use a 2-D/3-D FE model (import it as an fe_body)")
     return spec
 
