@@ -178,11 +178,13 @@ def _plot(res, path):
     rows = [r for r in res["rows"] if r["section"] in ("dense", "structured", "partial", "jacobians")
             and isinstance(r.get("error"), float) and math.isfinite(r["error"])]
     methods = list(dict.fromkeys(f"{r['section']}: {r['method']}" for r in rows))
+    colors = plt.get_cmap("tab20").colors  # one colour per method (tab10 repeats after ten)
     for k, m in enumerate(methods):
         pts = [r for r in rows if f"{r['section']}: {r['method']}" == m]
         x = [r["time"] for r in pts]
         y = [max(r["error"], 1e-17) for r in pts]
-        ax.plot(x, y, marker=markers[k % len(markers)], linestyle="-", label=m, alpha=0.85)
+        ax.plot(x, y, marker=markers[k % len(markers)], linestyle="-", label=m, alpha=0.85,
+                color=colors[(2 * k) % 20 if k < 10 else (2 * k + 1) % 20])
         for r in pts:
             ax.annotate(f"{r['n']:g}", (r["time"], max(r["error"], 1e-17)), fontsize=6,
                         xytext=(3, 3), textcoords="offset points")
@@ -192,7 +194,7 @@ def _plot(res, path):
     ax.set_ylabel("relative error (vs closed form / complex step)")
     ax.set_title("mbseig: error against wall time (labels: size)")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7, loc="best")
+    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
