@@ -11,8 +11,8 @@ import statistics
 import time
 from pathlib import Path
 
-from mbseig.analysis import analyze
-from mbseig.timedomain import check_modes
+from mbseig.studies import analyze
+from mbseig.check import check_modes
 
 ROOT = Path(__file__).resolve().parent.parent
 CASES = [("hand_device.toml", {}, None), ("chain_damped.toml", {"n": 3}, None),

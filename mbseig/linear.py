@@ -1,4 +1,5 @@
-"""Linearization about an equilibrium and projection onto the constraint null space (DESIGN §4).
+"""Stage 2: linearization about an equilibrium and projection onto the constraint null space
+(docs/design.md, "Linearization").
 
 With N an orthonormal basis of null Φ_q(q₀) (rank-revealing SVD, relative tolerance ``rank_tol``)
 and q = q₀ + N x:
@@ -20,13 +21,13 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
 
-from .case import LinearCase
-from .statics import Equilibrium
+from .model.linear_case import LinearCase
+from .numerics import null_space_basis
+from .statics import Equilibrium, solved
 
-__all__ = ["LinearModel", "linearize", "null_space_basis"]
+__all__ = ["LinearModel", "linearize"]
 
 SPARSE_MIN = 5000  # coordinates above which linearize keeps M, P, Q sparse by default
 
@@ -86,28 +87,25 @@ class LinearModel:
         return control.ss(A, B, np.eye(2 * n), np.zeros((2 * n, n)))
 
 
-def null_space_basis(Phi_q, n, rank_tol):
-    """(N, rank): orthonormal basis of null(Φ_q) from the SVD, rank by σ > rank_tol·σ_max."""
-    if Phi_q.shape[0] == 0:
-        return np.eye(n), 0
-    A = Phi_q.toarray() if sp.issparse(Phi_q) else np.asarray(Phi_q)
-    _, s, vt = sla.svd(A, full_matrices=True)
-    rank = int(np.sum(s > rank_tol * s[0])) if s.size and s[0] > 0 else 0
-    return vt[rank:].T.copy(), rank
-
-
-def linearize(model, eq: Equilibrium, *, rank_tol: float = 1e-10,
+def linearize(model, eq: Equilibrium, *, rank_tol: float | None = None,
               constraint_stiffness: bool = True, sparse: bool | None = None) -> LinearModel:
     """Linear model about ``eq`` (see module docstring).
 
-    rank_tol : relative singular-value threshold for null Φ_q.
+    rank_tol : relative singular-value threshold for null Φ_q (default: the one the equilibrium
+        used for the redundancy count, so both stages see the same rank).
     constraint_stiffness : include H(λ₀).  ``False`` reproduces the common mistake of dropping
         the constraint-force stiffness; it exists to measure that error, never for production.
     sparse : keep M, P, Q sparse (default: when the model has more than ``SPARSE_MIN``
         coordinates).  Without constraints N is the sparse identity; with constraints no
         null-space basis is formed: M, P, Q stay in full coordinates and ``constraint_jacobian``
-        holds Φ_q(q₀) for the bordered pencil of :mod:`mbseig.sparse` (N is None).
+        holds Φ_q(q₀) for the bordered pencil of :mod:`mbseig.eigen.partial` (N is None).
+
+    The model linearized is the one ``eq`` belongs to (:func:`mbseig.statics.solved`): with
+    inverse-statics commands resolved, the actuator settings found by the equilibrium.
     """
+    model = solved(model, eq)
+    if rank_tol is None:
+        rank_tol = float(eq.tolerances.get("rank_tol", 1e-10))
     if isinstance(model, LinearCase):
         return LinearModel(M=model.M, P=model.P, Q=model.Q, N=np.eye(model.n), q0=np.zeros(model.n),
                            lam0=np.zeros(0), coordinate_names=model.coordinate_names, name=model.name,

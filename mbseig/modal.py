@@ -7,7 +7,7 @@ For an eigenvalue s_k = −δ_k + iω_k:  ω_n = |s|,  ζ = δ/|s|,  f = ω/2π,
     tol_k = max(safety · κ_k · max(η_k, ε),  stability_rtol · |s_k|,  stability_atol)
 
 where κ_k·η_k is the first-order error bound of s_k (absolute condition number times backward
-error, see :mod:`mbseig.qep`).  The structured paths (``eigh``, ``proportional``) compute
+error, see :mod:`mbseig.eigen.measures`).  The structured paths (``eigh``, ``proportional``) compute
 δ = (α + βω²)/2 from an accurate ω² and supply a sharper bound of the error of Re s, which
 replaces κ·η in the δ test (not in the rigid-body and real tests).  So "δ = 0" means "zero within
 the numerical error of this eigenvalue", and the tolerance of each verdict is recorded per mode.  Kinds: ``rigid-body`` (|s| ≤ tol),
@@ -29,10 +29,10 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
+from .eigen import SOLVERS, EPS, solve_partial, solve_qep
 from .errors import SolverError
-from .qep import EPS, solve_qep
 
-__all__ = ["Modes", "modes", "STABILITY_ORDER"]
+__all__ = ["Modes", "modes", "STABILITY_ORDER", "tolerances", "stability", "worst"]
 
 STABILITY_ORDER = {"stable": 0, "critical": 1, "unstable": 2}
 DENSE_MAX = 5000  # sparse input above this size needs a partial-spectrum request
@@ -63,6 +63,7 @@ class Modes:
     n_infinite: int
     all_eigenvalues: np.ndarray
     tolerances: dict = field(default_factory=dict)
+    left_vectors: object = None  # conjugated left vectors ȳ of the listed modes (or None)
 
     def __len__(self):
         return self.eigenvalues.size
@@ -94,18 +95,17 @@ def modes(M, P, Q, *, solver: str = "auto", N=None, coordinate_names=None,
     stability_rtol, stability_atol, safety : see the module docstring.
     rigid_rank_tol : relative pivot threshold for counting independent rigid-body vectors.
     n_modes, target, band, constraints : ask for a partial spectrum of sparse matrices (the
-        ``partial-*`` paths of :func:`mbseig.sparse.solve_partial`): ``n_modes`` modes nearest the
+        ``partial-*`` paths of :func:`mbseig.eigen.solve_partial`): ``n_modes`` modes nearest the
         angular frequency ``target`` (rad/s, default 0), or every mode with ω_n in
         ``band = (ω_lo, ω_hi)``; ``constraints`` is Φ_q when M, P, Q are in full coordinates.
     eta_warn : a listed mode whose backward error exceeds it is named in a RuntimeWarning.
-    Other keywords go to :func:`mbseig.qep.solve_qep` (``sym_tol``, ``rayleigh_tol``, ``scale``,
-    ``left``) or to :func:`mbseig.sparse.solve_partial`.
+    Other keywords go to :func:`mbseig.eigen.solve_qep` (``sym_tol``, ``rayleigh_tol``, ``scale``,
+    ``left``) or to :func:`mbseig.eigen.solve_partial`.
     """
+    path = SOLVERS.get(solver)
     partial = (n_modes is not None or target is not None or band is not None
-               or constraints is not None or str(solver).startswith("partial-"))
+               or constraints is not None or (path is not None and path.partial))
     if partial:
-        from .sparse import solve_partial
-
         sol = solve_partial(M, P, Q, n_modes=n_modes, target=target, band=band, G=constraints,
                             solver=solver, **solver_options)
     else:
@@ -115,15 +115,8 @@ def modes(M, P, Q, *, solver: str = "auto", N=None, coordinate_names=None,
                               f"mbseig modes --n-modes K or --band-hz F1 F2)")
         sol = solve_qep(M, P, Q, solver=solver, **solver_options)
     s_all = sol.eigenvalues
-    err_all = sol.condition * np.maximum(sol.backward_error, EPS)
-    tol_all = np.maximum.reduce([safety * err_all, stability_rtol * np.abs(s_all),
-                                 np.full(s_all.size, stability_atol)])
-    rigid = np.abs(s_all) <= tol_all
-    # structured paths know Re s far better than κη (δ = (α + βω²)/2 from an accurate ω²)
-    re_err = getattr(sol, "real_error", None)
-    tol_re = tol_all if re_err is None else np.maximum.reduce(
-        [safety * np.minimum(err_all, re_err), stability_rtol * np.abs(s_all),
-         np.full(s_all.size, stability_atol)])
+    err_all, tol_all, tol_re, rigid = tolerances(sol, safety=safety, stability_rtol=stability_rtol,
+                                                 stability_atol=stability_atol)
     # a complex pair is listed once (ω > 0; real LAPACK drivers return exact conjugates) and a
     # real eigenvalue on its own; a rigid-body mode (s = 0, double when P x = 0) is listed once
     # per independent vector: as many as the rank of the rigid eigenvectors.
@@ -140,28 +133,31 @@ def modes(M, P, Q, *, solver: str = "auto", N=None, coordinate_names=None,
     sel = np.flatnonzero(listed)
     s = s_all[sel]
     eta, kappa, X = sol.backward_error[sel], sol.condition[sel], sol.vectors[:, sel]
+    Y = None if sol.left_vectors is None else sol.left_vectors[:, sel]
     flip = s.imag < 0  # the lower member of a near-real pair: listed as its conjugate
     if np.any(flip):
         s = np.where(flip, np.conj(s), s)
         X = X.astype(complex)
         X[:, flip] = np.conj(X[:, flip])
+        if Y is not None:
+            Y = Y.astype(complex)
+            Y[:, flip] = np.conj(Y[:, flip])
     err, tol, tol_s, is_rigid = err_all[sel], tol_all[sel], tol_re[sel], rigid[sel]
     delta, omega = 0.0 - s.real, s.imag  # 0.0 − x: no negative zeros in reports
     wn = np.abs(s)
     order = np.lexsort((omega, delta, wn))
     s, eta, kappa, X, err, tol, tol_s, delta, omega, wn, is_rigid = (
         a[..., order] for a in (s, eta, kappa, X, err, tol, tol_s, delta, omega, wn, is_rigid))
-    stability, kind = [], []
+    Y = None if Y is None else Y[:, order]
+    stability_ = stability(delta, tol_s, is_rigid)
+    kind = []
     for k in range(s.size):
         if is_rigid[k]:
-            st, kd = "critical", "rigid-body"
+            kd = "rigid-body"
+        elif abs(omega[k]) <= tol[k]:
+            kd = "overdamped" if delta[k] > 0 else "divergence"
         else:
-            st = "stable" if delta[k] > tol_s[k] else "unstable" if delta[k] < -tol_s[k] else "critical"
-            if abs(omega[k]) <= tol[k]:
-                kd = "overdamped" if delta[k] > 0 else "divergence"
-            else:
-                kd = "flutter" if st == "unstable" else "oscillatory"
-        stability.append(st)
+            kd = "flutter" if stability_[k] == "unstable" else "oscillatory"
         kind.append(kd)
     with np.errstate(divide="ignore", invalid="ignore"):
         zeta = np.where(wn > 0, delta / wn, 0.0)
@@ -181,7 +177,7 @@ def modes(M, P, Q, *, solver: str = "auto", N=None, coordinate_names=None,
         else:
             top = np.argsort(-mag, kind="stable")[:n_dominant]
         dominant.append([(names[i], float(mag[i])) for i in top if mag[i] >= 0.05])
-    verdict = max(stability, key=STABILITY_ORDER.get) if stability else "stable"
+    verdict = worst(stability_)
     missed = np.flatnonzero(eta > eta_warn)
     if missed.size:
         names_ = ", ".join(f"{z.real:.6g}{z.imag:+.6g}j (η={e:.1e})"
@@ -190,10 +186,40 @@ def modes(M, P, Q, *, solver: str = "auto", N=None, coordinate_names=None,
                       f"({sol.solver}): {names_}", RuntimeWarning, stacklevel=2)
     return Modes(
         eigenvalues=s, delta=delta, omega_n=wn, omega_d=omega, freq_hz=omega / (2 * np.pi),
-        zeta=zeta, stability=stability, kind=kind, backward_error=eta, condition=kappa,
+        zeta=zeta, stability=stability_, kind=kind, backward_error=eta, condition=kappa,
         error_estimate=err, tolerance=tol_s, vectors=X, shapes=shapes, dominant=dominant,
         verdict=verdict, solver=sol.solver, solver_reason=sol.reason, n_infinite=sol.n_infinite,
         all_eigenvalues=s_all,
         tolerances={"stability_rtol": stability_rtol, "stability_atol": stability_atol,
                     "safety": safety, "rigid_rank_tol": rigid_rank_tol, "eta_warn": eta_warn, **{k: v for k, v in sol.details.items()}},
+        left_vectors=Y,
     )
+
+
+def tolerances(sol, *, safety=10.0, stability_rtol=1e-12, stability_atol=0.0):
+    """(err, tol, tol_re, rigid) per eigenvalue of a :class:`~mbseig.eigen.QEPSolution`.
+
+    err = κ·max(η, ε) (first-order error bound), tol = max(safety·err, stability_rtol·|s|,
+    stability_atol) for the rigid-body and real tests, tol_re the same with the path's sharper
+    bound of Re s where it has one (the δ test), rigid: |s| ≤ tol.  The one definition used by
+    :func:`modes` and by the sweeps (module docstring).
+    """
+    s = sol.eigenvalues
+    err = sol.condition * np.maximum(sol.backward_error, EPS)
+    floor = [stability_rtol * np.abs(s), np.full(s.size, stability_atol)]
+    tol = np.maximum.reduce([safety * err, *floor])
+    re_err = sol.real_error
+    tol_re = tol if re_err is None else np.maximum.reduce([safety * np.minimum(err, re_err), *floor])
+    return err, tol, tol_re, np.abs(s) <= tol
+
+
+def stability(delta, tol_re, rigid) -> list:
+    """stable / critical / unstable per eigenvalue: δ against its tolerance; rigid-body modes
+    (s = 0 within its error) are critical."""
+    return ["critical" if r else "stable" if d > t else "unstable" if d < -t else "critical"
+            for d, t, r in zip(delta, tol_re, rigid)]
+
+
+def worst(stabilities) -> str:
+    """The verdict over modes: the worst of their stabilities ("stable" for none)."""
+    return max(stabilities, key=STABILITY_ORDER.get) if len(stabilities) else "stable"

@@ -1,52 +1,70 @@
-"""Figures for sweeps and reports (matplotlib, imported lazily; PNG without timestamps).
+"""Figures: sweeps, pole maps, mechanism mode shapes, time-domain checks (the drawing layer).
 
-Every function writes one PNG and returns its path; output is byte-identical for identical
-inputs (Agg backend, fixed size and dpi, no date or software metadata).
+Every function returns a :class:`matplotlib.figure.Figure` built without pyplot, so no global
+state changes: the backend a notebook or application chose stays as it is, and no figure is kept
+alive by a figure manager.  :func:`save` writes one as a PNG without metadata, so the output is
+byte-identical for identical inputs.  matplotlib is imported here only, when a figure is asked
+for.  The functions take result objects by their attributes (duck typing) and import no stage.
 """
 
 from __future__ import annotations
 
+import functools
 import math
+import re
 from pathlib import Path
 
 import numpy as np
 
+from .errors import CaseError
+
 __all__ = ["root_locus", "modes_vs_parameter", "stability_map", "pole_map", "mechanism_modes",
-           "save"]
+           "plot_check", "speed_accuracy", "save"]
 
 DPI = 100
+_STYLE = {"svg.hashsalt": "mbseig", "font.size": 9}
 
 
-def _plt():
+def _styled(fn):
+    """Draw with mbseig's style in a local rc context (the global rcParams are left alone)."""
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        import matplotlib
+
+        with matplotlib.rc_context(_STYLE):
+            return fn(*args, **kwargs)
+    return wrapper
+
+
+def _figure(**kw):
+    from matplotlib.figure import Figure
+
+    return Figure(**kw)
+
+
+def _cmap(name):
     import matplotlib
 
-    matplotlib.use("Agg", force=True)
-    import matplotlib.pyplot as plt
-
-    plt.rcParams.update({"svg.hashsalt": "mbseig", "font.size": 9})
-    return plt
+    return matplotlib.colormaps[name]
 
 
-def save(fig, path):
+def save(fig, path, *, dpi=DPI, element="figure"):
+    """Write ``fig`` as a PNG (no metadata) to ``path``; returns the path."""
     path = Path(path)
-    fig.savefig(path, dpi=DPI, metadata={"Software": None})
-    import matplotlib.pyplot as plt
-
-    plt.close(fig)
+    try:
+        fig.savefig(path, dpi=dpi, metadata={"Software": None})
+    except OSError as exc:
+        raise CaseError(f"cannot write: {exc.strerror or exc}", file=str(path),
+                        element=element) from None
     return path
 
 
-def _listed(S):
-    from .sweep import _listed_tracks
-
-    return _listed_tracks(S)
-
-
-def root_locus(res, path):
+@_styled
+def root_locus(res):
     """Tracked eigenvalues in the s-plane, coloured by track, along the first axis (all lines)."""
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(7, 5))
-    cmap = plt.get_cmap("tab10")
+    fig = _figure(figsize=(7, 5))
+    ax = fig.subplots()
+    cmap = _cmap("tab10")
     for l, S in enumerate(res.tracks):
         for n, j in enumerate(range(S.shape[1])):
             col = S[:, j]
@@ -65,17 +83,18 @@ def root_locus(res, path):
     ax.set_title(f"{title}: {res.axis} from {res.values[0]:g} (dot) to {res.values[-1]:g}; x = boundary")
     ax.grid(True, lw=0.3)
     fig.tight_layout()
-    return save(fig, path)
+    return fig
 
 
-def modes_vs_parameter(res, path):
+@_styled
+def modes_vs_parameter(res):
     """Frequency ω/2π and damping δ of each listed track against the first axis."""
-    plt = _plt()
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
-    cmap = plt.get_cmap("tab10")
+    fig = _figure(figsize=(7, 6))
+    a1, a2 = fig.subplots(2, 1, sharex=True)
+    cmap = _cmap("tab10")
     x = res.values
     for l, S in enumerate(res.tracks):
-        for j in _listed(S):
+        for j in res.listed_tracks(S):
             col = S[:, j]
             label = f"track {j}" if len(res.tracks) == 1 else None
             a1.plot(x, np.abs(col.imag) / (2 * math.pi), "-", color=cmap(j % 10), lw=1, label=label)
@@ -93,14 +112,15 @@ def modes_vs_parameter(res, path):
     a2.grid(True, lw=0.3)
     a1.set_title("tracked modes (MAC); dashed: stability boundaries")
     fig.tight_layout()
-    return save(fig, path)
+    return fig
 
 
-def stability_map(res, path):
+@_styled
+def stability_map(res):
     """Two-parameter map: spectral abscissa max Re s (colour), the α = 0 contour and the located
     boundaries (points)."""
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(7, 5))
+    fig = _figure(figsize=(7, 5))
+    ax = fig.subplots()
     x, y = res.axes[0][1], res.axes[1][1]
     A = res.abscissa_grid()  # (len(x), len(y))
     lim = float(np.nanmax(np.abs(A))) or 1.0
@@ -117,13 +137,14 @@ def stability_map(res, path):
     ax.set_ylabel(res.axes[1][0])
     ax.set_title("stability map: black line α = 0, dots = boundaries located by root finding")
     fig.tight_layout()
-    return save(fig, path)
+    return fig
 
 
-def pole_map(eigenvalues, path, *, title="pole map", stability=None):
+@_styled
+def pole_map(eigenvalues, *, title="pole map", stability=None):
     """Eigenvalues (both halves of each pair) in the s-plane."""
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(6, 4.5))
+    fig = _figure(figsize=(6, 4.5))
+    ax = fig.subplots()
     s = np.asarray(eigenvalues)
     colors = {"stable": "tab:blue", "critical": "tab:orange", "unstable": "tab:red"}
     for k, v in enumerate(s):
@@ -137,20 +158,21 @@ def pole_map(eigenvalues, path, *, title="pole map", stability=None):
     ax.set_title(title)
     ax.grid(True, lw=0.3)
     fig.tight_layout()
-    return save(fig, path)
+    return fig
 
 
-def mechanism_modes(model, q0, shapes, labels, path, *, amplitude=0.15, title=""):
+@_styled
+def mechanism_modes(model, q0, shapes, labels, *, amplitude=0.15, title=""):
     """The mechanism at equilibrium (black) with each mode shape superposed (one panel a mode).
 
     A mode shape (complex, full coordinates) is drawn at the phase of its largest component:
     q = q0 ± a·L·Re(e^{-iφ} v)/max|v| with a = ``amplitude`` and L the model's size.
     """
-    plt = _plt()
     n = len(labels)
     cols = min(n, 3) or 1
     rows = max(1, math.ceil(n / cols))
-    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.8 * rows), squeeze=False)
+    fig = _figure(figsize=(4.2 * cols, 3.8 * rows))
+    axes = fig.subplots(rows, cols, squeeze=False)
     L = model.length_scale
 
     def draw(ax, q, **kw):
@@ -185,4 +207,81 @@ def mechanism_modes(model, q0, shapes, labels, path, *, amplitude=0.15, title=""
     if title:
         fig.suptitle(title)
     fig.tight_layout()
-    return save(fig, path)
+    return fig
+
+
+def _slug(text):
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", text).strip("_") or "case"
+
+
+def plot_check(result, directory) -> list:
+    """Write ``<case>_mode<k>.png`` per simulated mode of a time-domain check ``result`` into
+    ``directory`` (one figure per mode: Re η with the fitted and predicted envelopes, and the
+    dominant coordinate); returns the paths."""
+    out = Path(directory)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise CaseError(f"cannot create the plot directory: {exc.strerror or exc}",
+                        file=str(out), element="--plot") from None
+    paths = []
+    for m in result.modes:
+        if m.skipped or m.t.size == 0:
+            continue
+        fig = _figure(figsize=(8, 6), constrained_layout=True)
+        ax1, ax2 = fig.subplots(2, 1, sharex=True)
+        t = m.t
+        a0 = abs(m.eta[0])
+        ax1.plot(t, m.eta.real, lw=0.8, color="C0", label="modal coordinate Re η (simulation)")
+        fit = m.fit_amplitude * np.exp(-m.measured_delta * t)
+        pred = a0 * np.exp(-m.predicted_delta * t)
+        for sign in (1, -1):
+            ax1.plot(t, sign * fit, color="C1", lw=1.6,
+                     label=f"fitted envelope, δ = {m.measured_delta:.5g}" if sign > 0 else None)
+            ax1.plot(t, sign * pred, color="k", lw=1.0, ls="--",
+                     label=f"predicted envelope, δ = {m.predicted_delta:.5g}" if sign > 0 else None)
+        verdict = "pass" if m.passed else "FAIL"
+        ax1.set_title(f"{result.name}: mode {m.index} ({m.kind}), {verdict}\n"
+                      f"ω pred {m.predicted_omega:.6g}, meas {m.measured_omega:.6g} "
+                      f"(rel. err. {m.rel_error_omega:.2e}); δ rel. err. {m.rel_error_delta:.2e}",
+                      fontsize=10)
+        ax1.set_ylabel("η")
+        lo, hi = ax1.get_ylim()
+        ax1.set_ylim(lo, hi + 0.6 * (hi - lo))  # room for the legend above the curves
+        ax1.legend(fontsize=8, loc="upper right")
+        ax2.plot(t, m.response, lw=0.8, color="C2")
+        ax2.set_ylabel(f"{m.coordinate} − equilibrium")
+        ax2.set_xlabel("t [s]")
+        paths.append(save(fig, out / f"{_slug(result.name)}_mode{m.index}.png", dpi=110,
+                          element="--plot"))
+    return paths
+
+
+@_styled
+def speed_accuracy(res):
+    """Error against wall time, one line per method of a :func:`mbseig.bench.run_bench` result."""
+    fig = _figure(figsize=(9, 6))
+    ax = fig.subplots()
+    markers = "os^vD<>pPX*h"
+    rows = [r for r in res["rows"] if r["section"] in ("dense", "structured", "partial", "jacobians")
+            and isinstance(r.get("error"), float) and math.isfinite(r["error"])]
+    methods = list(dict.fromkeys(f"{r['section']}: {r['method']}" for r in rows))
+    colors = _cmap("tab20").colors  # one colour per method (tab10 repeats after ten)
+    for k, m in enumerate(methods):
+        pts = [r for r in rows if f"{r['section']}: {r['method']}" == m]
+        x = [r["time"] for r in pts]
+        y = [max(r["error"], 1e-17) for r in pts]
+        ax.plot(x, y, marker=markers[k % len(markers)], linestyle="-", label=m, alpha=0.85,
+                color=colors[(2 * k) % 20 if k < 10 else (2 * k + 1) % 20])
+        for r in pts:
+            ax.annotate(f"{r['n']:g}", (r["time"], max(r["error"], 1e-17)), fontsize=6,
+                        xytext=(3, 3), textcoords="offset points")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("wall time [s] (median)")
+    ax.set_ylabel("relative error (vs closed form / complex step)")
+    ax.set_title("mbseig: error against wall time (labels: size)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
+    fig.tight_layout()
+    return fig

@@ -35,7 +35,7 @@ def closed_form_ratio(n, slenderness, nu=0.3, kappa=5.0 / 6.0):
 
 
 def mbseig_ratio(slenderness):
-    from mbseig.analysis import analyze
+    from mbseig.studies import analyze
 
     h = 0.1
     out = []

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from mbseig.expr import evaluate
+from mbseig.casefile.expr import evaluate
 
 
 def _series(spec, params, keys):

@@ -17,9 +17,9 @@ import scipy.optimize as so
 from conftest import CASES, write_case
 
 import mbseig
-from mbseig.analysis import analyze
+from mbseig.studies import analyze
 from mbseig.errors import CaseError
-from mbseig.flexible import BeamTheoryWarning
+from mbseig.casefile.flexible import BeamTheoryWarning
 from mbseig.model.affine import Affine
 from mbseig.model.beams import THEORIES, BeamElement, BeamSection, RotationLock
 

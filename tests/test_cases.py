@@ -10,7 +10,7 @@ from conftest import CASES
 from expected import expected_eigenvalues, expected_omega_n
 
 import mbseig
-from mbseig.analysis import analyze
+from mbseig.studies import analyze
 
 CASE_FILES = sorted(CASES.glob("*.toml"))
 

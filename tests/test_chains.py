@@ -13,7 +13,7 @@ import pytest
 from conftest import CASES
 
 import mbseig
-from mbseig.analysis import analyze
+from mbseig.studies import analyze
 
 K, M_, C = 1000.0, 1.0, 0.5
 

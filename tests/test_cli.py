@@ -57,7 +57,7 @@ def test_modes_table_and_linearize(path, capsys, tmp_path):
 def test_linearize_npz_round_trip(tmp_path):
     """Matrices written by --out give the same modes as the direct pipeline (same arrays)."""
     import mbseig
-    from mbseig.analysis import analyze
+    from mbseig.studies import analyze
 
     path = CASES / "four_bar.toml"
     out = tmp_path / "fb.npz"

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from conftest import write_case
 
-from mbseig.analysis import analyze
+from mbseig.studies import analyze
 
 HEAD = "schema_version = 1\n[expected]\nsource = \"closed form in tests/test_elements_closed_form.py\"\n"
 

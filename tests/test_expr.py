@@ -7,7 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mbseig.errors import ExpressionError
-from mbseig.expr import evaluate
+from mbseig.casefile.expr import evaluate
 
 numbers = st.floats(-1e3, 1e3, allow_nan=False).map(lambda x: round(x, 6))
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import mbseig
-from mbseig import failcases as fc
+from mbseig.bench import failcases as fc
 
 
 @pytest.mark.parametrize("case", fc.ALL, ids=lambda f: f.__name__)

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from conftest import CASES
 
-from mbseig.analysis import analyze
+from mbseig.studies import analyze
 
 A_LEN, B_LEN, C_LEN = 0.3, 1.0, 0.8
 MASS = (1.0, 2.0, 1.5)  # crank, coupler, rocker

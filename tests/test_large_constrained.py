@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from conftest import write_case
 
-from mbseig.analysis import analyze
+from mbseig.studies import analyze
 from mbseig.errors import EquilibriumError
 
 CASE = """

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from conftest import CASES, write_case
 
-from mbseig.analysis import analyze
+from mbseig.studies import analyze
 
 
 def with_duplicate_rod(tmp_path, source, rod_points):

@@ -12,10 +12,10 @@ import scipy.sparse as sp
 from conftest import CASES, write_case
 
 import mbseig
-from mbseig import case_batch
+from mbseig.casefile import batch as case_batch
 from mbseig.cli import main
 from mbseig.errors import CaseError, SolverError
-from mbseig.sparse import solve_partial
+from mbseig.eigen import solve_partial
 
 
 def chain(n, k=1000.0, m=1.0):

@@ -13,7 +13,7 @@ from scipy.optimize import brentq
 
 from mbseig.cli import main
 from mbseig.errors import CaseError
-from mbseig.sweep import mac_matrix, parse_range, run_sweep
+from mbseig.studies.sweep import mac_matrix, parse_range, run_sweep
 
 CROSSING = """
 schema_version = 1

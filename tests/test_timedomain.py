@@ -17,9 +17,9 @@ from conftest import CASES, write_case
 from expected import expected_eigenvalues
 
 import mbseig
-from mbseig.analysis import analyze
+from mbseig.studies import analyze
 from mbseig.cli import main
-from mbseig.timedomain import check_modes
+from mbseig.check import check_modes
 
 G = 9.81
 

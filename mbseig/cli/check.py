@@ -5,9 +5,9 @@ Exit 0 when every simulated mode passes, 1 when one fails, 2 on bad input.
 
 from __future__ import annotations
 
-from ..analysis import analyze
-from ..qep import SOLVERS
-from ..timedomain import INTEGRATORS, check_modes, parse_mode_list
+from ..check import INTEGRATORS, check_modes, parse_mode_list
+from ..eigen import dense_solvers
+from ..studies import analyze
 from .common import add_case_arguments, case_kwargs, print_json
 
 
@@ -32,7 +32,7 @@ def register(sub):
                    help="integrator (default DOP853: explicit, no numerical damping)")
     p.add_argument("--ode-rtol", type=float, default=1e-10, metavar="R",
                    help="integrator relative tolerance (default 1e-10)")
-    p.add_argument("--solver", default="auto", choices=["auto", *SOLVERS],
+    p.add_argument("--solver", default="auto", choices=["auto", *dense_solvers()],
                    help="eigensolver path for the prediction (default: chosen by structure)")
     p.add_argument("--plot", default=None, metavar="DIR",
                    help="write one PNG per checked mode (response and envelopes) into DIR")

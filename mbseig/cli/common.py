@@ -5,8 +5,8 @@ from __future__ import annotations
 import json
 import sys
 
-from ..analysis import jsonable
-from ..case import parse_param_overrides
+from ..casefile import parse_param_overrides
+from ..numerics import jsonable
 
 __all__ = ["add_case_arguments", "case_kwargs", "print_json"]
 

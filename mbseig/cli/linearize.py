@@ -7,10 +7,11 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
-from ..case import load_case
+from ..casefile import load_case
 from ..errors import CaseError
 from ..linear import linearize
-from ..statics import equilibrium
+from ..numerics import jsonable
+from ..statics import equilibrium, solved
 from .common import add_case_arguments, case_kwargs, print_json
 
 FORMATS = (".npz", ".mat", ".json")
@@ -65,6 +66,7 @@ def run(args) -> int:
     model = load_case(args.case, config=kwargs["config"], **kwargs["params"])
     eq = equilibrium(model)
     lin = linearize(model, eq)
+    model = solved(model, eq)
     arrays = _arrays(model, eq, lin)
     meta = {
         "case": model.name, "parameters": dict(model.parameters),
@@ -103,8 +105,6 @@ def _write(path, arrays, meta):
             scipy.io.savemat(str(path), {**arrays, "coordinate_names": meta["coordinate_names"]})
         else:
             import json
-
-            from ..analysis import jsonable
 
             path.write_text(json.dumps(jsonable({**meta, **{k: _json_value(v) for k, v in arrays.items()}})))
     except OSError as exc:

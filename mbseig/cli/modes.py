@@ -4,17 +4,16 @@ from __future__ import annotations
 
 import math
 
-from ..analysis import analyze, modes_json
+from ..eigen import SOLVERS
 from ..errors import CaseError
-from ..qep import SOLVERS
-from ..sparse import PARTIAL_SOLVERS
+from ..studies import analyze, modes_json
 from .common import add_case_arguments, case_kwargs, print_json
 
 
 def register(sub):
     p = sub.add_parser("modes", help="solve the modes and classify their stability")
     add_case_arguments(p)
-    p.add_argument("--solver", default="auto", choices=["auto", *SOLVERS, *PARTIAL_SOLVERS],
+    p.add_argument("--solver", default="auto", choices=["auto", *SOLVERS],
                    help="eigensolver path (default: chosen by structure)")
     p.add_argument("--n-modes", type=int, default=None, metavar="K",
                    help="only the K modes nearest the target (sparse shift-invert path, large models)")

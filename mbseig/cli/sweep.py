@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 
-from ..case import parse_param_overrides
+from ..casefile import parse_param_overrides
 from .common import add_case_arguments, print_json
 
 
@@ -31,7 +31,7 @@ def register(sub):
 
 
 def run(args) -> int:
-    from ..sweep import parse_range, progress_bar, run_sweep, write_outputs
+    from ..studies.sweep import parse_range, progress_bar, run_sweep, write_outputs
 
     ranges = [parse_range(item) for item in args.param if ":" in item]
     fixed = parse_param_overrides([item for item in args.param if ":" not in item])

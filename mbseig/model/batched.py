@@ -23,21 +23,13 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import EquilibriumError
+from .base import Force
 
-__all__ = ["SpringDamperSet", "coo_sum"]
-
-
-def coo_sum(n_rows, n_cols, triplets):
-    """Sum of (rows, cols, values) triplets as CSR."""
-    triplets = [t for t in triplets if t[0].size]
-    if not triplets:
-        return sp.csr_matrix((n_rows, n_cols))
-    r, c, v = (np.concatenate(x) for x in zip(*triplets))
-    return sp.coo_matrix((v, (r, c)), shape=(n_rows, n_cols)).tocsr()
+__all__ = ["SpringDamperSet"]
 
 
 @dataclass(frozen=True, eq=False)
-class SpringDamperSet:
+class SpringDamperSet(Force):
     """Springs/dashpots k, l0, c between points a and b, one row per member.
 
     ia, ib : (nb, dim) coordinate indices of the two points (−1: a fixed component whose value

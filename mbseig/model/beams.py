@@ -38,6 +38,7 @@ import numpy as np
 
 from ..errors import EquilibriumError
 from .affine import Affine
+from .base import Constraint, Force
 
 __all__ = [
     "BeamSection",
@@ -128,7 +129,7 @@ def _wrap(a):
 
 
 @dataclass(frozen=True, eq=False)
-class BeamElement:
+class BeamElement(Force):
     """One co-rotational planar beam element on w = [x₁, y₁, θ₁, x₂, y₂, θ₂] (module docstring)."""
 
     name: str
@@ -242,7 +243,7 @@ class BeamElement:
 
 
 @dataclass(frozen=True, eq=False)
-class RotationLock:
+class RotationLock(Constraint):
     """A beam node's angle follows a body direction: Φ = u × t(θ − c) = |u| sin(θ − c − α_u).
 
     ``stacked`` maps q to [u_x, u_y, θ] (u: a body-fixed direction, linear in q; θ: the node's
@@ -283,5 +284,8 @@ class RotationLock:
         wd = self.stacked.rate(qd)
         return np.array([-(wd @ H @ wd)])
 
-    def scale(self):
-        return 1.0
+    def reaction(self, q, lam):
+        """The moment λ|u| that welds the node to the body (Φ = |u| sin(θ − c − α_u))."""
+        u = self.stacked(q)[:2]
+        return {"key": "moment", "label": "moment", "unit": "N m",
+                "value": float(lam[0]) * float(np.linalg.norm(u))}

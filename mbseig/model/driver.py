@@ -21,14 +21,35 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import CaseError
 from .affine import Affine
-from .elements import relative_angle
+from .base import Constraint
+from .elements import DistanceConstraint, SpringDamper, relative_angle
 
-__all__ = ["AngleDriver"]
+__all__ = ["AngleDriver", "check_command"]
+
+
+def check_command(driver, targets, forces, constraints):
+    """(springs, locks): the targets ``("force" | "joint", index, label)`` of an inverse-statics
+    driver, checked: at most one planar spring (its free length is set) and distance joints (their
+    length is set)."""
+    springs = [t for t in targets if t[0] == "force"]
+    locks = [t for t in targets if t[0] == "joint"]
+    if len(springs) > 1:
+        raise CaseError("an angle_driver can set the free length of one spring only",
+                        element=driver.name)
+    for _, k, label in springs:
+        if not isinstance(forces[k], SpringDamper) or forces[k].diff.dim == 1:
+            raise CaseError(f"sets {label}: only a planar spring or spring_damper can be set",
+                            element=driver.name)
+    for _, k, label in locks:
+        if not isinstance(constraints[k], DistanceConstraint):
+            raise CaseError(f"sets {label}: only a distance joint can be set", element=driver.name)
+    return springs, locks
 
 
 @dataclass(frozen=True, eq=False)
-class AngleDriver:
+class AngleDriver(Constraint):
     """Φ = wrap(θ(q) − θ*) on the stacked directions ``dirs`` = [a; b] (4 rows)."""
 
     name: str
@@ -69,3 +90,7 @@ class AngleDriver:
     def scale(self):
         """Typical magnitude of Φ (an angle): 1 rad."""
         return 1.0
+
+    def reaction(self, q, lam):
+        """The torque −λ that holds the angle, in the sense of θ."""
+        return {"key": "torque", "label": "torque", "value": -float(lam[0]), "unit": "N m"}

@@ -19,6 +19,7 @@ import numpy as np
 
 from ..errors import EquilibriumError
 from .affine import J2, Affine, combine
+from .base import Constraint, Force
 
 __all__ = [
     "body_mass_matrix",
@@ -70,7 +71,7 @@ def body_direction(ri: Affine, rj: Affine, local, length: float) -> Affine:
 # Constraints
 # ---------------------------------------------------------------------------------------------
 @dataclass(frozen=True, eq=False)
-class DistanceConstraint:
+class DistanceConstraint(Constraint):
     """Φ = d·d − L² with d = r_b − r_a (a rigid length or a massless rod)."""
 
     name: str
@@ -100,9 +101,14 @@ class DistanceConstraint:
         """Typical magnitude of Φ, to judge residuals: L²."""
         return max(self.length**2, 1e-300)
 
+    def reaction(self, q, lam):
+        """Axial force 2λL, tension positive."""
+        return {"key": "axial_force", "label": "axial force (tension +)",
+                "value": 2.0 * float(lam[0]) * self.length, "unit": "N"}
+
 
 @dataclass(frozen=True, eq=False)
-class LinearConstraint:
+class LinearConstraint(Constraint):
     """Φ = G r(q) − b: a fixed point, a point on a fixed line, a point attached to a body."""
 
     name: str
@@ -135,12 +141,17 @@ class LinearConstraint:
     def scale(self):
         return self.length_scale
 
+    def reaction(self, q, lam):
+        """The force −Gᵀλ the constraint exerts on its point."""
+        return {"key": "force", "label": "force", "value": [float(x) for x in -(self.G.T @ lam)],
+                "unit": "N"}
+
 
 # ---------------------------------------------------------------------------------------------
 # Forces
 # ---------------------------------------------------------------------------------------------
 @dataclass(frozen=True, eq=False)
-class SpringDamper:
+class SpringDamper(Force):
     """Linear spring (stiffness k, free length l0) and dashpot c between two points.
 
     d = r_b − r_a, l = |d|, e = d/l.  The force on b is −f with f = k (l − l0) e + c (e·ḋ) e and
@@ -230,7 +241,7 @@ def relative_angle(dirs: Affine, q, sense: float, name: str):
 
 
 @dataclass(frozen=True, eq=False)
-class TorsionalSpringDamper:
+class TorsionalSpringDamper(Force):
     """Torsional spring-damper on the relative angle between two planar directions.
 
     θ = atan2(a × b, a · b) is the angle from direction a (body 1 or ground) to direction b
@@ -272,7 +283,7 @@ class TorsionalSpringDamper:
 
 
 @dataclass(frozen=True, eq=False)
-class FollowerForce:
+class FollowerForce(Force):
     """Force of magnitude f at a body point along a body-fixed direction (non-conservative).
 
     F = f u(q) with u = (ū I + v̄ J)(r_j − r_i)/L linear in q, so g = C_Pᵀ f u(q) and

@@ -14,26 +14,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from .batched import coo_sum
+from ..numerics import coo_sum, scatter as _scatter
 
 __all__ = ["Model"]
-
-
-def _scatter(n_rows, n_cols, blocks):
-    """Sum of dense local blocks (rows_idx, cols_idx, values) into a CSR matrix."""
-    rows, cols, vals = [], [], []
-    for r, c, v in blocks:
-        if v.size == 0:
-            continue
-        rr, cc = np.meshgrid(r, c, indexing="ij")
-        rows.append(rr.ravel())
-        cols.append(cc.ravel())
-        vals.append(np.asarray(v, dtype=float).ravel())
-    if not rows:
-        return sp.csr_matrix((n_rows, n_cols))
-    return sp.coo_matrix(
-        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n_rows, n_cols)
-    ).tocsr()
 
 
 @dataclass(frozen=True, eq=False)
@@ -49,15 +32,18 @@ class Model:
     forces, constraints : element objects (see :mod:`mbseig.model.elements`).
     points : named affine maps of every basic point and body marker, for reports and drawings.
     bodies : body name → (basic point i, basic point j).
-    report : the case's ``[report]`` table as parsed by :func:`mbseig.device.parse_report`
+    report : the case's ``[report]`` table as parsed by :mod:`mbseig.casefile.report_table`
         (joint angles with their ranges of motion, pins, actuator), empty when absent.
-    drivers : one record per inverse-statics driver (target angle, effort, the free length or
-        locked length it set), see :mod:`mbseig.inverse_statics`.
+    commands : inverse-statics commands not yet resolved, ``(AngleDriver, targets)`` per driver
+        with targets ``("force" | "joint", index, label)`` (the elements it sets); loading leaves
+        them pending and :func:`mbseig.equilibrium` resolves them (:mod:`mbseig.statics.inverse`).
+    drivers : one record per resolved driver (target angle, effort, the free length or locked
+        length it set), on the model that :func:`mbseig.equilibrium` returns as ``eq.model``.
     mass_elements : (element, M_ref) pairs for masses that depend on the configuration
         (co-rotational beams, ``element.mass(q)`` on ``element.idx``); ``mass`` holds them as
         M_ref (at the builder's initial positions) and :meth:`mass_matrix` re-evaluates them.
     flexible : ``{"bodies": {name: record}, "refinement": {...}}`` for beams and FE bodies
-        (theory, slenderness, elements, warnings), see :mod:`mbseig.flexible`.
+        (theory, slenderness, elements, warnings), see :mod:`mbseig.casefile.flexible`.
     """
 
     name: str
@@ -75,8 +61,9 @@ class Model:
     length_scale: float = 1.0
     description: str = ""
     expected: dict = field(default_factory=dict)
-    report: dict = field(default_factory=dict)  # parsed [report] table (mbseig.device)
-    drivers: tuple = ()  # inverse-statics records (mbseig.inverse_statics)
+    report: dict = field(default_factory=dict)  # parsed [report] table
+    drivers: tuple = ()  # inverse-statics records (mbseig.statics.inverse)
+    commands: tuple = ()  # pending inverse-statics commands (resolved by mbseig.equilibrium)
     mass_elements: tuple = ()
     flexible: dict = field(default_factory=dict)
 

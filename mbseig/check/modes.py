@@ -78,230 +78,14 @@ import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-import scipy.linalg as sla
 
-from .case import LinearCase
-from .errors import CaseError, SimulationError
+from ..errors import CaseError, SimulationError
+from ..model.linear_case import LinearCase
+from ..statics import solved
+from ..statics.reactions import reaction_forces
+from .dynamics import ForwardDynamics, simulate
 
-__all__ = [
-    "CheckResult",
-    "ModeCheck",
-    "Simulation",
-    "ForwardDynamics",
-    "check_modes",
-    "simulate",
-    "parse_mode_list",
-    "reaction_forces",
-    "INTEGRATORS",
-]
-
-#: integrators offered through ``method=`` (scipy.integrate.solve_ivp names)
-INTEGRATORS = ("DOP853", "Radau", "BDF")
-
-
-# ---------------------------------------------------------------------------------------------
-# Forward dynamics
-# ---------------------------------------------------------------------------------------------
-class ForwardDynamics:
-    """Right-hand side and constraint projections of the nonlinear model about q₀.
-
-    State y = [u; v] with q = q₀ + u, q̇ = v.  ``model`` is a :class:`~mbseig.Model` or a
-    :class:`~mbseig.LinearCase` (then M ẍ + P ẋ + Q x = 0 is integrated as it stands).
-    """
-
-    def __init__(self, model, q0, *, redundant: bool = False, mass_tol: float = 1e-12,
-                 projection_tol: float = 1e-14):
-        self.model = model
-        self.q0 = np.asarray(q0, dtype=float)
-        self.mass_tol, self.projection_tol = mass_tol, projection_tol
-        self.linear = isinstance(model, LinearCase)
-        self.n = model.n
-        self.nfev = 0
-        if self.linear:
-            self.M = _dense(model.M)
-            self.P, self.Q = _dense(model.P), _dense(model.Q)
-            self.m = 0
-            self.constraints = ()
-        else:
-            if getattr(model, "mass_elements", ()):
-                names = ", ".join(str(getattr(e, "name", "?")) for e, _ in model.mass_elements[:3])
-                raise SimulationError(
-                    f"configuration-dependent mass ({names}): the time-domain check integrates "
-                    f"constant-mass models only", element="time-domain check")
-            self.M = model.mass.toarray()
-            self.constraints = tuple(model.constraints)
-            self.m = model.n_constraints
-            off = np.cumsum([0] + [c.n_eq for c in self.constraints])
-            self.rows = [np.arange(off[k], off[k + 1]) for k in range(len(self.constraints))]
-            self.cscale = model.constraint_scales() if self.m else np.zeros(0)
-        self.redundant = bool(redundant)
-        self._check_mass()
-        if self.m == 0:
-            self._lu = sla.lu_factor(self.M)
-
-    # -- model pieces (dense, assembled here because the sparse assembly costs ~100 µs) ------
-    def phi(self, q):
-        return self.model.phi(q) if self.m else np.zeros(0)
-
-    def phi_q(self, q):
-        J = np.zeros((self.m, self.n))
-        for r, c in zip(self.rows, self.constraints):
-            J[np.ix_(r, c.idx)] = c.jac(q)
-        return J
-
-    def force(self, q, qd):
-        if self.linear:
-            return -(self.P @ qd) - self.Q @ q
-        return self.model.generalized_force(q, qd)
-
-    def _check_mass(self):
-        """The reduced mass Nᵀ M N must be positive definite (no massless free motion)."""
-        if self.m:
-            J = self.phi_q(self.q0)
-            _, s, vt = sla.svd(J)
-            rank = int(np.sum(s > 1e-10 * s[0])) if s.size and s[0] > 0 else 0
-            N = vt[rank:].T
-        else:
-            N = np.eye(self.n)
-        if N.shape[1] == 0:
-            return
-        Mr = N.T @ self.M @ N
-        w, V = np.linalg.eigh(0.5 * (Mr + Mr.T))
-        scale = max(float(np.max(np.abs(np.diag(self.M)), initial=0.0)), 1e-300)
-        if w[0] <= self.mass_tol * scale:
-            v = N @ V[:, 0]
-            names = [self.model.coordinate_names[i] for i in np.argsort(-np.abs(v))[:3]
-                     if abs(v[i]) >= 0.1 * np.abs(v).max()]
-            raise SimulationError(
-                f"the mass matrix is singular on the constraint null space (massless free motion "
-                f"of {', '.join(names)}): the forward dynamics are not an ODE; give these points "
-                f"mass or constrain them", element="time-domain check")
-
-    # -- accelerations ----------------------------------------------------------------------
-    def acceleration(self, q, qd):
-        """(q̈, λ) from the augmented index-1 system."""
-        self.nfev += 1
-        g = self.force(q, qd)
-        if self.m == 0:
-            return sla.lu_solve(self._lu, g), np.zeros(0)
-        J = self.phi_q(q)
-        gam = self.model.gamma(q, qd)
-        n = self.n
-        A = np.zeros((n + self.m, n + self.m))
-        A[:n, :n] = self.M
-        A[:n, n:] = J.T
-        A[n:, :n] = J
-        rhs = np.concatenate([g, gam])
-        if self.redundant:
-            sol = np.linalg.lstsq(A, rhs, rcond=None)[0]
-        else:
-            sol = np.linalg.solve(A, rhs)
-        return sol[:n], sol[n:]
-
-    def rhs(self, t, y):
-        n = self.n
-        u, v = y[:n], y[n:]
-        qdd, _ = self.acceleration(self.q0 + u, v)
-        return np.concatenate([v, qdd])
-
-    # -- projections ------------------------------------------------------------------------
-    def constraint_violation(self, u, v):
-        """(max |Φ_k|/scale_k, max |Φ_q q̇|) at q = q₀ + u."""
-        if self.m == 0:
-            return 0.0, 0.0
-        q = self.q0 + u
-        pos = float(np.max(np.abs(self.phi(q)) / self.cscale))
-        vel = float(np.max(np.abs(self.phi_q(q) @ v)))
-        return pos, vel
-
-    def project(self, u, v, *, max_iter: int = 10):
-        """Minimum-norm corrections onto Φ(q₀ + u) = 0 and Φ_q v = 0; returns (u, v, |Δu|, |Δv|)."""
-        if self.m == 0:
-            return u, v, 0.0, 0.0
-        u = u.copy()
-        du_total = np.zeros_like(u)
-        for _ in range(max_iter):
-            q = self.q0 + u
-            r = self.phi(q)
-            if np.max(np.abs(r) / self.cscale) <= self.projection_tol:
-                break
-            du = -np.linalg.lstsq(self.phi_q(q), r, rcond=None)[0]
-            u += du
-            du_total += du
-        else:
-            raise SimulationError(
-                "position projection onto the constraints did not converge (the motion left the "
-                "region where the constraints can be satisfied)", element="time-domain check")
-        J = self.phi_q(self.q0 + u)
-        dv = -np.linalg.lstsq(J, J @ v, rcond=None)[0]
-        return u, v + dv, float(np.linalg.norm(du_total)), float(np.linalg.norm(dv))
-
-
-@dataclass(frozen=True, eq=False)
-class Simulation:
-    """Samples of a forward-dynamics run: q(t) = q₀ + u(t), q̇(t) = v(t).
-
-    ``constraint_drift``: largest max_k |Φ_k|/scale_k met before a projection;
-    ``velocity_drift``: largest |Φ_q q̇|; ``max_projection``: largest position correction.
-    """
-
-    t: np.ndarray
-    u: np.ndarray  # n × len(t)
-    v: np.ndarray
-    method: str
-    rtol: float
-    atol_position: float
-    atol_velocity: float
-    n_segments: int
-    nfev: int
-    constraint_drift: float
-    velocity_drift: float
-    max_projection: float
-    max_velocity_projection: float
-
-
-def simulate(dynamics: ForwardDynamics, u0, v0, t_eval, *, segment_samples: int,
-             method: str = "DOP853", rtol: float = 1e-10, atol_position: float,
-             atol_velocity: float) -> Simulation:
-    """Integrate from (u0, v0) through the sample times ``t_eval`` (t_eval[0] = 0), projecting
-    onto the constraints every ``segment_samples`` samples."""
-    from scipy.integrate import solve_ivp  # imported here: it costs ~0.2 s at import mbseig
-
-    if method not in INTEGRATORS:
-        raise CaseError(f"unknown integrator {method!r} (one of {', '.join(INTEGRATORS)})",
-                        element="method")
-    n = dynamics.n
-    atol = np.concatenate([np.full(n, atol_position), np.full(n, atol_velocity)])
-    u, v, _, _ = dynamics.project(np.asarray(u0, float), np.asarray(v0, float))
-    U, V = [u], [v]
-    drift = vdrift = proj = vproj = 0.0
-    n_seg = 0
-    k = 0
-    nfev0 = dynamics.nfev
-    while k < len(t_eval) - 1:
-        k1 = min(k + segment_samples, len(t_eval) - 1)
-        ts = t_eval[k:k1 + 1]
-        sol = solve_ivp(dynamics.rhs, (ts[0], ts[-1]), np.concatenate([u, v]), method=method,
-                        t_eval=ts[1:], rtol=rtol, atol=atol)
-        if sol.status != 0:
-            t_fail = sol.t[-1] if sol.t.size else ts[0]
-            raise SimulationError(f"integration failed at t = {t_fail:.6g}: {sol.message}",
-                                  element="time-domain check")
-        n_seg += 1
-        u, v = sol.y[:n, -1], sol.y[n:, -1]
-        d, dv = dynamics.constraint_violation(u, v)
-        drift, vdrift = max(drift, d), max(vdrift, dv)
-        u, v, du, dvv = dynamics.project(u, v)
-        proj, vproj = max(proj, du), max(vproj, dvv)
-        U.extend(sol.y[:n, :-1].T)
-        V.extend(sol.y[n:, :-1].T)
-        U.append(u)
-        V.append(v)
-        k = k1
-    return Simulation(t=np.asarray(t_eval, float), u=np.array(U).T, v=np.array(V).T, method=method,
-                      rtol=rtol, atol_position=atol_position, atol_velocity=atol_velocity,
-                      n_segments=n_seg, nfev=dynamics.nfev - nfev0, constraint_drift=drift,
-                      velocity_drift=vdrift, max_projection=proj, max_velocity_projection=vproj)
+__all__ = ["CheckResult", "ModeCheck", "check_modes", "parse_mode_list"]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -444,7 +228,7 @@ class CheckResult:
 
     def plot(self, directory) -> list:
         """Write one PNG per simulated mode to ``directory``; returns the paths."""
-        from .checkplot import plot_check
+        from ..plots import plot_check
 
         return plot_check(self, directory)
 
@@ -504,9 +288,11 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
     bad = [k for k in idx if not 1 <= k <= n_modes]
     if bad:
         raise CaseError(f"mode numbers must lie in 1..{n_modes}, got {bad}", element="modes")
+    model = solved(model, eq)
     redundant = bool(getattr(eq, "n_redundant", 0))
     try:
-        dyn = ForwardDynamics(model, lin.q0, redundant=redundant, mass_tol=mass_tol)
+        dyn = ForwardDynamics(model, lin.q0, redundant=redundant, mass_tol=mass_tol,
+                              rank_tol=float(lin.tolerances.get("rank_tol", 1e-10)))
     except SimulationError as exc:
         raise exc.located(file=getattr(model, "source", None)) from None
     length = 1.0 if isinstance(model, LinearCase) else float(model.length_scale)
@@ -666,34 +452,3 @@ def _fit_exponential(t, eta):
     (p0, p1), *_ = np.linalg.lstsq(A, ph, rcond=None)
     res = np.sqrt(np.mean((logm - c0 - c1 * t) ** 2 + (ph - p0 - p1 * t) ** 2))
     return float(-c1), float(p1), float(res), float(np.exp(c0))
-
-
-# ---------------------------------------------------------------------------------------------
-# Reactions (inverse statics at the equilibrium)
-# ---------------------------------------------------------------------------------------------
-def reaction_forces(model, eq) -> list:
-    """Per constraint element: its multipliers λ and the reaction −Φ_qᵀλ it exerts on each point.
-
-    Returns a list of ``{"element", "multipliers", "forces": {point: [fx, fy, ...]}}``; a
-    distance constraint (a rod or a body's rigid length) with λ > 0 is in tension 2λL.
-    """
-    if isinstance(model, LinearCase) or not model.n_constraints:
-        return []
-    names = model.coordinate_names
-    out, k = [], 0
-    for c in model.constraints:
-        lam = np.asarray(eq.lam[k:k + c.n_eq], float)
-        k += c.n_eq
-        f_local = -(c.jac(eq.q).T @ lam)
-        forces: dict = {}
-        for i, val in zip(c.idx, f_local):
-            point, _, axis = names[i].rpartition(".")
-            forces.setdefault(point, {})[axis] = float(val) + 0.0  # + 0.0: no "-0" in reports
-        out.append({"element": c.name, "multipliers": [float(x) for x in lam],
-                    "forces": {p: [v.get(ax, 0.0) for ax in "xyz"[:model.dimension]]
-                               for p, v in forces.items()}})
-    return out
-
-
-def _dense(A):
-    return A.toarray() if hasattr(A, "toarray") else np.asarray(A, dtype=float)

@@ -1,6 +1,6 @@
 """Flexible bodies in case files: ``[[beams]]`` and ``[[fe_bodies]]``.
 
-Called by the case builder (:mod:`mbseig.case`) in two steps: :func:`allocate` adds the extra
+Called by the case builder (:mod:`mbseig.casefile.builder`) in two steps: :func:`allocate` adds the extra
 coordinates right after the points (interior beam nodes ``beam.n3.x``/``.y``, node angles
 ``beam.n3.theta``, FE interface angles ``body.A.theta`` and modal coordinates ``body.eta1``), and
 :func:`assemble` adds elements, masses and constraints once bodies exist (a beam end may be
@@ -30,12 +30,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import CaseError
-from .model.affine import Affine, combine
-from .model.beams import THEORIES, BeamElement, BeamSection, RotationLock, section_properties
+from ..errors import CaseError
+from ..model.affine import Affine, combine
+from ..model.beams import THEORIES, BeamElement, BeamSection, RotationLock, section_properties
+from ..model.fe_body import LinearFEBody
+from .fields import Fields, expand, template
+from .matrices import matrix_value
 
 __all__ = ["BeamTheoryWarning", "EB_SLENDERNESS", "MIN_SLENDERNESS", "AUTO_START_ELEMENTS",
-           "LinearFEBody", "allocate", "assemble", "craig_bampton", "export_fe_body"]
+           "allocate", "assemble", "parse_refinement"]
 
 EB_SLENDERNESS = 10.0  # below this, Euler–Bernoulli neglects shear that matters
 MIN_SLENDERNESS = 5.0  # below this, no beam theory is adequate
@@ -65,26 +68,6 @@ class _BeamSpec:
     warnings: list = field(default_factory=list)
 
 
-@dataclass(frozen=True, eq=False)
-class LinearFEBody:
-    """Linear reduced FE body: U = ½ zᵀ K z with z = C q[idx] + d (module docstring)."""
-
-    name: str
-    z: Affine
-    K: np.ndarray
-
-    @property
-    def idx(self):
-        return self.z.idx
-
-    def force(self, q, qd):
-        return -(self.z.C.T @ (self.K @ self.z(q)))
-
-    def jacobians(self, q, qd):
-        m = self.idx.size
-        return self.z.C.T @ self.K @ self.z.C, np.zeros((m, m))
-
-
 # ---------------------------------------------------------------------------------------------
 def _new_coord(b, name, value):
     k = len(b.q_init)
@@ -102,15 +85,13 @@ def _parse_ends(f):
 
 
 def _beam_spec(b, f, mesh_override):
-    from .case import _template
-
     name = f.text("name")
     if "." in name or name in b.point_index:
         raise f.error(f"beam name {name!r} is used already or contains '.'")
     pts = f.raw("points")
     if not isinstance(pts, list) or len(pts) != 2 or not all(isinstance(p, str) for p in pts):
         raise f.error("points must be a list of two basic point names [start, end]")
-    pa, pb = (_template(p, f.names, f) for p in pts)
+    pa, pb = (template(p, f.names, f) for p in pts)
     for p in (pa, pb):
         if p not in b.point_index:
             raise f.error(f"unknown point {p!r}")
@@ -130,9 +111,8 @@ def _beam_spec(b, f, mesh_override):
     if sec is not None:
         if f.has("A") or f.has("I"):
             raise f.error("give either section = {...} or A and I, not both")
-        from .case import _Fields
 
-        sf = _Fields(sec, f"{f.label}.section", f.names)
+        sf = Fields(sec, f"{f.label}.section", f.names)
         shape = sf.text("shape")
         if shape == "rectangle":
             dims = {"b": sf.num("b", positive=True), "h": sf.num("h", positive=True)}
@@ -193,16 +173,14 @@ def _beam_spec(b, f, mesh_override):
 
 def allocate(b, mesh=None):
     """Parse ``[[beams]]`` and ``[[fe_bodies]]`` and add their coordinates to the builder ``b``."""
-    from .case import _expand, _Fields
-
     mesh = mesh or {}
     b.beam_specs, b.fe_specs = [], []
     items = b.data.get("beams", [])
     if items and b.dim != 2:
         raise CaseError("beams need dimension = 2", element="beams")
     names = set()
-    for k, (item, label, params) in enumerate(_expand("beams", items, b.params)):
-        f = _Fields(item, label, params)
+    for k, (item, label, params) in enumerate(expand("beams", items, b.params)):
+        f = Fields(item, label, params)
         spec = _beam_spec(b, f, mesh.get(k, mesh.get(item.get("name"))))
         if spec.name in names:
             raise f.error(f"duplicate beam name {spec.name!r}")
@@ -233,29 +211,22 @@ def allocate(b, mesh=None):
     items = b.data.get("fe_bodies", [])
     if items and b.dim != 2:
         raise CaseError("fe_bodies need dimension = 2", element="fe_bodies")
-    for item, label, params in _expand("fe_bodies", items, b.params):
-        b.fe_specs.append(_fe_spec(b, _Fields(item, label, params)))
+    for item, label, params in expand("fe_bodies", items, b.params):
+        b.fe_specs.append(_fe_spec(b, Fields(item, label, params)))
 
 
 def _fe_spec(b, f):
-    from .case import _matrix_value, _template
-
     name = f.text("name")
     if "." in name or name in b.point_index:
         raise f.error(f"FE body name {name!r} is used already or contains '.'")
-    base = getattr(b, "base_dir", None)
-    if base is None:
-        from pathlib import Path
-
-        base = Path(b.source).parent
-    M = _matrix_value(f.raw("mass"), f"{f.label}.mass", f.names, base)
-    K = _matrix_value(f.raw("stiffness"), f"{f.label}.stiffness", f.names, base)
+    M = matrix_value(f.raw("mass"), f"{f.label}.mass", f.names, b.files)
+    K = matrix_value(f.raw("stiffness"), f"{f.label}.stiffness", f.names, b.files)
     if M.shape != K.shape:
         raise f.error(f"mass is {M.shape[0]}×{M.shape[0]} but stiffness {K.shape[0]}×{K.shape[0]}")
     iface = f.raw("interface")
     if not isinstance(iface, list) or not iface or not all(isinstance(p, str) for p in iface):
         raise f.error("interface must be a non-empty list of point names (matrix node order)")
-    iface = [_template(p, f.names, f) for p in iface]
+    iface = [template(p, f.names, f) for p in iface]
     for p in iface:
         if p not in b.point_index:
             raise f.error(f"unknown interface point {p!r}")
@@ -301,11 +272,9 @@ def assemble(b, forces, constraints, mass_blocks, mass_elements, g_const, gravit
 
 def parse_refinement(table, params):
     """``[refinement]``: modes (count), f_max [Hz], accuracy, max_elements → dict or {}."""
-    from .case import _Fields
-
     if table is None:
         return {}
-    f = _Fields(table, "refinement", params)
+    f = Fields(table, "refinement", params)
     out = {"modes": f.num("modes", None), "f_max": f.num("f_max", None, positive=True),
            "accuracy": f.num("accuracy", 1e-3, positive=True),
            "max_elements": f.num("max_elements", 256, positive=True)}
@@ -408,79 +377,3 @@ def _assemble_fe(b, spec, constraints, forces, mass_blocks, q_init):
             "size": int(spec["M"].shape[0])}
 
 
-# ---------------------------------------------------------------------------------------------
-def craig_bampton(M, K, boundary, n_modes=None):
-    """Craig–Bampton reduction of (M, K) keeping the ``boundary`` dofs physical.
-
-        q = T [u_b; η],   T = ┌ I    0 ┐,   Ψ = −K_ii⁻¹ K_ib (static constraint modes),
-                              └ Ψ    Φ ┘    Φ: the lowest ``n_modes`` fixed-interface modes
-
-    (all of them when None: then T is square and the reduction exact).  Returns (Tᵀ M T, Tᵀ K T, T)
-    with the boundary dofs first, in the order given.
-    """
-    import scipy.linalg as sla
-
-    M, K = np.asarray(M, dtype=float), np.asarray(K, dtype=float)
-    n = M.shape[0]
-    b = np.asarray(boundary, dtype=np.intp)
-    i = np.setdiff1d(np.arange(n), b)
-    Kii, Kib = K[np.ix_(i, i)], K[np.ix_(i, b)]
-    Psi = -np.linalg.solve(Kii, Kib)
-    k = i.size if n_modes is None else min(int(n_modes), i.size)
-    _, Phi = sla.eigh(Kii, M[np.ix_(i, i)], subset_by_index=[0, k - 1]) if k else (None, np.zeros((i.size, 0)))
-    T = np.zeros((n, b.size + k))
-    T[b, :b.size] = np.eye(b.size)
-    T[np.ix_(i, np.arange(b.size))] = Psi
-    T[np.ix_(i, np.arange(b.size, b.size + k))] = Phi
-    Mr, Kr = T.T @ M @ T, T.T @ K @ T
-    return 0.5 * (Mr + Mr.T), 0.5 * (Kr + Kr.T), T
-
-
-def export_fe_body(model, interface, path, *, n_modes=None, q=None, lam=None):
-    """Write a model (typically one free-free beam) as a Craig–Bampton FE body.
-
-    interface : point names; each contributes (P.x, P.y, θ) with θ the angle coordinate of the
-        beam node at P.  The matrices are M(q) and K(q) + Σλ∇²Φ at q (default the initial
-        positions), on the model's coordinates when it has no constraints.  ``path`` ending in
-        .npz gets arrays ``M`` and ``K``; ending in .mtx gives ``<stem>_M.mtx`` and
-        ``<stem>_K.mtx`` (MatrixMarket).  Returns the written file names.
-    """
-    from pathlib import Path
-
-    if model.n_constraints:
-        raise CaseError("export_fe_body needs a model without constraints (a free body)",
-                        element="export")
-    q = model.q_init if q is None else q
-    names = list(model.coordinate_names)
-    beams = (model.flexible or {}).get("bodies", {})
-    boundary = []
-    for p in interface:
-        for ax in ("x", "y"):
-            if f"{p}.{ax}" not in names:
-                raise CaseError(f"interface point {p!r} has no free coordinate {p}.{ax}",
-                                element="export")
-            boundary.append(names.index(f"{p}.{ax}"))
-        theta = [f"{nm}.n{0 if r['points'][0] == p else r['elements']}.theta"
-                 for nm, r in beams.items() if r.get("type") == "beam" and p in r["points"]]
-        theta = [t for t in theta if t in names]
-        if len(theta) != 1:
-            raise CaseError(f"interface point {p!r} must be the end of exactly one beam with a "
-                            "free rotation", element="export")
-        boundary.append(names.index(theta[0]))
-    M = model.mass_matrix(q).toarray()
-    K = model.force_jacobians(q)[0].toarray()
-    Mr, Kr, _ = craig_bampton(M, K, boundary, n_modes)
-    path = Path(path)
-    if path.suffix == ".npz":
-        np.savez(path, M=Mr, K=Kr)
-        return [str(path)]
-    if path.suffix == ".mtx":
-        import scipy.io
-
-        out = []
-        for key, A in (("M", Mr), ("K", Kr)):
-            f = path.with_name(f"{path.stem}_{key}.mtx")
-            scipy.io.mmwrite(str(f), A, symmetry="symmetric")
-            out.append(str(f))
-        return out
-    raise CaseError(f"export to .npz or .mtx, got {path.name!r}", element="export")

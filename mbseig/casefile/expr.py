@@ -10,13 +10,17 @@ comprehensions, lambdas, keywords and every other construct are rejected.
 from __future__ import annotations
 
 import ast
+import functools
 import math
 import operator
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 
-from .errors import ExpressionError
+import numpy as np
 
-__all__ = ["evaluate", "FUNCTIONS", "CONSTANTS", "MAX_LENGTH"]
+from ..errors import ExpressionError
+
+__all__ = ["evaluate", "parse", "walk", "Dialect", "SCALAR", "FUNCTIONS", "CONSTANTS", "MAX_LENGTH"]
 
 MAX_LENGTH = 500  # characters in one expression
 
@@ -68,45 +72,66 @@ def evaluate(value, names: Mapping[str, float] | None = None) -> float:
     return result
 
 
-def _evaluate_string(text: str, names: Mapping[str, float]) -> float:
+@dataclass(frozen=True)
+class Dialect:
+    """What an expression may call and how it fails: scalar (math) or vectorized (numpy)."""
+
+    functions: Mapping
+    binary: Mapping
+    fail: Callable[[str], Exception]
+
+
+SCALAR = Dialect(FUNCTIONS, _BINARY, ExpressionError)
+
+
+@functools.lru_cache(maxsize=4096)
+def parse(text: str):
+    """The syntax tree of an expression string (cached); ExpressionError if it cannot be parsed."""
     if len(text) > MAX_LENGTH:
         raise ExpressionError(f"expression longer than {MAX_LENGTH} characters")
     try:
-        tree = ast.parse(text.strip(), mode="eval")
+        return ast.parse(text.strip(), mode="eval").body
     except SyntaxError:
         raise ExpressionError(f"cannot parse expression {text!r}") from None
+
+
+def _evaluate_string(text: str, names: Mapping[str, float]) -> float:
+    tree = parse(text)
     try:
-        return float(_walk(tree.body, names, text))
+        return float(walk(tree, names, text, SCALAR))
     except ExpressionError:
         raise
     except (ArithmeticError, ValueError, TypeError) as exc:
         raise ExpressionError(f"cannot evaluate {text!r}: {exc}") from None
 
 
-def _walk(node, names, text):
+def walk(node, names, text, dialect=SCALAR):
+    """Value of a parsed expression against the whitelist (names may map to numpy arrays)."""
+    fail = dialect.fail
     if isinstance(node, ast.Constant):
         if isinstance(node.value, bool) or not isinstance(node.value, (int, float)):
-            raise ExpressionError(f"only numbers are allowed as constants in {text!r}")
+            raise fail(f"only numbers are allowed as constants in {text!r}")
         return float(node.value)
     if isinstance(node, ast.Name):
         if node.id in names:
-            return float(names[node.id])
+            value = names[node.id]
+            return value if isinstance(value, np.ndarray) else float(value)
         if node.id in CONSTANTS:
             return CONSTANTS[node.id]
-        raise ExpressionError(f"unknown name {node.id!r} in {text!r}")
-    if isinstance(node, ast.BinOp) and type(node.op) in _BINARY:
-        left = _walk(node.left, names, text)
-        right = _walk(node.right, names, text)
-        if isinstance(node.op, ast.Pow) and abs(right) > 1e4:
-            raise ExpressionError(f"exponent {right:g} too large in {text!r}")
-        return _BINARY[type(node.op)](left, right)
+        raise fail(f"unknown name {node.id!r} in {text!r}")
+    if isinstance(node, ast.BinOp) and type(node.op) in dialect.binary:
+        left = walk(node.left, names, text, dialect)
+        right = walk(node.right, names, text, dialect)
+        if isinstance(node.op, ast.Pow) and np.any(np.abs(right) > 1e4):
+            raise fail(f"exponent {np.max(np.abs(right)):g} too large in {text!r}")
+        return dialect.binary[type(node.op)](left, right)
     if isinstance(node, ast.UnaryOp) and type(node.op) in _UNARY:
-        return _UNARY[type(node.op)](_walk(node.operand, names, text))
+        return _UNARY[type(node.op)](walk(node.operand, names, text, dialect))
     if isinstance(node, ast.Call):
-        if not isinstance(node.func, ast.Name) or node.func.id not in FUNCTIONS:
-            raise ExpressionError(f"function not allowed in {text!r}: {ast.unparse(node.func)}")
+        if not isinstance(node.func, ast.Name) or node.func.id not in dialect.functions:
+            raise fail(f"function not allowed in {text!r}: {ast.unparse(node.func)}")
         if node.keywords:
-            raise ExpressionError(f"keyword arguments are not allowed in {text!r}")
-        args = [_walk(a, names, text) for a in node.args]
-        return FUNCTIONS[node.func.id](*args)
-    raise ExpressionError(f"not allowed in an expression: {ast.unparse(node)!r} in {text!r}")
+            raise fail(f"keyword arguments are not allowed in {text!r}")
+        args = [walk(a, names, text, dialect) for a in node.args]
+        return dialect.functions[node.func.id](*args)
+    raise fail(f"not allowed in an expression: {ast.unparse(node)!r} in {text!r}")

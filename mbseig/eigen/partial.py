@@ -33,12 +33,13 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .errors import SolverError
-from .qep import QEPSolution, proportional_real_error, undamped_pairs
+from ..errors import SolverError
+from ..numerics import unit_columns
+from .base import QEPSolution, partial_solvers, register, requested_path
+from .measures import (backward_errors, better_half, conditions, fro, is_symmetric,
+                       proportional_real_error, rayleigh_fit, undamped_pairs)
 
-__all__ = ["solve_partial", "PARTIAL_SOLVERS", "sparse_structure"]
-
-PARTIAL_SOLVERS = ("partial-eigh", "partial-proportional", "partial-companion")
+__all__ = ["solve_partial", "sparse_structure"]
 
 
 def _csr(A, n=None):
@@ -50,34 +51,20 @@ def _csr(A, n=None):
     return A.astype(float)
 
 
-def _fro(A):
-    return float(spla.norm(A)) if A.nnz else 0.0
-
-
-def _is_sym(A, tol):
-    nA = _fro(A)
-    return nA == 0 or _fro(A - A.T) <= tol * nA
-
-
 def sparse_structure(M, P, Q, *, sym_tol=1e-13, rayleigh_tol=1e-12, probes=3, seed=0):
     """(name, reason, extras) for sparse M, P, Q: the partial path ``auto`` takes.
 
     Proportional damping P = αM + βQ is fitted on ``probes`` random vectors v (P v against
     M v, Q v) and accepted when the relative residual is below ``rayleigh_tol``.
     """
-    symmetric = _is_sym(M, sym_tol) and _is_sym(Q, sym_tol)
-    if symmetric and P.nnz == 0 or (symmetric and _fro(P) == 0):
+    symmetric = is_symmetric(M, sym_tol) and is_symmetric(Q, sym_tol)
+    if symmetric and fro(P) == 0:
         return "partial-eigh", "P = 0, M and Q symmetric", {}
-    if symmetric and _is_sym(P, sym_tol):
-        rng = np.random.default_rng(seed)
-        V = rng.standard_normal((M.shape[0], probes))
-        A = np.column_stack([(M @ V).ravel(), (Q @ V).ravel()])
-        b = (P @ V).ravel()
-        coef, *_ = np.linalg.lstsq(A, b, rcond=None)
-        if np.linalg.norm(A @ coef - b) <= rayleigh_tol * np.linalg.norm(b):
-            a, bb = float(coef[0]), float(coef[1])
-            return ("partial-proportional", f"P = {a:.6g} M + {bb:.6g} Q (Rayleigh damping)",
-                    {"alpha": a, "beta": bb})
+    if symmetric and is_symmetric(P, sym_tol):
+        ab = rayleigh_fit(M, P, Q, rayleigh_tol, probes=probes, seed=seed)
+        if ab is not None:
+            return ("partial-proportional", f"P = {ab[0]:.6g} M + {ab[1]:.6g} Q (Rayleigh damping)",
+                    {"alpha": ab[0], "beta": ab[1]})
     return "partial-companion", "general damping or non-symmetric: shift-invert on the companion pencil", {}
 
 
@@ -103,7 +90,7 @@ class _ShiftLU:
 
 def _bordered(M, P, Q, G):
     m = G.shape[0]
-    nQ, nG = _fro(Q), _fro(G)
+    nQ, nG = fro(Q), fro(G)
     c = nQ / nG if nG > 0 and nQ > 0 else 1.0
     Z = sp.csr_matrix((m, m))
     Mb = sp.block_diag([M, Z], format="csr")
@@ -158,28 +145,10 @@ def _companion_partial(Mb, Pb, Qb, k, sigma, scale, ncv, maxiter, tol):
     return s, Z[:nb], Z[nb:] / np.where(s != 0, s, 1.0), sig
 
 
-def _eta(Mb, Pb, Qb, s, X, norms):
-    nM, nP, nQ = norms
-    R = (Mb @ X) * s**2 + (Pb @ X) * s + Qb @ X
-    den = (np.abs(s) ** 2 * nM + np.abs(s) * nP + nQ) * _colnorm(X)
-    rn = _colnorm(R)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(den > 0, rn / den, np.where(rn == 0, 0.0, np.inf))
 
 
-def _kappa(Mb, Pb, s, X, Yc, norms):
-    """κ with Yc the conjugated left vectors (yᴴ = Ycᵀ)."""
-    nM, nP, nQ = norms
-    num = (np.abs(s) ** 2 * nM + np.abs(s) * nP + nQ) * _colnorm(X) * _colnorm(Yc)
-    den = np.abs(np.einsum("ij,ij->j", Yc, (Mb @ X) * (2 * s) + Pb @ X))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(den > 0, num / den, np.inf)
 
 
-def _unit(X):
-    nrm = _colnorm(X)
-    nrm[nrm == 0] = 1.0
-    return X / nrm
 
 
 def solve_partial(M, P, Q, *, n_modes: int | None = None, target: float | None = None,
@@ -193,7 +162,7 @@ def solve_partial(M, P, Q, *, n_modes: int | None = None, target: float | None =
     target : angular frequency ω (rad/s) the modes are sought around; default 0 (lowest modes).
     band : (ω_lo, ω_hi): every mode with ω_lo ≤ ω_n ≤ ω_hi (the count grows until all are found).
     G : constraint Jacobian Φ_q (m × n); M, P, Q are then in full coordinates (bordered pencil).
-    solver : ``auto`` or one of :data:`PARTIAL_SOLVERS`.
+    solver : ``auto`` or a partial path of :data:`mbseig.eigen.base.SOLVERS`.
     verify_tol : largest backward error accepted for a returned pair (else SolverError).
     arpack_tol, ncv, maxiter : ARPACK's own options (0 = machine precision).
     left : on the companion path with non-symmetric matrices, compute left eigenvectors (a second
@@ -215,16 +184,8 @@ def solve_partial(M, P, Q, *, n_modes: int | None = None, target: float | None =
     if n_modes is not None and int(n_modes) < 1:
         raise SolverError(f"n_modes must be a positive integer, got {n_modes!r}")
     name, reason, extras = sparse_structure(M, P, Q, sym_tol=sym_tol, rayleigh_tol=rayleigh_tol)
-    if solver != "auto":
-        if solver not in PARTIAL_SOLVERS:
-            raise SolverError(f"unknown partial solver {solver!r} (auto, {', '.join(PARTIAL_SOLVERS)})")
-        if solver != "partial-companion" and name == "partial-companion":
-            raise SolverError(f"solver {solver!r} does not apply: {reason}")
-        if solver == "partial-eigh" and name == "partial-proportional":
-            raise SolverError("solver 'partial-eigh' does not apply: P is not zero")
-        if solver == "partial-proportional" and name == "partial-eigh":
-            extras = {"alpha": 0.0, "beta": 0.0}
-        name, reason = solver, f"requested ({reason})"
+    name, reason, extras = requested_path(solver, name, reason, extras, partial_solvers(),
+                                          "partial solver")
     m = 0 if G is None else G.shape[0]
     if m:
         G = _csr(G) if sp.issparse(G) else sp.csr_matrix(np.asarray(G, dtype=float))
@@ -235,7 +196,7 @@ def solve_partial(M, P, Q, *, n_modes: int | None = None, target: float | None =
     else:
         Mb, Pb, Qb = M, P, Q
     nb = Mb.shape[0]
-    norms = (_fro(Mb), _fro(Pb), _fro(Qb))
+    norms = (fro(Mb), fro(Pb), fro(Qb))
     scale = norms[2] if norms[2] > 0 else 1.0
     w_scale = np.sqrt(norms[2] / norms[0]) if norms[0] > 0 else 1.0
     omega_t = 0.0 if target is None else float(target)
@@ -269,42 +230,33 @@ def solve_partial(M, P, Q, *, n_modes: int | None = None, target: float | None =
             w, V = w[inside], V[:, inside]
         s, X, eta, kappa = undamped_pairs(Mb, Pb, Qb, w, V, extras.get("alpha", 0.0),
                                           extras.get("beta", 0.0), norms)
-        take2 = np.zeros(0, bool)
+        n_second, Yc = 0, X
     else:
-        X1, X2 = _unit(X1), _unit(X2)
-        e1, e2 = _eta(Mb, Pb, Qb, s, X1, norms), _eta(Mb, Pb, Qb, s, X2, norms)
-        take2 = e2 < e1
-        X = X1
-        X[:, take2] = X2[:, take2]
+        X, eta, _, _, n_second = better_half((Mb, Pb, Qb), s, X1, X2, norms)
         del X1, X2
-        eta = np.minimum(e1, e2)
         s, X, eta = _select(s, X, eta, want if band is None else None, omega_t, band)
-        symmetric_all = all(_is_sym(A, sym_tol) for A in (Mb, Pb, Qb))
+        symmetric_all = all(is_symmetric(A, sym_tol) for A in (Mb, Pb, Qb))
         Yc = X if symmetric_all or not left else \
             _left_vectors(Mb, Pb, Qb, s, k, sig, ncv, maxiter, arpack_tol, w_scale).conj()
-        kappa = _kappa(Mb, Pb, s, X, Yc, norms)
+        kappa = conditions(s, X, Yc, Mb @ X, Pb @ X, norms)
     bad = eta > verify_tol
     if np.any(bad):
         worst = ", ".join(f"{z.real:.6g}{z.imag:+.6g}j (η={e:.1e})" for z, e in zip(s[bad][:5], eta[bad][:5]))
         raise SolverError(f"{name}: {int(bad.sum())} returned pairs fail the backward-error check "
                           f"η ≤ {verify_tol:g}: {worst}")
-    Xq = _unit(X[:n]) if m else X
+    Xq = unit_columns(X[:n]) if m else X
     real_error = None
     if name == "partial-proportional":
         a, b = extras["alpha"], extras["beta"]
-        fit = _fro((P - a * M - b * Q).tocsr())
+        fit = fro((P - a * M - b * Q).tocsr())
         real_error = proportional_real_error(s, kappa, eta, norms, a, b, fit)
     return QEPSolution(s, Xq, eta, kappa, name, reason, 0, norms,
                        {**extras, "shift": complex(sig) if np.iscomplex(sig) else float(np.real(sig)),
                         "n_requested": want, "arpack_k": k, "n_constraint_rows": m,
-                        "verify_tol": verify_tol, "second_half_vectors": int(np.sum(take2))},
-                       real_error)
+                        "verify_tol": verify_tol, "second_half_vectors": n_second},
+                       real_error, left_vectors=(unit_columns(Yc[:n]) if m else Yc), partial=True)
 
 
-def _colnorm(X):
-    if np.iscomplexobj(X):
-        return np.sqrt(np.einsum("ij,ij->j", X.real, X.real) + np.einsum("ij,ij->j", X.imag, X.imag))
-    return np.sqrt(np.einsum("ij,ij->j", X, X))
 
 
 def _select(s, X, eta, count, omega_t, band):
@@ -342,3 +294,9 @@ def _left_vectors(Mb, Pb, Qb, s, k, sig, ncv, maxiter, tol, scale):
         i = int(np.argmin(np.abs(st - z)))
         Y[:, j] = Y1[:, i]
     return Y.conj()  # yᴴ(s²M + sP + Q) = 0 ⇔ (s²Mᵀ + sPᵀ + Qᵀ) ȳ = 0
+
+
+for _name, _needs in (("partial-eigh", "P = 0, M and Q symmetric"),
+                      ("partial-proportional", "P = αM + βQ with M and Q symmetric"),
+                      ("partial-companion", "nothing (any sparse M, P, Q)")):
+    register(_name, partial=True, needs=_needs, driver=solve_partial)

@@ -2,7 +2,7 @@
 
 The request names the modes (the lowest ``modes`` listed modes and/or those below ``f_max`` Hz)
 and a relative ``accuracy``.  Every beam with ``elements = "auto"`` starts at
-:data:`mbseig.flexible.AUTO_START_ELEMENTS` elements; one beam at a time is doubled while the
+:data:`mbseig.casefile.flexible.AUTO_START_ELEMENTS` elements; one beam at a time is doubled while the
 others are held, and the change Δ of the requested frequencies,
 
     Δ = max_k |ω_k(2n) − ω_k(n)| / ω_k(2n)       (sorted ω_n; rigid-body modes compared absolutely)
@@ -23,13 +23,12 @@ approximations on nested meshes converge from above, so comparing sorted frequen
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
-from .errors import CaseError, MbseigError
+from ..errors import CaseError
+from .point import Analysis, analyze_model, as_spec
 
 __all__ = ["Refinement", "refine_analysis", "requested_modes"]
 
@@ -81,20 +80,21 @@ def _change(w_coarse, w_fine, scale):
     return float(np.max(np.abs(w_coarse[:k] - w_fine[:k]) / den))
 
 
-def refine_analysis(path, *, config=None, params=None, request=None, solver="auto",
+def refine_analysis(spec, *, config=None, params=None, request=None, solver="auto",
                     constraint_stiffness=True, modes_options=None, assumed_order=2.0,
-                    max_order=4.0):
-    """Refine the ``auto`` beams of the case at ``path`` for ``request``; return the final
-    :class:`~mbseig.analysis.Analysis` with its ``refinement`` record.
+                    max_order=4.0, model=None):
+    """Refine the ``auto`` beams of the case ``spec`` (a path or a parsed
+    :class:`~mbseig.casefile.CaseSpec`, rebuilt per mesh, never re-read) for ``request``; return
+    the final :class:`~mbseig.studies.pipeline.Analysis` with its ``refinement`` record.
 
     request : {"modes": K, "f_max": Hz, "accuracy": a, "max_elements": n}; None takes the
         case's ``[refinement]`` table.
+    model : the model already built from ``spec`` at these parameters, if the caller has it.
     """
-    from .analysis import Analysis, analyze
-    from .case import build_case, load_case
-
-    path = Path(path)
-    model = load_case(path, config=config, **(params or {}))
+    spec = as_spec(spec)
+    path = spec.source
+    if model is None:
+        model = spec.build(config, **(params or {}))
     fl = getattr(model, "flexible", {}) or {}
     req = dict(fl.get("refinement") or {})
     req.update({k: v for k, v in (request or {}).items() if v is not None})
@@ -108,16 +108,10 @@ def refine_analysis(path, *, config=None, params=None, request=None, solver="aut
                         element="refinement")
     bodies = fl.get("bodies", {})
     auto = [nm for nm, r in bodies.items() if r.get("type") == "beam" and r.get("auto")]
-    data = tomllib.loads(path.read_bytes().decode("utf-8"))
 
     def run(mesh):
-        try:
-            m = build_case(data, name=path.stem, source=str(path), base_dir=path.parent,
-                           config=config, overrides=params or {}, mesh=mesh)
-        except MbseigError as exc:
-            raise exc.located(file=str(path)) from None
-        return analyze(path, solver=solver, constraint_stiffness=constraint_stiffness,
-                       modes_options=modes_options, model=m)
+        return analyze_model(spec.build(config, mesh=mesh, **(params or {})), solver=solver,
+                             constraint_stiffness=constraint_stiffness, modes_options=modes_options)
 
     mesh = {nm: bodies[nm]["elements"] for nm in auto}
     current = run(mesh)

@@ -15,13 +15,17 @@ Naive methods, as commonly written:
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
-__all__ = ["FailCase", "ALL", "naive_companion", "naive_verdict", "run_all"]
+from ..casefile import load_case
+from ..check import check_modes
+from ..linear import linearize
+from ..modal import modes
+from ..statics import equilibrium
+from .cases import case_path
 
-CASES = Path(__file__).resolve().parent.parent / "cases"
+__all__ = ["FailCase", "ALL", "naive_companion", "naive_verdict", "run_all"]
 
 
 @dataclass
@@ -51,14 +55,12 @@ def naive_verdict(s):
 
 # ---------------------------------------------------------------------------------------------
 def pendulum_constraint_stiffness():
-    import mbseig
-
-    model = mbseig.load_case(CASES / "pendulum.toml")
-    eq = mbseig.equilibrium(model)
-    wrong = mbseig.linearize(model, eq, constraint_stiffness=False)
-    right = mbseig.linearize(model, eq)
-    mw = mbseig.modes(wrong.M, wrong.P, wrong.Q)
-    mr = mbseig.modes(right.M, right.P, right.Q)
+    model = load_case(case_path("pendulum"))
+    eq = equilibrium(model)
+    wrong = linearize(model, eq, constraint_stiffness=False)
+    right = linearize(model, eq)
+    mw = modes(wrong.M, wrong.P, wrong.Q)
+    mr = modes(right.M, right.P, right.Q)
     exact = np.sqrt(9.81 / 1.0)
     return FailCase(
         "pendulum: constraint-force stiffness", "linearize without Σλ∇²Φ",
@@ -70,14 +72,12 @@ def pendulum_constraint_stiffness():
 
 
 def four_bar_constraint_stiffness():
-    import mbseig
-
-    model = mbseig.load_case(CASES / "four_bar.toml")
-    eq = mbseig.equilibrium(model)
-    wrong = mbseig.linearize(model, eq, constraint_stiffness=False)
-    right = mbseig.linearize(model, eq)
-    ww = mbseig.modes(wrong.M, wrong.P, wrong.Q).omega_n[0]
-    wr = mbseig.modes(right.M, right.P, right.Q).omega_n[0]
+    model = load_case(case_path("four_bar"))
+    eq = equilibrium(model)
+    wrong = linearize(model, eq, constraint_stiffness=False)
+    right = linearize(model, eq)
+    ww = modes(wrong.M, wrong.P, wrong.Q).omega_n[0]
+    wr = modes(right.M, right.P, right.Q).omega_n[0]
     shift = (ww - wr) / wr
     return FailCase(
         "loaded four-bar: constraint-force stiffness", "linearize without Σλ∇²Φ",
@@ -105,14 +105,12 @@ ZIEGLER_CRITICAL = 3.5 - np.sqrt(2.0)
 def ziegler_follower():
     import scipy.linalg as sla
 
-    import mbseig
-
     load = 2.2  # c/l; above F_cr = 2.0858
     M, P, Q = ziegler_matrices(load)
-    md = mbseig.modes(M, P, Q)
+    md = modes(M, P, Q)
     w2 = sla.eigh(0.5 * (Q + Q.T), M, eigvals_only=True)  # symmetric part forced into eigh
     naive_kind = "divergence" if np.any(w2 < 0) else "oscillatory"
-    below = mbseig.modes(*ziegler_matrices(1.9))
+    below = modes(*ziegler_matrices(1.9))
     return FailCase(
         "Ziegler pendulum, follower load 2.2 c/l", "eigh on the symmetric part of Q",
         f"{naive_kind} (real s), static buckling at F = 2 c/l",
@@ -126,13 +124,11 @@ def ziegler_follower():
 def badly_scaled(n=12, seed=4, damping=1e-7):
     """Masses 1e-6…1 kg, springs 1e3…1e9 N/m (shuffled), light dashpots.  M, K, C symmetric
     positive definite ⇒ every mode decays (Re s < 0): the energy-dissipation theorem."""
-    import mbseig
-
     M, C, K = badly_scaled_matrices(n, seed, damping)
-    naive = mbseig.modes(M, C, K, solver="qz", scale=False)  # the unscaled companion pencil
+    naive = modes(M, C, K, solver="qz", scale=False)  # the unscaled companion pencil
     s_naive = naive.all_eigenvalues
     s_comp = naive_companion(M, C, K)
-    md = mbseig.modes(M, C, K)
+    md = modes(M, C, K)
     return FailCase(
         "badly scaled chain (m 1e-6…1 kg, k 1e3…1e9 N/m, c = 1e-7 N s/m)",
         "QZ on the unscaled companion pencil + Re s > 0 rule",
@@ -157,13 +153,11 @@ def badly_scaled_matrices(n=12, seed=4, damping=1e-7):
 
 
 def large_undamped(n=400):
-    import mbseig
-
     k, m = 1000.0, 1.0
     K = 2 * k * np.eye(n) - k * np.eye(n, k=1) - k * np.eye(n, k=-1)
     M = m * np.eye(n)
     s_naive = naive_companion(M, np.zeros((n, n)), K)
-    md = mbseig.modes(M, np.zeros((n, n)), K, solver="companion")
+    md = modes(M, np.zeros((n, n)), K, solver="companion")
     n_pos = int(np.sum(s_naive.real > 0))
     return FailCase(
         f"undamped chain, n = {n} (general companion path)", "naive companion + Re s > 0 rule",
@@ -177,21 +171,19 @@ def large_undamped(n=400):
 def repeated_and_defective():
     """Isotropic 2-D oscillator (ω double), critically damped SDOF (s = −1 defective),
     free-free chain (rigid mode), massless middle point (singular M)."""
-    import mbseig
-
     out = {}
     # repeated: two identical uncoupled oscillators k = 4, m = 1 → ω = 2 twice
-    md = mbseig.modes(np.eye(2), np.zeros((2, 2)), 4 * np.eye(2))
+    md = modes(np.eye(2), np.zeros((2, 2)), 4 * np.eye(2))
     out["repeated"] = (len(md), list(md.omega_n), md.verdict)
     ok_rep = len(md) == 2 and np.allclose(md.omega_n, 2.0, rtol=1e-12) and md.verdict == "critical"
     # defective: s² + 2s + 1 = 0 → s = −1 (double, one eigenvector)
-    md = mbseig.modes(np.eye(1), 2 * np.eye(1), np.eye(1))
+    md = modes(np.eye(1), 2 * np.eye(1), np.eye(1))
     out["defective"] = (len(md), list(md.eigenvalues), list(md.kind), md.verdict)
     ok_def = (len(md) == 2 and np.allclose(md.eigenvalues, -1.0, atol=1e-7)
               and md.kind == ["overdamped", "overdamped"] and md.verdict == "stable")
     # rigid body: free-free chain of 3 (ω = 0, √(k/m), √(3k/m))
     K = np.array([[1.0, -1, 0], [-1, 2, -1], [0, -1, 1]])
-    md = mbseig.modes(np.eye(3), np.zeros((3, 3)), K)
+    md = modes(np.eye(3), np.zeros((3, 3)), K)
     s_naive = naive_companion(np.eye(3), np.zeros((3, 3)), K)
     out["rigid"] = (len(md), list(md.kind), naive_verdict(s_naive))
     ok_rig = (len(md) == 3 and md.kind.count("rigid-body") == 1
@@ -199,7 +191,7 @@ def repeated_and_defective():
     # singular mass: wall–m–(massless)–m–wall with springs k: ω² = k/m, 2k/m (static condensation)
     M = np.diag([1.0, 0.0, 1.0])
     K = np.array([[2.0, -1, 0], [-1, 2, -1], [0, -1, 2]])
-    md = mbseig.modes(M, np.zeros((3, 3)), K)
+    md = modes(M, np.zeros((3, 3)), K)
     try:
         naive_companion(M, np.zeros((3, 3)), K)
         naive_singular = "ran"
@@ -222,8 +214,6 @@ def dissipative_integrator(steps_per_period=10, periods=20):
     Euler with h = T/10 multiplies it by 1/(1 − hs) per step; |1 − hs| > 1 here, so the
     simulated flutter decays: the time domain says stable.  mbseig's time-domain check
     (DOP853, rtol 1e-10, on the nonlinear case) measures the growth."""
-    import mbseig
-
     M, P, Q = ziegler_matrices(2.2)
     n = M.shape[0]
     Mi = np.linalg.inv(M)
@@ -239,20 +229,15 @@ def dissipative_integrator(steps_per_period=10, periods=20):
         z = step @ z
     growth = np.linalg.norm(z) / z0
     naive_delta = np.log(abs(1 - h * s)) / h  # apparent δ of the discrete flutter mode
-    try:
-        from . import timedomain
-
-        model = mbseig.load_case(CASES / "ziegler_pendulum.toml", config="flutter")
-        eq = mbseig.equilibrium(model)
-        lin = mbseig.linearize(model, eq)
-        md = mbseig.modes(lin.M, lin.P, lin.Q, N=lin.N)
-        res = timedomain.check_modes(model, eq, lin, md)
-        flut = [m for m in res.modes if m.predicted_delta < 0 and not m.skipped]
-        measured = flut[0].measured_delta if flut else float("nan")
-        td = f"δ measured {measured:+.4g} (predicted {flut[0].predicted_delta:+.4g}): unstable" if flut else "no flutter mode checked"
-        right = bool(flut) and measured < 0 and flut[0].passed
-    except ImportError:
-        td, right, measured = "mbseig.timedomain not available", False, float("nan")
+    model = load_case(case_path("ziegler_pendulum"), config="flutter")
+    eq = equilibrium(model)
+    lin = linearize(model, eq)
+    md = modes(lin.M, lin.P, lin.Q, N=lin.N)
+    res = check_modes(model, eq, lin, md)
+    flut = [m for m in res.modes if m.predicted_delta < 0 and not m.skipped]
+    measured = flut[0].measured_delta if flut else float("nan")
+    td = f"δ measured {measured:+.4g} (predicted {flut[0].predicted_delta:+.4g}): unstable" if flut else "no flutter mode checked"
+    right = bool(flut) and measured < 0 and flut[0].passed
     return FailCase(
         "time domain: Ziegler pendulum past the flutter load", "backward Euler, 10 steps per period",
         f"response ×{growth:.2g} after {periods} periods (apparent δ = {naive_delta:+.3g}): looks stable",

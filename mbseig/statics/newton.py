@@ -1,4 +1,4 @@
-"""Static equilibrium of the constrained model (DESIGN §3).
+"""Static equilibrium of the constrained model (docs/design.md, "Equilibrium").
 
 Solve, at q̇ = 0,
 
@@ -23,10 +23,11 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .case import LinearCase
-from .errors import EquilibriumError, MbseigError
+from ..errors import EquilibriumError, MbseigError
+from ..model.linear_case import LinearCase
+from ..numerics import constraint_rank
 
-__all__ = ["Equilibrium", "equilibrium", "constraint_rank"]
+__all__ = ["Equilibrium", "solve_statics", "solved"]
 
 NONMONOTONE_MEMORY = 5  # merits the line search compares against (1: monotone)
 DENSE_LIMIT = 4000  # augmented size up to which the Newton step is a dense SVD least-squares solve
@@ -51,22 +52,19 @@ class Equilibrium:
     reactions: tuple = ()  # (constraint name, λ values) per constraint element
     tolerances: dict = field(default_factory=dict)
     method: str = "newton"
+    model: object = None  # the model this is the equilibrium of (commands resolved), see solved()
 
 
-def constraint_rank(Phi_q, rank_tol):
-    """(rank, singular values) of Φ_q with the relative tolerance rank_tol · σ_max."""
-    if Phi_q.shape[0] == 0:
-        return 0, np.zeros(0)
-    A = Phi_q.toarray() if sp.issparse(Phi_q) else np.asarray(Phi_q)
-    s = sla.svd(A, compute_uv=False)
-    if s.size == 0 or s[0] == 0:
-        return 0, s
-    return int(np.sum(s > rank_tol * s[0])), s
+def solved(model, eq):
+    """The model whose equilibrium ``eq`` is: ``eq.model`` when :func:`mbseig.equilibrium`
+    resolved inverse-statics commands (actuator settings), else ``model`` itself.  Every stage
+    after the equilibrium works on this model."""
+    return eq.model if getattr(eq, "model", None) is not None else model
 
 
-def equilibrium(model, *, tol: float = 1e-12, max_iter: int = 50, rank_tol: float = 1e-10,
-                q_init=None) -> Equilibrium:
-    """Find the static equilibrium of ``model`` (see the module docstring).
+def solve_statics(model, *, tol: float = 1e-12, max_iter: int = 50, rank_tol: float = 1e-10,
+                  q_init=None) -> Equilibrium:
+    """Find the static equilibrium of ``model`` as it is (see the module docstring).
 
     tol : relative residual at which Newton stops (forces scaled by ``force_scale``, each
         constraint by its own scale, e.g. L² for a rigid length).
@@ -83,7 +81,8 @@ def _equilibrium(model, *, tol, max_iter, rank_tol, q_init):
     if isinstance(model, LinearCase):
         return Equilibrium(q=np.zeros(model.n), lam=np.zeros(0), residual=0.0, force_residual=0.0,
                            constraint_residual=0.0, iterations=0, rank=0, n_redundant=0,
-                           tolerances={"tol": tol}, method="linear case")
+                           tolerances={"tol": tol, "rank_tol": rank_tol}, method="linear case",
+                           model=model)
     n, m = model.n, model.n_constraints
     q = np.array(model.q_init if q_init is None else q_init, dtype=float)
     cscale = model.constraint_scales()
@@ -150,6 +149,7 @@ def _equilibrium(model, *, tol, max_iter, rank_tol, q_init):
         reactions=tuple(reactions),
         tolerances={"tol": tol, "max_iter": max_iter, "rank_tol": rank_tol,
                     "force_scale": force_scale, "rank_method": rank_method},
+        model=model,
     )
 
 

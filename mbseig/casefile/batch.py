@@ -2,12 +2,12 @@
 
 Repeated points, point masses and spring/damper elements are expanded for all values of the
 index at once: each expression is parsed once and evaluated on a numpy array of index values
-(the whitelist of :mod:`mbseig.expr`, with numpy functions), each name template is formatted
+(the whitelist of :mod:`mbseig.casefile.expr`, walked by the same code with numpy functions), each name template is formatted
 once per member, and springs become one :class:`~mbseig.model.batched.SpringDamperSet`.
 
 Anything unusual (an unknown field, a non-finite value, a name that clashes, a point that is a
 body marker, an ``enabled`` or ``name`` field, ...) makes the batch decline, and the element is
-expanded one member at a time by :mod:`mbseig.case`, which then reports the precise error. The
+expanded one member at a time by :mod:`mbseig.casefile.builder`, which then reports the precise error. The
 batch path therefore changes speed, never results or messages.
 """
 
@@ -19,9 +19,10 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from .expr import CONSTANTS, MAX_LENGTH
-from .model.affine import Affine
-from .model.batched import SpringDamperSet
+from ..errors import ExpressionError
+from ..model.affine import Affine
+from ..model.batched import SpringDamperSet
+from .expr import Dialect, parse, walk
 
 __all__ = ["Batcher", "vector_evaluate", "vector_template", "LazyPoints"]
 
@@ -35,53 +36,13 @@ _FUNCS = {
 }
 _BIN = {ast.Add: np.add, ast.Sub: np.subtract, ast.Mult: np.multiply, ast.Div: np.divide,
         ast.Pow: np.power, ast.Mod: np.mod}
-_PARSED: dict[str, object] = {}
 
 
 class _Decline(Exception):
     """The batch path does not handle this element; expand it member by member."""
 
 
-def _parse(text):
-    tree = _PARSED.get(text)
-    if tree is None:
-        if len(text) > MAX_LENGTH:
-            raise _Decline
-        try:
-            tree = ast.parse(text.strip(), mode="eval").body
-        except SyntaxError:
-            raise _Decline from None
-        _PARSED[text] = tree
-    return tree
-
-
-def _walk(node, names, var, ivals):
-    if isinstance(node, ast.Constant):
-        if isinstance(node.value, bool) or not isinstance(node.value, (int, float)):
-            raise _Decline
-        return float(node.value)
-    if isinstance(node, ast.Name):
-        if node.id == var:
-            return ivals
-        if node.id in names:
-            return float(names[node.id])
-        if node.id in CONSTANTS:
-            return CONSTANTS[node.id]
-        raise _Decline
-    if isinstance(node, ast.BinOp) and type(node.op) in _BIN:
-        a, b = _walk(node.left, names, var, ivals), _walk(node.right, names, var, ivals)
-        if isinstance(node.op, ast.Pow) and np.any(np.abs(b) > 1e4):
-            raise _Decline
-        if isinstance(node.op, (ast.Div, ast.Mod)) and np.any(np.asarray(b) == 0):
-            raise _Decline
-        return _BIN[type(node.op)](a, b)
-    if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
-        v = _walk(node.operand, names, var, ivals)
-        return -v if isinstance(node.op, ast.USub) else v
-    if (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in _FUNCS
-            and not node.keywords and node.args):
-        return _FUNCS[node.func.id](*[_walk(a, names, var, ivals) for a in node.args])
-    raise _Decline
+_VECTOR = Dialect(_FUNCS, _BIN, lambda message: _Decline())
 
 
 def vector_evaluate(value, names, var, ivals):
@@ -91,9 +52,13 @@ def vector_evaluate(value, names, var, ivals):
     if isinstance(value, (int, float)):
         out = np.full(ivals.size, float(value))
     elif isinstance(value, str):
-        with np.errstate(all="ignore"):
-            out = np.broadcast_to(np.asarray(_walk(_parse(value), names, var, ivals), float),
-                                  ivals.shape).copy()
+        try:
+            tree = parse(value)
+            with np.errstate(all="ignore"):
+                out = np.broadcast_to(np.asarray(walk(tree, {**names, var: ivals}, value, _VECTOR),
+                                                 float), ivals.shape).copy()
+        except (ExpressionError, ArithmeticError, ValueError, TypeError):
+            raise _Decline from None
     else:
         raise _Decline
     if not np.all(np.isfinite(out)):
@@ -149,7 +114,7 @@ class LazyPoints(Mapping):
 
 
 class Batcher:
-    """Callbacks for :func:`mbseig.case._expand`: ``batch(section, item, label, var, ivals,
+    """Callbacks for :func:`mbseig.casefile.fields.expand`: ``batch(section, item, label, var, ivals,
     params) -> bool`` (True when the whole repeated element was added)."""
 
     def __init__(self, builder):
@@ -219,7 +184,7 @@ class Batcher:
         b = self.b
         names = vector_template(refs, params, var, ivals)
         missing = [nm for nm in set(names) if nm not in self._rows]
-        if missing:  # points added one at a time by mbseig.case
+        if missing:  # points added one at a time by the builder
             if any(nm not in b.point_index for nm in missing):
                 raise _Decline
             self._register(missing, [b.point_index[nm] for nm in missing],

@@ -1,5 +1,5 @@
 """reports/benchmarks.md and reports/speed_accuracy.png from a :func:`mbseig.bench.run_bench`
-result (matplotlib imported here, lazily)."""
+result (the chart is drawn by :func:`mbseig.plots.speed_accuracy`)."""
 
 from __future__ import annotations
 
@@ -7,6 +7,8 @@ import math
 from pathlib import Path
 
 import numpy as np
+
+from .. import plots
 
 __all__ = ["write_report"]
 
@@ -164,37 +166,4 @@ def write_report(res, out_dir):
             L.append(f"| {c['name']} | {c['naive_method']} | {c['naive']} | {c['mbseig']} | {c['reference']} | "
                      f"{'yes' if c['naive_wrong'] else 'no'} | {'yes' if c['mbseig_right'] else '**no**'} |")
     (out_dir / "benchmarks.md").write_text("\n".join(L) + "\n")
-    _plot(res, out_dir / "speed_accuracy.png")
-
-
-def _plot(res, path):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(9, 6))
-    markers = "os^vD<>pPX*h"
-    rows = [r for r in res["rows"] if r["section"] in ("dense", "structured", "partial", "jacobians")
-            and isinstance(r.get("error"), float) and math.isfinite(r["error"])]
-    methods = list(dict.fromkeys(f"{r['section']}: {r['method']}" for r in rows))
-    colors = plt.get_cmap("tab20").colors  # one colour per method (tab10 repeats after ten)
-    for k, m in enumerate(methods):
-        pts = [r for r in rows if f"{r['section']}: {r['method']}" == m]
-        x = [r["time"] for r in pts]
-        y = [max(r["error"], 1e-17) for r in pts]
-        ax.plot(x, y, marker=markers[k % len(markers)], linestyle="-", label=m, alpha=0.85,
-                color=colors[(2 * k) % 20 if k < 10 else (2 * k + 1) % 20])
-        for r in pts:
-            ax.annotate(f"{r['n']:g}", (r["time"], max(r["error"], 1e-17)), fontsize=6,
-                        xytext=(3, 3), textcoords="offset points")
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("wall time [s] (median)")
-    ax.set_ylabel("relative error (vs closed form / complex step)")
-    ax.set_title("mbseig: error against wall time (labels: size)")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    plots.save(plots.speed_accuracy(res), out_dir / "speed_accuracy.png", dpi=120)

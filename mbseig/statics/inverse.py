@@ -1,4 +1,4 @@
-"""Inverse statics: set an actuator from a commanded posture (DESIGN §3).
+"""Inverse statics: set an actuator from a commanded posture (docs/design.md, "Equilibrium").
 
 A case may hold an ``angle_driver`` joint with ``sets = [...]`` naming the actuator elements it
 commands.  The driver is then used only in a pre-solve and is not part of the final model:
@@ -27,37 +27,28 @@ import dataclasses
 
 import numpy as np
 
-from .errors import CaseError, EquilibriumError
-from .model.elements import DistanceConstraint, SpringDamper
+from ..errors import EquilibriumError
+from ..model.driver import check_command
 
-__all__ = ["resolve_drivers"]
+__all__ = ["resolve_commands"]
 
 
-def resolve_drivers(make_model, forces, constraints, drivers, *, tol=1e-12, max_iter=30):
-    """(forces, constraints, q_guess, records) with every driver's commanded elements set.
+def resolve_commands(model, equilibrium, *, tol=1e-12, max_iter=30):
+    """The model with every pending command (``model.commands``) resolved: commanded elements
+    set, ``drivers`` holding one record per driver, ``q_init`` at the commanded posture.
 
-    make_model(forces, constraints, q_init) builds a :class:`~mbseig.model.Model`; ``drivers`` is a
-    list of ``(driver, targets)`` with targets a list of ``("force" | "joint", index, label)``
-    into ``forces`` / ``constraints``.
+    equilibrium(model, q_init=...) is the static solve (:func:`mbseig.statics.newton.solve_statics`).
     """
-    from .statics import equilibrium
+    drivers = model.commands
 
-    forces, constraints = list(forces), list(constraints)
+    def make_model(forces, constraints, q_init=None):
+        return dataclasses.replace(model, forces=tuple(forces), constraints=tuple(constraints),
+                                   q_init=model.q_init if q_init is None else q_init, commands=())
+
+    forces, constraints = list(model.forces), list(model.constraints)
     q_guess, records = None, []
     for driver, targets in drivers:
-        springs = [t for t in targets if t[0] == "force"]
-        locks = [t for t in targets if t[0] == "joint"]
-        if len(springs) > 1:
-            raise CaseError("an angle_driver can set the free length of one spring only",
-                            element=driver.name)
-        for kind, k, label in springs:
-            if not isinstance(forces[k], SpringDamper) or forces[k].diff.dim == 1:
-                raise CaseError(f"sets {label}: only a planar spring or spring_damper can be set",
-                                element=driver.name)
-        for kind, k, label in locks:
-            if not isinstance(constraints[k], DistanceConstraint):
-                raise CaseError(f"sets {label}: only a distance joint can be set",
-                                element=driver.name)
+        springs, locks = check_command(driver, targets, forces, constraints)
         lock_idx = {k for _, k, _ in locks}
         pre_constraints = [c for k, c in enumerate(constraints) if k not in lock_idx] + [driver]
         row = sum(c.n_eq for c in pre_constraints) - 1  # the driver's multiplier (last row)
@@ -110,4 +101,4 @@ def resolve_drivers(make_model, forces, constraints, drivers, *, tol=1e-12, max_
             rec["sets"].append({"element": c.name, "length": length})
         q_guess = eq.q
         records.append(rec)
-    return forces, constraints, q_guess, records
+    return dataclasses.replace(make_model(forces, constraints, q_guess), drivers=tuple(records))

@@ -17,8 +17,8 @@ assignment on cost = 1 − MAC + penalties (scipy.optimize.linear_sum_assignment
 never used.
 
 Boundaries.  A tracked eigenvalue is unstable where h = δ + tol < 0, with δ = −Re s and tol the
-per-eigenvalue stability tolerance of :mod:`mbseig.modal` (``safety`` κ max(η, ε), ``stability_rtol``
-|s|).  Where h changes sign between two grid points, the crossing is located by Brent's method on
+per-eigenvalue stability tolerance of :func:`mbseig.modal.tolerances`, the same that decides
+``mbseig modes``.  Where h changes sign between two grid points, the crossing is located by Brent's method on
 h(p) (each evaluation re-solves the model and picks the eigenvalue matching the track by MAC; where
 several match within ``AMBIGUOUS_MAC``, as the partners of a collision do, the least stable one) to
 ``xtol = xtol_rel · |stop − start|``; conjugate duplicates are merged.  For a damped crossing the
@@ -30,17 +30,24 @@ from __future__ import annotations
 
 import itertools
 import math
-import os
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from .errors import CaseError, MbseigError
+from .. import plots
+from ..eigen import solve_qep
+from ..errors import CaseError, MbseigError
+from ..linear import linearize
+from ..modal import stability, tolerances, worst
+from ..numerics import jsonable
+from ..statics import equilibrium, solved
+from ..statics.reactions import rom_flags
+from .point import as_spec
+from .runners import Runner, progress_bar
 
 __all__ = ["parse_range", "SweepResult", "run_sweep", "evaluate_point", "mac_matrix",
-           "track_line", "write_outputs"]
+           "track_line", "write_outputs", "progress_bar"]
 
 CONJUGATE_PENALTY = 2.0
 DISTANCE_WEIGHT = 1e-3
@@ -70,35 +77,26 @@ def parse_range(text: str):
 def evaluate_point(case, config, params, *, safety=10.0, stability_rtol=1e-12):
     """All eigenpairs at one parameter point (a pure function, picklable for workers).
 
+    case : a :class:`~mbseig.casefile.CaseSpec` (a model factory: the case is not read again).
     Returns a dict: eigenvalues (2n, complex), shapes (n_full × 2n, unit columns), tol (per
-    eigenvalue), verdict, out_of_range (joints outside their range of motion, from the case's
+    eigenvalue: the δ tolerance of :func:`mbseig.modal.tolerances`), verdict (as ``mbseig
+    modes`` gives it), out_of_range (joints outside their range of motion, from the case's
     [report] table), error (None or a one-line message).
     """
-    from .case import LinearCase, load_case
-    from .linear import linearize
-    from .qep import EPS, solve_qep
-    from .statics import equilibrium
-
     try:
-        model = load_case(case, config=config, **params)
+        model = case.build(config, **params)
         eq = equilibrium(model)
         lin = linearize(model, eq)
         sol = solve_qep(lin.M, lin.P, lin.Q)
     except MbseigError as exc:
         return {"params": dict(params), "error": exc.one_line()}
     s = sol.eigenvalues
-    tol = np.maximum(safety * sol.condition * np.maximum(sol.backward_error, EPS),
-                     stability_rtol * np.abs(s))
+    _, _, tol, rigid = tolerances(sol, safety=safety, stability_rtol=stability_rtol)
     X = lin.N @ sol.vectors
     X = X / np.maximum(np.linalg.norm(X, axis=0), np.finfo(float).tiny)
-    delta = -s.real
-    verdict = ("unstable" if np.any(delta < -tol) else
-               "critical" if np.any(np.abs(delta) <= tol) else "stable")
-    out_of_range = []
-    if not isinstance(model, LinearCase) and model.report.get("angles"):
-        from .device import rom_flags
-
-        out_of_range = rom_flags(model, eq.q)
+    verdict = worst(stability(-s.real, tol, rigid))
+    model = solved(model, eq)
+    out_of_range = rom_flags(model, eq.q) if getattr(model, "report", {}).get("angles") else []
     return {"params": dict(params), "error": None, "eigenvalues": s, "shapes": X, "tol": tol,
             "verdict": verdict, "out_of_range": out_of_range, "solver": sol.solver}
 
@@ -221,82 +219,6 @@ def locate_boundary(case, config, params, axis, lo, hi, ref_s, ref_shape, xtol, 
 
 
 # ---------------------------------------------------------------------------------------------
-class _Runner:
-    """Runs a pure function over argument tuples: in-process, local processes or Dask."""
-
-    def __init__(self, *, jobs=None, scheduler=None, progress=None):
-        self.jobs = jobs if jobs is not None else (os.cpu_count() or 1)
-        self.scheduler = scheduler
-        self.progress = progress
-        self.kind = "dask" if scheduler else ("serial" if self.jobs <= 1 else "processes")
-        self._client = self._pool = None
-
-    def __enter__(self):
-        if self.kind == "dask":
-            try:
-                from distributed import Client
-            except ImportError:
-                raise MbseigError("--scheduler needs the optional extra: pip install 'mbseig[dask]'",
-                                  element="--scheduler") from None
-            self._client = self.scheduler if not isinstance(self.scheduler, str) else Client(self.scheduler)
-        elif self.kind == "processes":
-            from concurrent.futures import ProcessPoolExecutor
-
-            self._pool = ProcessPoolExecutor(max_workers=self.jobs)
-        return self
-
-    def __exit__(self, *exc):
-        if self._pool is not None:
-            self._pool.shutdown()
-        if self._client is not None and isinstance(self.scheduler, str):
-            self._client.close()
-
-    def map(self, fn, calls, label):
-        """[fn(*args, **kwargs) for args, kwargs in calls], in order."""
-        total, done = len(calls), 0
-        results = [None] * total
-        if self.progress:
-            self.progress(label, 0, total)
-        if self.kind == "serial":
-            for i, (a, kw) in enumerate(calls):
-                results[i] = fn(*a, **kw)
-                done += 1
-                if self.progress:
-                    self.progress(label, done, total)
-            return results
-        if self.kind == "processes":
-            from concurrent.futures import as_completed
-
-            futs = {self._pool.submit(fn, *a, **kw): i for i, (a, kw) in enumerate(calls)}
-            for fut in as_completed(futs):
-                results[futs[fut]] = fut.result()
-                done += 1
-                if self.progress:
-                    self.progress(label, done, total)
-            return results
-        from distributed import as_completed as das_completed
-
-        futs = [self._client.submit(fn, *a, pure=False, **kw) for a, kw in calls]
-        index = {f.key: i for i, f in enumerate(futs)}
-        for fut in das_completed(futs):
-            results[index[fut.key]] = fut.result()
-            done += 1
-            if self.progress:
-                self.progress(label, done, total)
-        return results
-
-
-def progress_bar(stream=sys.stderr, width=30):
-    """A progress callback drawing ``label [#####.....] k/n`` on one line of ``stream``."""
-    def show(label, done, total):
-        filled = int(width * done / total) if total else width
-        stream.write(f"\r{label:<10} [{'#' * filled}{'.' * (width - filled)}] {done}/{total}")
-        if done >= total:
-            stream.write("\n")
-        stream.flush()
-    return show
-
-
 @dataclass(frozen=True, eq=False)
 class SweepResult:
     """A sweep: grid, per-point results, tracked eigenvalues per line and stability boundaries.
@@ -338,13 +260,23 @@ class SweepResult:
                     out[k, l] = float(np.max(pt["eigenvalues"].real))
         return out
 
-    def to_json(self) -> dict:
-        from .analysis import jsonable
+    @staticmethod
+    def listed_tracks(S):
+        """Tracks to list: drop the mirror image (Im < 0 on average) of a complex-pair track."""
+        keep = []
+        for j in range(S.shape[1]):
+            col = S[:, j]
+            im = col.imag[~np.isnan(col)]
+            if im.size and np.mean(im) < 0 and np.any(np.abs(im) > 0):
+                continue
+            keep.append(j)
+        return keep
 
+    def to_json(self) -> dict:
         lines = []
         for l, fixed in enumerate(self.lines):
             S = self.tracks[l]
-            keep = _listed_tracks(S)
+            keep = self.listed_tracks(S)
             tracks = []
             for j in keep:
                 col = S[:, j]
@@ -366,27 +298,18 @@ class SweepResult:
         })
 
 
-def _listed_tracks(S):
-    """Tracks to list: drop the mirror image (Im < 0 on average) of a complex-pair track."""
-    keep = []
-    for j in range(S.shape[1]):
-        col = S[:, j]
-        im = col.imag[~np.isnan(col)]
-        if im.size and np.mean(im) < 0 and np.any(np.abs(im) > 0):
-            continue
-        keep.append(j)
-    return keep
-
-
 def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None, progress=None,
               xtol_rel=1e-10, safety=10.0, stability_rtol=1e-12) -> SweepResult:
     """Sweep ``case`` over ``axes`` = [(name, values), ...] (see the module docstring).
 
+    case : a path (read and parsed once, here) or a :class:`~mbseig.casefile.CaseSpec`; the
+        points and boundary searches receive the parsed case, never the path.
     jobs : local worker processes (default: CPU count; 1 runs in-process).
     scheduler : a Dask scheduler address (or a ``distributed.Client``) to run the points on.
     xtol_rel : boundary tolerance relative to the first axis' span.
     """
-    case_arg, case = str(case), str(Path(case).resolve())
+    spec = as_spec(case)
+    case_arg, case = spec.source, spec
     fixed = dict(fixed or {})
     names = [n for n, _ in axes]
     if len(set(names)) != len(names):
@@ -401,13 +324,11 @@ def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None,
     opts = {"safety": safety, "stability_rtol": stability_rtol}
     calls = [((case, config, {**fixed, **line, axis0: float(v)}), opts)
              for line in lines for v in values0]
-    # probe one point first so that a bad case or parameter fails fast with its own message
-    from .case import load_case
-
-    load_case(case, config=config, **calls[0][0][2])
+    # build one point first so that a bad case or parameter fails fast with its own message
+    spec.build(config, **calls[0][0][2])
     span = abs(float(values0[-1] - values0[0]))
     xtol = xtol_rel * span
-    with _Runner(jobs=jobs, scheduler=scheduler, progress=progress) as runner:
+    with Runner(jobs=jobs, scheduler=scheduler, progress=progress) as runner:
         flat = runner.map(evaluate_point, calls, "points")
         n0 = len(values0)
         points = [flat[l * n0:(l + 1) * n0] for l in range(len(lines))]
@@ -487,7 +408,7 @@ def write_outputs(res: SweepResult, out_dir) -> list[Path]:
         w.writerow(others + [res.axis, "track", "re", "im", "delta", "omega_n", "freq_hz", "zeta"])
         for l, line in enumerate(res.lines):
             S = res.tracks[l]
-            for j in _listed_tracks(S):
+            for j in res.listed_tracks(S):
                 for k, v in enumerate(res.values):
                     s = S[k, j]
                     if np.isnan(s):
@@ -507,10 +428,8 @@ def write_outputs(res: SweepResult, out_dir) -> list[Path]:
                 b["parameter"], repr(b["value"]), b["track"], repr(b["eigenvalue"][0]),
                 repr(b["eigenvalue"][1]), b["kind"], b["stability"], repr(b["xtol"])])
     paths.append(p)
-    from . import plots
-
-    paths.append(plots.root_locus(res, out / "root_locus.png"))
-    paths.append(plots.modes_vs_parameter(res, out / "modes_vs_parameter.png"))
+    paths.append(plots.save(plots.root_locus(res), out / "root_locus.png"))
+    paths.append(plots.save(plots.modes_vs_parameter(res), out / "modes_vs_parameter.png"))
     if len(res.axes) == 2:
-        paths.append(plots.stability_map(res, out / "stability_map.png"))
+        paths.append(plots.save(plots.stability_map(res), out / "stability_map.png"))
     return paths

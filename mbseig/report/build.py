@@ -4,11 +4,11 @@ For each configuration (all of the case's ``[configurations]`` with ``all_config
 summary, the equilibrium (posture, range-of-motion flags, pin reactions, constraint forces,
 actuator effort), the mode table with verdict and margins, the mechanism at equilibrium with
 each mode shape superposed, the pole map and the time-domain check of every mode
-(:mod:`mbseig.timedomain`).  Then the studies declared in ``[[report.studies]]``:
+(:mod:`mbseig.check`).  Then the studies declared in ``[[report.studies]]``:
 
 - ``sweep``: a parameter swept over ``range`` with ``count`` points on ``config`` (optionally
   one line per value of ``lines = {name = [values]}``); its stability boundaries
-  (:func:`mbseig.sweep.run_sweep`) and the parameter value at which the equilibrium leaves the
+  (:func:`mbseig.studies.run_sweep`) and the parameter value at which the equilibrium leaves the
   range of motion (Brent's method on the smallest joint margin, same ``xtol``).
 - ``compare = "constraint_stiffness"``: the eigenvalues of ``config`` with and without the
   constraint-force stiffness Σ λ ∇²Φ.
@@ -20,18 +20,23 @@ also written next to report.md, which links them.
 
 from __future__ import annotations
 
-import base64
-import html
 import math
 from pathlib import Path
 
 import numpy as np
 
-from .case import LinearCase
+from .. import plots
+from ..check import check_modes
+from ..linear import linearize
+from ..modal import modes
+from ..model.linear_case import LinearCase
+from ..statics import equilibrium
+from ..statics.reactions import posture, reactions
+from ..studies import analyze, run_sweep, write_outputs
+from ..studies.point import as_spec
+from .render import render_html, render_markdown
 
-from .errors import CaseError
-
-__all__ = ["build_report", "render_markdown", "render_html", "write_report"]
+__all__ = ["build_report", "write_report"]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -52,10 +57,6 @@ def _fmt(x, digits=6):
 
 
 def _config_blocks(case, config, out_dir, *, run_check, stem):
-    from . import plots
-    from .analysis import analyze
-    from .device import reactions
-
     a = analyze(case, config=config)
     model, eq, lin, md = a.model, a.eq, a.linear, a.modes
     tag = config or "base"
@@ -104,9 +105,9 @@ def _config_blocks(case, config, out_dir, *, run_check, stem):
                          _fmt(p["magnitude"], 5)] for p in rep["pins"]]))
     rows = []
     for c in rep["constraints"]:
-        carried = ("axial force " + _fmt(c["axial_force"], 5) + " N (tension +)" if "axial_force" in c
-                   else "force " + ", ".join(_fmt(x, 5) for x in c["force"]) + " N" if "force" in c
-                   else "torque " + _fmt(c.get("torque"), 5) + " N m")
+        r = c["reaction"]
+        value = r["value"] if isinstance(r["value"], list) else [r["value"]]
+        carried = f"{r['label']} {', '.join(_fmt(x, 5) for x in value)} {r['unit']}".rstrip()
         rows.append([c["element"], ", ".join(_fmt(x, 6) for x in c["multipliers"]), carried])
     if rows:
         blocks.append(("table", ["constraint", "multiplier λ", "reaction"], rows))
@@ -127,12 +128,13 @@ def _config_blocks(case, config, out_dir, *, run_check, stem):
                         f"δ − tol = {min_margin:.4g} (tol per mode: max(10 κ η, 1e-12 |s|))."))
     labels = [f"mode {k + 1}: {md.freq_hz[k]:.4g} Hz, ζ = {md.zeta[k]:.3g}" for k in range(len(md))]
     if not linear_case:
-        img = plots.mechanism_modes(model, eq.q, md.shapes, labels,
-                                    out_dir / f"{stem}_{tag}_shapes.png",
-                                    title=f"{tag}: equilibrium (black) and mode shapes (±, red/blue)")
+        img = plots.save(plots.mechanism_modes(
+            model, eq.q, md.shapes, labels,
+            title=f"{tag}: equilibrium (black) and mode shapes (±, red/blue)"),
+            out_dir / f"{stem}_{tag}_shapes.png")
         blocks.append(("img", img, f"{tag}: mechanism at equilibrium with each mode shape superposed"))
-    img = plots.pole_map(md.eigenvalues, out_dir / f"{stem}_{tag}_poles.png",
-                         title=f"{tag}: pole map (numbers = mode)", stability=md.stability)
+    img = plots.save(plots.pole_map(md.eigenvalues, title=f"{tag}: pole map (numbers = mode)",
+                                    stability=md.stability), out_dir / f"{stem}_{tag}_poles.png")
     blocks.append(("img", img, f"{tag}: pole map"))
     blocks += _check_blocks(a, run_check)
     summary = {"config": tag, "dof": lin.dof, "verdict": md.verdict,
@@ -149,22 +151,13 @@ _SHOWN_PARAMS: set = set()
 
 
 def _describe(case, config):
-    import tomllib
-
-    data = tomllib.loads(Path(case).read_text())
-    return str(data.get("configurations", {}).get(config, {}).get("description", ""))
+    return str(case.configurations.get(config, {}).get("description", ""))
 
 
 def _check_blocks(a, run_check):
     blocks = [("h3", "Time-domain check")]
     if not run_check:
         blocks.append(("p", "Time-domain check not run (report built with --no-check)."))
-        return blocks
-    try:
-        from .timedomain import check_modes
-    except ImportError:
-        blocks.append(("p", "Time-domain check unavailable: this installation has no "
-                            "mbseig.timedomain module; run `mbseig check` once it is installed."))
         return blocks
     res = check_modes(a.model, a.eq, a.linear, a.modes)
     rows = []
@@ -189,9 +182,6 @@ def _check_blocks(a, run_check):
 
 # ---------------------------------------------------------------------------------------------
 def _study_blocks(case, study, out_dir, stem, jobs):
-    from . import plots  # noqa: F401  (sweep outputs use it)
-    from .sweep import run_sweep
-
     kind = "compare" if "compare" in study else "sweep"
     config = study.get("config")
     title = study.get("title", f"{kind} on {config}")
@@ -206,8 +196,6 @@ def _study_blocks(case, study, out_dir, stem, jobs):
         axes.append((lname, np.asarray(lvals, dtype=float)))
     res = run_sweep(case, axes, config=config, jobs=jobs, xtol_rel=float(study.get("xtol_rel", 1e-10)))
     sdir = out_dir / f"{stem}_{config}_{name}"
-    from .sweep import write_outputs
-
     paths = write_outputs(res, sdir)
     xtol = res.tolerances["xtol"]
     rows, crit = [], []
@@ -239,12 +227,8 @@ def _rom_exit(case, config, line, name, values, points, xtol):
     """First parameter value where a joint leaves its range of motion (None if never)."""
     from scipy.optimize import brentq
 
-    from .case import load_case
-    from .device import posture
-    from .statics import equilibrium
-
     def margin(p):
-        model = load_case(case, config=config, **{**line, name: p})
+        model = case.build(config, **{**line, name: p})
         eq = equilibrium(model)
         rows = [r for r in posture(model, eq.q) if r["margin_deg"] is not None]
         worst = min(rows, key=lambda r: r["margin_deg"]) if rows else None
@@ -263,12 +247,7 @@ def _rom_exit(case, config, line, name, values, points, xtol):
 
 
 def _compare_blocks(case, config):
-    from .case import load_case
-    from .linear import linearize
-    from .modal import modes
-    from .statics import equilibrium
-
-    model = load_case(case, config=config)
+    model = case.build(config)
     eq = equilibrium(model)
     with_h = modes(*_mpq(linearize(model, eq)))
     without = modes(*_mpq(linearize(model, eq, constraint_stiffness=False)))
@@ -298,20 +277,19 @@ def _mpq(lin):
 
 # ---------------------------------------------------------------------------------------------
 def build_report(case, *, configs=None, out_dir, run_check=True, jobs=None, studies=True):
-    """Blocks of the report of ``case`` for ``configs`` (list of names; [None] for the base)."""
-    from .case import load_case
-
-    case = str(case)
+    """Blocks of the report of ``case`` (a path or a parsed :class:`~mbseig.casefile.CaseSpec`,
+    read once) for ``configs`` (list of names; [None] for the base)."""
+    case = as_spec(case)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    stem = Path(case).stem
+    stem = case.name
     configs = configs or [None]
-    base = load_case(case, config=configs[0])
+    base = case.build(configs[0])
     blocks = [("h1", f"Stability report: {stem}"),
               ("p", base.description or ""),
-              ("p", f"Case file: `{Path(case).name}`. Configurations: "
+              ("p", f"Case file: `{Path(case.source).name}`. Configurations: "
                     + ", ".join(c or "base" for c in configs) + ". Regenerate with `mbseig report "
-                    + f"cases/{Path(case).name}" + (" --all-configs" if len(configs) > 1 else "") + "`.")]
+                    + f"cases/{Path(case.source).name}" + (" --all-configs" if len(configs) > 1 else "") + "`.")]
     summaries, cfg_blocks = [], []
     for c in configs:
         b, s = _config_blocks(case, c, out_dir, run_check=run_check, stem=stem)
@@ -387,87 +365,19 @@ def _findings(study_sums):
 
 
 # ---------------------------------------------------------------------------------------------
-def render_markdown(blocks, out_dir) -> str:
-    out_dir = Path(out_dir)
-    lines = []
-    for b in blocks:
-        kind = b[0]
-        if kind in ("h1", "h2", "h3"):
-            lines += ["#" * int(kind[1]) + " " + b[1], ""]
-        elif kind == "p":
-            if b[1]:
-                lines += [b[1], ""]
-        elif kind == "pre":
-            lines += ["```", b[1], "```", ""]
-        elif kind == "table":
-            head, rows = b[1], b[2]
-            lines.append("| " + " | ".join(head) + " |")
-            lines.append("|" + "|".join("---" for _ in head) + "|")
-            for r in rows:
-                lines.append("| " + " | ".join(str(x).replace("|", "\\|") for x in r) + " |")
-            lines.append("")
-        elif kind == "img":
-            rel = Path(b[1]).relative_to(out_dir).as_posix()
-            lines += [f"![{b[2]}]({rel})", ""]
-    return "\n".join(lines).rstrip() + "\n"
-
-
-_CSS = """body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;color:#222}
-table{border-collapse:collapse;margin:0.6em 0;font-size:0.85em}td,th{border:1px solid #bbb;padding:2px 6px}
-th{background:#eee}img{max-width:100%;border:1px solid #ddd}figure{margin:1em 0}
-figcaption{font-size:0.85em;color:#555}code{background:#f4f4f4}"""
-
-
-def _inline(text):
-    t = html.escape(text)
-    parts = t.split("`")
-    t = "".join(f"<code>{p}</code>" if i % 2 else p for i, p in enumerate(parts))
-    parts = t.split("**")
-    return "".join(f"<strong>{p}</strong>" if i % 2 else p for i, p in enumerate(parts))
-
-
-def render_html(blocks, title) -> str:
-    out = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
-           f"<title>{html.escape(title)}</title>", f"<style>{_CSS}</style></head><body>"]
-    for b in blocks:
-        kind = b[0]
-        if kind in ("h1", "h2", "h3"):
-            out.append(f"<{kind}>{_inline(b[1])}</{kind}>")
-        elif kind == "p":
-            if b[1]:
-                out.append(f"<p>{_inline(b[1])}</p>")
-        elif kind == "pre":
-            out.append(f"<pre>{html.escape(b[1])}</pre>")
-        elif kind == "table":
-            out.append("<table><tr>" + "".join(f"<th>{_inline(h)}</th>" for h in b[1]) + "</tr>")
-            for r in b[2]:
-                out.append("<tr>" + "".join(f"<td>{_inline(str(x))}</td>" for x in r) + "</tr>")
-            out.append("</table>")
-        elif kind == "img":
-            data = base64.b64encode(Path(b[1]).read_bytes()).decode("ascii")
-            out.append(f'<figure><img src="data:image/png;base64,{data}" alt="{html.escape(b[2])}">'
-                       f"<figcaption>{_inline(b[2])}</figcaption></figure>")
-    out.append("</body></html>")
-    return "\n".join(out) + "\n"
-
-
 def write_report(case, *, out_dir=None, configs=None, all_configs=False, run_check=True,
                  jobs=None, studies=True):
-    """Write report.md and report.html (default directory reports/<case>); returns their paths."""
-    import tomllib
+    """Write report.md and report.html (default directory reports/<case>); returns their paths.
 
-    case = Path(case)
+    ``case`` is a path or a parsed :class:`~mbseig.casefile.CaseSpec`; it is read once."""
+    case = as_spec(case)
     if all_configs:
-        try:
-            data = tomllib.loads(case.read_text())
-        except (OSError, tomllib.TOMLDecodeError) as exc:
-            raise CaseError(f"cannot read case: {exc}", file=str(case)) from None
-        configs = sorted(data.get("configurations", {})) or [None]
-    out = Path(out_dir) if out_dir else Path("reports") / case.stem
+        configs = sorted(case.configurations) or [None]
+    out = Path(out_dir) if out_dir else Path("reports") / case.name
     blocks = build_report(case, configs=configs, out_dir=out, run_check=run_check, jobs=jobs,
                           studies=studies)
     md = out / "report.md"
     md.write_text(render_markdown(blocks, out))
     page = out / "report.html"
-    page.write_text(render_html(blocks, f"Stability report: {case.stem}"))
+    page.write_text(render_html(blocks, f"Stability report: {case.name}"))
     return md, page

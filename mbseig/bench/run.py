@@ -20,8 +20,8 @@ partial    lowest 20 modes of the damped chain, 10⁴ … 10⁶ coordinates, who
 jacobians  analytic K of a 2-D spring network against forward and central differences and the
            complex step.
 constraint linearization with and without the constraint-force stiffness.
-timedomain the time-domain check's integrator (mbseig.timedomain) against loose settings.
-failures   mbseig.failcases: where naive methods give the wrong verdict.
+timedomain the time-domain check's integrator (mbseig.check) against loose settings.
+failures   mbseig.bench.failcases: where naive methods give the wrong verdict.
 """
 
 from __future__ import annotations
@@ -39,10 +39,15 @@ from pathlib import Path
 import numpy as np
 import scipy.linalg as sla
 
-from .qep import solve_qep
-
-ROOT = Path(__file__).resolve().parent.parent
-CASES = ROOT / "cases"
+from ..casefile import load_case
+from ..check import check_modes
+from ..eigen import solve_qep
+from ..linear import linearize
+from ..modal import modes
+from ..statics import equilibrium
+from .cases import case_path
+from .failcases import run_all
+from .report import write_report
 
 __all__ = ["run_bench"]
 
@@ -181,21 +186,19 @@ def _partial_worker(kind, n, n_modes):
 
     import scipy.sparse as sp
 
-    import mbseig
-
     t0 = time.perf_counter()
-    model = mbseig.load_case(CASES / "chain_damped.toml", n=n)
+    model = load_case(case_path("chain_damped"), n=n)
     t1 = time.perf_counter()
-    eq = mbseig.equilibrium(model)
+    eq = equilibrium(model)
     t2 = time.perf_counter()
-    lin = mbseig.linearize(model, eq, sparse=True)
+    lin = linearize(model, eq, sparse=True)
     t3 = time.perf_counter()
     P = lin.P
     if kind == "general":  # one extra dashpot at the first mass: not proportional any more
         P = (P + sp.csr_matrix(([2.0], ([0], [0])), shape=P.shape)).tocsr()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        md = mbseig.modes(lin.M, P, lin.Q, N=lin.N, coordinate_names=lin.coordinate_names, n_modes=n_modes)
+        md = modes(lin.M, P, lin.Q, N=lin.N, coordinate_names=lin.coordinate_names, n_modes=n_modes)
     t4 = time.perf_counter()
     err = rel_error(md.eigenvalues, chain_exact(n)[: n_modes + 5]) if kind == "proportional" else math.nan
     rss = _peak_rss_mb(resource)
@@ -227,7 +230,7 @@ def bench_partial(sizes, repeats, general_max, threads, log, n_modes=20):
                 continue
             runs = []
             for _ in range(repeats):  # medians at every size, 10⁶ included (≈20 s a run)
-                code = f"from mbseig.bench import _partial_worker; _partial_worker({kind!r}, {n}, {n_modes})"
+                code = f"from mbseig.bench.run import _partial_worker; _partial_worker({kind!r}, {n}, {n_modes})"
                 p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
                 if p.returncode != 0:
                     log(f"partial {kind} n={n} failed: {p.stderr.strip().splitlines()[-1:]}")
@@ -308,13 +311,11 @@ def _complex_g(model):
 
 
 def bench_jacobians(sizes, repeats, log, tmpdir):
-    import mbseig
-
     rows = []
     for npts in sizes:
         path = Path(tmpdir) / f"spring_net_{npts}.toml"
         path.write_text(_spring_net_case(npts))
-        model = mbseig.load_case(path)
+        model = load_case(path)
         rng = np.random.default_rng(0)
         q = model.q_init + 0.02 * rng.normal(size=model.n)
         n = model.n
@@ -341,16 +342,14 @@ def bench_jacobians(sizes, repeats, log, tmpdir):
 
 
 def bench_constraint_stiffness(repeats, log):
-    import mbseig
-
     rows = []
     for case, exact in (("pendulum", math.sqrt(9.81)), ("four_bar", None)):
-        model = mbseig.load_case(CASES / f"{case}.toml")
-        eq = mbseig.equilibrium(model)
-        fns = {"with Σλ∇²Φ": lambda: mbseig.linearize(model, eq),
-               "without Σλ∇²Φ": lambda: mbseig.linearize(model, eq, constraint_stiffness=False)}
+        model = load_case(case_path(case))
+        eq = equilibrium(model)
+        fns = {"with Σλ∇²Φ": lambda: linearize(model, eq),
+               "without Σλ∇²Φ": lambda: linearize(model, eq, constraint_stiffness=False)}
         t, out = _median_times(fns, repeats)
-        w = {k: float(mbseig.modes(v.M, v.P, v.Q).omega_n[0]) for k, v in out.items()}
+        w = {k: float(modes(v.M, v.P, v.Q).omega_n[0]) for k, v in out.items()}
         ref = exact if exact is not None else w["with Σλ∇²Φ"]
         for k in fns:
             rows.append({"section": "constraint", "method": f"{case} {k}", "n": model.n, "time": t[k],
@@ -362,26 +361,18 @@ def bench_constraint_stiffness(repeats, log):
 
 def bench_timedomain(log):
     """δ error of the time-domain check against cost, for three integrator settings."""
-    try:
-        from . import timedomain
-    except ImportError:
-        return [], "mbseig.timedomain is not available"
-    import mbseig
-
     rows = []
-    model = mbseig.load_case(CASES / "ziegler_pendulum.toml", config="flutter")
-    eq = mbseig.equilibrium(model)
-    lin = mbseig.linearize(model, eq)
-    md = mbseig.modes(lin.M, lin.P, lin.Q, N=lin.N, coordinate_names=lin.coordinate_names)
+    model = load_case(case_path("ziegler_pendulum"), config="flutter")
+    eq = equilibrium(model)
+    lin = linearize(model, eq)
+    md = modes(lin.M, lin.P, lin.Q, N=lin.N, coordinate_names=lin.coordinate_names)
     settings = [("DOP853 rtol 1e-10 (default)", "DOP853", 1e-10),
                 ("DOP853 rtol 1e-4 (loose explicit)", "DOP853", 1e-4),
                 ("Radau rtol 1e-3 (loose implicit)", "Radau", 1e-3),
                 ("BDF rtol 1e-3 (low-order implicit)", "BDF", 1e-3)]
     for label, method, rtol in settings:
-        if method not in getattr(timedomain, "INTEGRATORS", (method,)):
-            continue
         try:
-            res = timedomain.check_modes(model, eq, lin, md, method=method, ode_rtol=rtol)
+            res = check_modes(model, eq, lin, md, method=method, ode_rtol=rtol)
         except Exception as exc:  # noqa: BLE001 - a failed setting is a result to report
             log(f"timedomain {label}: {exc}")
             continue
@@ -402,7 +393,7 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
     """Run the benchmark and write the report; returns the result dict."""
     import tempfile
 
-    out_dir = Path(out_dir or ROOT / "reports")
+    out_dir = Path(out_dir or "reports")
     out_dir.mkdir(parents=True, exist_ok=True)
     repeats = repeats or (1 if quick else 3)
     all_sections = ("dense", "structured", "partial", "jacobians", "constraint", "timedomain", "failures")
@@ -438,8 +429,6 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
             res["rows"] += rows
             res["timedomain_note"] = why
         if "failures" in sections:
-            from .failcases import run_all
-
             res["failures"] = [{k: getattr(c, k) for k in ("name", "naive_method", "naive", "mbseig",
                                                            "reference", "naive_wrong", "mbseig_right")}
                                for c in run_all()]
@@ -447,8 +436,6 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
         res["rows"] += bench_partial(cfg["partial_sizes"], repeats, cfg["partial_general_max"], threads, log)
     res["elapsed"] = time.perf_counter() - t_start
     (out_dir / "benchmarks.json").write_text(json.dumps(res, indent=1, default=_json_default))
-    from .bench_report import write_report
-
     write_report(res, out_dir)
     return res
 

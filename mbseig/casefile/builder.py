@@ -1,0 +1,444 @@
+"""Multibody case tables → :class:`~mbseig.model.Model` (points, masses, bodies, joints, forces).
+
+One reader entry per element type: :meth:`Builder._joint` and :meth:`Builder._force` read the
+fields and construct the element classes of :mod:`mbseig.model`; nothing is solved here.
+Inverse-statics drivers (``angle_driver`` with ``sets``) are left on the model as pending
+``commands`` for :func:`mbseig.equilibrium` to resolve.  Every problem raises
+:class:`~mbseig.errors.CaseError` naming the element (``joints[2] 'rod'``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..errors import CaseError
+from ..model.affine import Affine, combine
+from ..model.driver import AngleDriver, check_command
+from ..model.elements import (
+    DistanceConstraint,
+    FollowerForce,
+    LinearConstraint,
+    SpringDamper,
+    TorsionalSpringDamper,
+    body_direction,
+    body_mass_matrix,
+    body_point,
+)
+from ..model.system import Model
+from ..numerics import scatter
+from . import flexible
+from .batch import Batcher, LazyPoints
+from .fields import REQUIRED, Fields, expand, template
+from .report_table import parse_report
+
+__all__ = ["Builder"]
+
+_AXES = "xyz"
+
+
+class Builder:
+    def __init__(self, data, name, source, params, description, expected, *, files=None,
+                 mesh=None):
+        self.data, self.name, self.source, self.params = data, name, source, params
+        self.description, self.expected = description, expected
+        self.files = files  # reads matrix files (FE bodies) once: mbseig.casefile.CaseSpec
+        self.mesh = mesh  # beam name or index → element count (mbseig.studies.refine)
+        dim = data.get("dimension")
+        if dim not in (1, 2, 3):
+            raise CaseError(f"dimension must be 1, 2 or 3, got {dim!r}", element="case")
+        self.dim = dim
+        self.point_index: dict[str, np.ndarray] = {}  # name → coordinate indices (−1: fixed)
+        self.point_pos: dict[str, np.ndarray] = {}
+        self.coord_names: list[str] = []
+        self.q_init: list[float] = []
+        self.bodies: dict[str, dict] = {}
+        self.markers: dict[str, Affine] = {}
+        self.named: dict[str, tuple] = {}  # element name → ("joint" | "force", index, label)
+        self.drivers: list = []  # (AngleDriver, [names it sets], fields) for inverse statics
+        self.element_body: dict[str, str] = {}  # attach / follower element label → body
+
+    # -- points ------------------------------------------------------------------------
+    def build(self):
+        batch = Batcher(self)  # vectorized expansion of repeated points, masses and springs
+        for item, label, names in expand("points", self.data.get("points", []), self.params, batch):
+            f = Fields(item, label, names)
+            pname = f.text("name")
+            if pname in self.point_index:
+                raise f.error(f"duplicate point name {pname!r}")
+            if "." in pname:
+                raise f.error(f"point name {pname!r} must not contain '.'")
+            pos = f.vec("position", self.dim)
+            fixed = f.flag("fixed", False)
+            f.done()
+            if fixed:
+                idx = np.full(self.dim, -1, dtype=np.intp)
+            else:
+                idx = np.arange(len(self.q_init), len(self.q_init) + self.dim, dtype=np.intp)
+                self.coord_names += [f"{pname}.{_AXES[a]}" for a in range(self.dim)]
+                self.q_init += list(pos)
+            self.point_index[pname] = idx
+            self.point_pos[pname] = pos
+        flexible.allocate(self, self.mesh)  # beam nodes, FE-body coordinates
+        if not self.q_init:
+            raise CaseError("the model has no free coordinates (every point is fixed)", element="points")
+        self.n = len(self.q_init)
+        q0 = np.array(self.q_init)
+        self.q0 = q0
+        positions = np.array([p for p in self.point_pos.values()])
+        extent = float(np.ptp(positions, axis=0).max()) if len(positions) > 1 else 0.0
+        self.length_scale = extent if extent > 0 else 1.0
+
+        mass_blocks, g_const = [], np.zeros(self.n)
+        gravity = self.gravity()
+        constraints, forces = [], []
+        batch.bind(g_const, forces, gravity)
+
+        for item, label, names in expand("masses", self.data.get("masses", []), self.params, batch):
+            f = Fields(item, label, names)
+            f.raw("name", None)
+            point = self._basic_point(f, f.text("point"))
+            m = f.num("mass", positive=True)
+            f.done()
+            idx = self.point_index[point]
+            free = idx[idx >= 0]
+            mass_blocks.append((free, free, m * np.eye(free.size)))
+            if gravity is not None:
+                g_const[free] += m * gravity[idx >= 0]
+
+        for item, label, names in expand("bodies", self.data.get("bodies", []), self.params):
+            f = Fields(item, label, names)
+            if self.dim != 2:
+                raise f.error("planar rigid bodies need dimension = 2")
+            bname = f.text("name")
+            if bname in self.bodies or bname in self.point_index or "." in bname:
+                raise f.error(f"body name {bname!r} is used already or contains '.'")
+            pts = f.raw("points")
+            if not isinstance(pts, list) or len(pts) != 2 or not all(isinstance(p, str) for p in pts):
+                raise f.error("points must be a list of two basic point names")
+            pi, pj = (self._basic_point(f, template(p, names, f)) for p in pts)
+            if pi == pj:
+                raise f.error("a body needs two different basic points")
+            init_len = float(np.linalg.norm(self.point_pos[pj] - self.point_pos[pi]))
+            L = f.num("length", init_len, positive=True)
+            # mass = 0 (with inertia = 0) is a massless rod: it carries joints, springs and
+            # follower loads while point masses on its basic points carry the inertia
+            m = f.num("mass", nonnegative=True)
+            inertia = f.num("inertia", nonnegative=True)
+            com = f.vec("com", 2, [L / 2, 0.0])
+            marker_table = f.raw("markers", {})
+            f.done()
+            if not isinstance(marker_table, dict):
+                raise f.error("markers must be a table name = [x, y]")
+            ri, rj = self._affine_of(pi), self._affine_of(pj)
+            qb = combine([(1.0, ri), (1.0, rj)], stack=True)
+            Mb = body_mass_matrix(m, inertia, tuple(com), L)
+            mass_blocks.append(self._embed(qb, Mb))
+            if gravity is not None:
+                G = body_point(ri, rj, com, L)
+                np.add.at(g_const, G.idx, G.C.T @ (m * gravity))
+            self.bodies[bname] = {"points": (pi, pj), "length": L, "mass": m, "label": label}
+            for mname, local in marker_table.items():
+                loc = Fields({"local": local}, f"{label}.markers.{mname}", names).vec("local", 2)
+                self.markers[f"{bname}.{mname}"] = body_point(ri, rj, loc, L)
+            rod = DistanceConstraint(f"{label} (rigid length)", rj - ri, L)
+            self._add_constraint(constraints, rod, f)
+
+        mass_elements = []  # configuration-dependent masses (co-rotational beams)
+        flexible_record = flexible.assemble(self, forces, constraints, mass_blocks, mass_elements,
+                                     g_const, gravity)
+
+        for item, label, names in expand("joints", self.data.get("joints", []), self.params):
+            before = len(constraints)
+            self._joint(Fields(item, label, names), constraints)
+            self._remember(item, "joint", constraints, before, label)
+
+        for item, label, names in expand("forces", self.data.get("forces", []), self.params, batch):
+            before = len(forces)
+            self._force(Fields(item, label, names), forces, g_const)
+            self._remember(item, "force", forces, before, label)
+
+        mass = sp.csr_matrix((self.n, self.n))
+        if mass_blocks:
+            mass = scatter(self.n, self.n, mass_blocks)
+        rows, vals = batch.mass_coo()
+        if rows.size:
+            mass = mass + sp.csr_matrix((vals, (rows, rows)), shape=(self.n, self.n))
+        points = LazyPoints(self.point_index, self.point_pos, self.markers)
+        report = {}
+        if "report" in self.data:
+            report = parse_report(self.data["report"], self)
+
+        commands = tuple((d, self._driver_targets(names, f)) for d, names, f in self.drivers)
+        for driver, targets in commands:  # checked now; resolved by mbseig.equilibrium
+            check_command(driver, targets, forces, constraints)
+        return Model(
+            name=self.name, source=self.source, parameters=dict(self.params), dimension=self.dim,
+            coordinate_names=tuple(self.coord_names), q_init=q0, mass=mass, g_const=g_const,
+            forces=tuple(forces), constraints=tuple(constraints), points=points,
+            bodies=self.bodies, length_scale=self.length_scale, description=self.description,
+            expected=self.expected, report=report, commands=commands,
+            mass_elements=tuple(mass_elements), flexible=flexible_record,
+        )
+
+    def _remember(self, item, kind, elements, before, label):
+        name = item.get("name")
+        if isinstance(name, str) and len(elements) == before + 1:
+            self.named[name] = (kind, before, label)
+
+    def _driver_targets(self, names, f):
+        """Elements named by a driver's ``sets``; names of disabled elements are skipped."""
+        declared = {item.get("name") for sec in ("joints", "forces")
+                    for item in self.data.get(sec, []) if isinstance(item, dict)}
+        targets = []
+        for nm in names:
+            if nm in self.named:
+                targets.append(self.named[nm])
+            elif nm not in declared:
+                raise f.error(f"sets unknown element {nm!r} (a named spring or distance joint)")
+        return targets
+
+    def gravity(self):
+        g = self.data.get("gravity")
+        if g is None:
+            return None
+        f = Fields({"gravity": g}, "gravity", self.params)
+        return f.vec("gravity", self.dim)
+
+    def _embed(self, aff, local):
+        """A block on the components of ``aff`` mapped to its free coordinates: Cᵀ B C."""
+        return (aff.idx, aff.idx, aff.C.T @ local @ aff.C)
+
+    # -- references ----------------------------------------------------------------------
+    def _basic_point(self, f, pname):
+        if pname not in self.point_index:
+            raise f.error(f"unknown point {pname!r}")
+        return pname
+
+    def _affine_of(self, pname):
+        return Affine.select(self.point_index[pname], self.point_pos[pname])
+
+    def _point_ref(self, f, key):
+        """A basic point name, a body marker 'body.marker', or {body = ..., local = [x, y]}."""
+        ref = f.raw(key)
+        if isinstance(ref, str):
+            ref = template(ref, f.names, f)
+            if ref in self.point_index:
+                return self._affine_of(ref)
+            if ref in self.markers:
+                return self.markers[ref]
+            raise f.error(f"unknown point {ref!r} in {key}")
+        if isinstance(ref, dict):
+            sub = Fields(ref, f"{f.label}.{key}", f.names)
+            body = self.body(sub, sub.text("body"))
+            local = sub.vec("local", 2)
+            sub.done()
+            return self._body_point(body, local)
+        raise f.error(f"{key} must be a point name or a table {{body, local}}")
+
+    def body(self, f, bname):
+        if bname not in self.bodies:
+            raise f.error(f"unknown body {bname!r}")
+        return bname
+
+    def _body_point(self, bname, local):
+        b = self.bodies[bname]
+        pi, pj = b["points"]
+        return body_point(self._affine_of(pi), self._affine_of(pj), local, b["length"])
+
+    def _body_dir(self, bname, local=(1.0, 0.0)):
+        b = self.bodies[bname]
+        pi, pj = b["points"]
+        return body_direction(self._affine_of(pi), self._affine_of(pj), local, b["length"])
+
+    def _two_points(self, f):
+        pts = f.raw("points")
+        if not isinstance(pts, list) or len(pts) != 2:
+            raise f.error("points must be a list of two point references")
+        f.t = {**f.t, "_a": pts[0], "_b": pts[1]}
+        a, b = self._point_ref(f, "_a"), self._point_ref(f, "_b")
+        f.used |= {"_a", "_b"}
+        return a, b
+
+    def _add_constraint(self, constraints, c, f):
+        if c.idx.size == 0:
+            if np.any(np.abs(c.phi(self.q0)) > 1e-12 * c.scale()):
+                raise f.error("constraint between fixed points cannot be satisfied")
+            return
+        constraints.append(c)
+
+    # -- joints --------------------------------------------------------------------------
+    def _joint(self, f, constraints):
+        kind = f.text("type")
+        name = f.text("name", None)
+        if kind == "distance":
+            a, b = self._two_points(f)
+            diff = b - a
+            L = f.num("length", float(np.linalg.norm(diff(self.q0))), positive=True)
+            f.done()
+            self._add_constraint(constraints, DistanceConstraint(f.label, diff, L), f)
+        elif kind == "fixed":
+            p = self._point_ref(f, "point")
+            target = f.vec("position", self.dim, p(self.q0))
+            f.done()
+            c = LinearConstraint(f.label, p, np.eye(self.dim), target, self.length_scale)
+            self._add_constraint(constraints, c, f)
+        elif kind in ("slider", "point_on_line"):
+            if self.dim == 1:
+                raise f.error("a slider needs dimension 2 or 3")
+            p = self._point_ref(f, "point")
+            origin = f.vec("origin", self.dim, p(self.q0))
+            direction = f.vec("direction", self.dim)
+            f.done()
+            norm = np.linalg.norm(direction)
+            if norm == 0:
+                raise f.error("direction must not be zero")
+            # rows: an orthonormal basis of the directions normal to the line
+            G = _normal_basis(direction / norm)
+            c = LinearConstraint(f.label, p, G, G @ origin, self.length_scale)
+            self._add_constraint(constraints, c, f)
+        elif kind == "attach":
+            if self.dim != 2:
+                raise f.error("attach needs dimension = 2 (planar bodies)")
+            p = self._point_ref(f, "point")
+            body = self.body(f, f.text("body"))
+            b = self.bodies[body]
+            local = f.vec("local", 2, None)
+            f.done()
+            if local is None:
+                local = _local_coordinates(self, body, p(self.q0))
+            diff = p - self._body_point(body, local)
+            c = LinearConstraint(f.label, diff, np.eye(2), np.zeros(2), self.length_scale)
+            self.element_body[f.label] = body
+            self._add_constraint(constraints, c, f)
+        elif kind == "angle_driver":
+            self._angle_driver(f, constraints)
+        else:
+            raise f.error(
+                f"unknown joint type {kind!r} (distance, fixed, slider, attach, angle_driver)")
+        del name
+
+    def _angle_driver(self, f, constraints):
+        """Prescribed relative angle (driving constraint); with ``sets`` an inverse-statics
+        command (see :mod:`mbseig.inverse_statics`), otherwise a permanent constraint."""
+        if self.dim != 2:
+            raise f.error("angle_driver needs dimension = 2")
+        stacked, sense = self.angle_pair(f)
+        angle = f.num("angle")
+        sets = f.raw("sets", [])
+        f.done()
+        if isinstance(sets, str):
+            sets = [sets]
+        if not isinstance(sets, list) or not all(isinstance(x, str) for x in sets):
+            raise f.error("sets must be an element name or a list of names")
+        if stacked.idx.size == 0:
+            raise f.error("angle_driver between two fixed directions")
+        driver = AngleDriver(f.label, stacked, angle, sense)
+        if sets:
+            self.drivers.append((driver, sets, f))
+        else:
+            constraints.append(driver)
+
+    def angle_pair(self, f):
+        """Stacked directions [a; b] of ``bodies = [b1 or "ground", b2]`` and the sense (±1)."""
+        bodies = f.raw("bodies")
+        if not isinstance(bodies, list) or len(bodies) != 2:
+            raise f.error("bodies must be [body1, body2]; use \"ground\" for the fixed frame")
+        dirs = []
+        for bname in bodies:
+            bname = template(str(bname), f.names, f)
+            if bname == "ground":
+                dirs.append(Affine.constant(f.vec("ground_direction", 2, [1.0, 0.0])))
+            else:
+                dirs.append(self._body_dir(self.body(f, bname)))
+        sense_txt = f.text("sense", "ccw")
+        if sense_txt not in ("ccw", "cw"):
+            raise f.error("sense must be 'ccw' or 'cw'")
+        return combine([(1.0, dirs[0]), (1.0, dirs[1])], stack=True), (1.0 if sense_txt == "ccw" else -1.0)
+
+    # -- forces --------------------------------------------------------------------------
+    def _force(self, f, forces, g_const):
+        kind = f.text("type")
+        f.text("name", None)
+        if kind in ("spring", "damper", "spring_damper"):
+            a, b = self._two_points(f)
+            diff = b - a
+            d0 = diff(self.q0)
+            init = float(d0[0]) if self.dim == 1 else float(np.linalg.norm(d0))
+            k = f.num("stiffness", 0.0 if kind == "damper" else REQUIRED, nonnegative=True)
+            # active = true: a controlled actuator whose force loop may inject energy, so its
+            # damping may be negative (stability studies); passive elements must dissipate
+            active = f.flag("active", False)
+            c = f.num("damping", 0.0 if kind == "spring" else REQUIRED, nonnegative=not active)
+            l0 = f.num("free_length", init)
+            f.done()
+            if self.dim > 1 and l0 < 0:
+                raise f.error("free_length must not be negative")
+            if diff.idx.size:
+                forces.append(SpringDamper(f.label, diff, k, l0, c))
+        elif kind == "torsional":
+            if self.dim != 2:
+                raise f.error("torsional springs need dimension = 2")
+            bodies = f.raw("bodies")
+            if not isinstance(bodies, list) or len(bodies) != 2:
+                raise f.error("bodies must be [body1, body2]; use \"ground\" for the fixed frame")
+            dirs = []
+            for k_, bname in enumerate(bodies):
+                bname = template(str(bname), f.names, f)
+                if bname == "ground":
+                    gdir = f.vec("ground_direction", 2, [1.0, 0.0])
+                    dirs.append(Affine.constant(gdir))
+                else:
+                    dirs.append(self._body_dir(self.body(f, bname)))
+            k = f.num("stiffness", 0.0, nonnegative=True)
+            c = f.num("damping", 0.0, nonnegative=True)
+            sense_txt = f.text("sense", "ccw")
+            if sense_txt not in ("ccw", "cw"):
+                raise f.error("sense must be 'ccw' or 'cw'")
+            sense = 1.0 if sense_txt == "ccw" else -1.0
+            stacked = combine([(1.0, dirs[0]), (1.0, dirs[1])], stack=True)
+            probe = TorsionalSpringDamper(f.label, stacked, k, c, 0.0, sense)
+            a0 = f.num("angle0", probe.angle(self.q0) if stacked.idx.size else 0.0)
+            f.done()
+            if stacked.idx.size:
+                forces.append(TorsionalSpringDamper(f.label, stacked, k, c, a0, sense))
+        elif kind == "force":
+            p = self._point_ref(f, "point")
+            vec = f.vec("vector", self.dim)
+            f.done()
+            np.add.at(g_const, p.idx, p.C.T @ vec)
+        elif kind == "follower":
+            if self.dim != 2:
+                raise f.error("follower forces need dimension = 2")
+            body = self.body(f, f.text("body"))
+            at = f.vec("at", 2)
+            direction = f.vec("direction", 2)
+            mag = f.num("magnitude")
+            f.done()
+            nd = np.linalg.norm(direction)
+            if nd == 0:
+                raise f.error("direction must not be zero")
+            p = self._body_point(body, at)
+            u = self._body_dir(body, direction / nd)
+            self.element_body[f.label] = body
+            forces.append(FollowerForce(f.label, combine([(1.0, p), (1.0, u)], stack=True), mag))
+        else:
+            raise f.error(
+                f"unknown force type {kind!r} (spring, damper, spring_damper, torsional, force, follower)"
+            )
+
+
+def _normal_basis(u):
+    """Rows spanning the orthogonal complement of the unit vector u."""
+    _, _, vt = np.linalg.svd(u[None, :])
+    return vt[1:]
+
+
+def _local_coordinates(builder, body, r):
+    b = builder.bodies[body]
+    pi, pj = b["points"]
+    ri, rj = builder.point_pos[pi], builder.point_pos[pj]
+    L = np.linalg.norm(rj - ri)
+    e = (rj - ri) / L
+    n = np.array([-e[1], e[0]])
+    return np.array([(r - ri) @ e, (r - ri) @ n]) * (b["length"] / L)

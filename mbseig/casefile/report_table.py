@@ -1,0 +1,92 @@
+"""The ``[report]`` table of a case (README, "Case files"): joint angles with their range of
+motion, pins, actuator elements and studies, validated against the model being built."""
+
+from __future__ import annotations
+
+from ..errors import CaseError
+from ..model.driver import AngleDriver
+from .fields import Fields
+
+__all__ = ["parse_report"]
+
+_REPORT_KEYS = {"actuator", "angles", "pins", "studies"}
+_STUDY_KEYS = {"title", "config", "sweep", "range", "count", "lines", "xtol_rel", "compare"}
+
+
+def parse_report(table, builder) -> dict:
+    """Validate a ``[report]`` table against the model being built (``case._Builder``)."""
+    if not isinstance(table, dict):
+        raise CaseError("[report] must be a table", element="report")
+    unknown = sorted(set(table) - _REPORT_KEYS)
+    if unknown:
+        raise CaseError(f"unknown field {unknown[0]!r} ({', '.join(sorted(_REPORT_KEYS))})",
+                        element="report")
+    names = builder.params
+    out = {"angles": [], "pins": [], "actuator": [], "studies": [], "gravity": builder.gravity(),
+           "element_body": dict(builder.element_body)}
+    act = table.get("actuator", [])
+    act = [act] if isinstance(act, str) else act
+    if not isinstance(act, list) or not all(isinstance(a, str) for a in act):
+        raise CaseError("actuator must be an element name or a list of names", element="report.actuator")
+    declared = {item.get("name") for sec in ("joints", "forces")
+                for item in builder.data.get(sec, []) if isinstance(item, dict)}
+    for a in act:
+        if a in builder.named:
+            out["actuator"].append(builder.named[a])
+        elif a not in declared:
+            raise CaseError(f"unknown element {a!r}", element="report.actuator")
+    for k, item in enumerate(_table_list(table.get("angles", []), "report.angles")):
+        f = Fields(item, f"report.angles[{k}]", names)
+        name = f.text("name")
+        stacked, sense = builder.angle_pair(f)
+        rng = f.vec("range", 2, None)
+        f.done()
+        if rng is not None and not rng[0] < rng[1]:
+            raise f.error(f"range must be [min, max] in degrees with min < max, got {list(rng)}")
+        out["angles"].append({"name": name, "driver": AngleDriver(name, stacked, 0.0, sense),
+                              "range_deg": None if rng is None else (float(rng[0]), float(rng[1]))})
+    for k, item in enumerate(_table_list(table.get("pins", []), "report.pins")):
+        f = Fields(item, f"report.pins[{k}]", names)
+        name = f.text("name")
+        point = f.text("point")
+        outboard = f.raw("outboard")
+        f.done()
+        if point not in builder.point_index:
+            raise f.error(f"unknown point {point!r}")
+        if not isinstance(outboard, list) or not outboard:
+            raise f.error("outboard must be a non-empty list of body names")
+        for b in outboard:
+            builder.body(f, b)
+        out["pins"].append({"name": name, "point": point, "outboard": list(outboard)})
+    configs = builder.data.get("configurations", {})
+    for k, item in enumerate(_table_list(table.get("studies", []), "report.studies")):
+        label = f"report.studies[{k}]"
+        unknown = sorted(set(item) - _STUDY_KEYS)
+        if unknown:
+            raise CaseError(f"unknown field {unknown[0]!r}", element=label)
+        if item.get("config") is not None and item["config"] not in configs:
+            raise CaseError(f"unknown configuration {item['config']!r}", element=label)
+        if "compare" in item:
+            if item["compare"] != "constraint_stiffness":
+                raise CaseError("compare must be \"constraint_stiffness\"", element=label)
+        else:
+            if item.get("sweep") not in builder.params:
+                raise CaseError(f"sweep must name a parameter, got {item.get('sweep')!r}", element=label)
+            rng, count = item.get("range"), item.get("count")
+            if (not isinstance(rng, list) or len(rng) != 2
+                    or not all(isinstance(x, (int, float)) for x in rng) or rng[0] == rng[1]):
+                raise CaseError("range must be [start, stop] with start ≠ stop", element=label)
+            if not isinstance(count, int) or count < 2:
+                raise CaseError("count must be an integer ≥ 2", element=label)
+            lines = item.get("lines", {})
+            if not isinstance(lines, dict) or not all(
+                    n in builder.params and isinstance(v, list) and v for n, v in lines.items()):
+                raise CaseError("lines must be {parameter = [values, ...]}", element=label)
+        out["studies"].append(dict(item))
+    return out
+
+
+def _table_list(value, label):
+    if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
+        raise CaseError("must be an array of tables", element=label)
+    return value

@@ -1,0 +1,95 @@
+"""The solver contract and the one registry of eigensolver paths (docs/design.md, "Solvers").
+
+A path is a :class:`SolverPath`: a name, whether it computes a partial spectrum, the structure
+it needs, and a function ``solve(M, P, Q, **options) -> QEPSolution``.  :func:`register` adds
+one (with the function that runs it); :data:`SOLVERS` holds them all, dense and partial; :func:`mbseig.eigen.solve` dispatches by
+the path's ``partial`` flag, never by its name.  Every path returns the same result type.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+__all__ = ["QEPSolution", "SolverPath", "SOLVERS", "register", "dense_solvers", "partial_solvers"]
+
+
+@dataclass(frozen=True, eq=False)
+class QEPSolution:
+    """Finite eigenvalues of (M s² + P s + Q) x = 0 with their vectors and accuracy measures.
+
+    eigenvalues : s (complex), all finite ones of the path (a partial path: those requested).
+    vectors : unit right vectors x, one column per eigenvalue (the coordinates of M).
+    left_vectors : conjugated left vectors ȳ (yᴴ = columns transposed), or None where the path
+        did not form them.  For symmetric M, P, Q, y = x̄ exactly, and ``left_vectors`` is x.
+    backward_error, condition : η and κ per pair (:mod:`mbseig.eigen.measures`).
+    solver, reason : the path that ran and why it was chosen.
+    n_infinite : infinite eigenvalues dropped (singular M).
+    norms : (‖M‖_F, ‖P‖_F, ‖Q‖_F) of the problem the pairs were checked on.
+    details : path-specific figures (scaling γ, shift, ARPACK sizes, ...).
+    real_error : a sharper error bound of Re s where the path knows one (proportional damping).
+    partial : True when only part of the spectrum was computed.
+    """
+
+    eigenvalues: np.ndarray
+    vectors: np.ndarray
+    backward_error: np.ndarray
+    condition: np.ndarray
+    solver: str
+    reason: str
+    n_infinite: int = 0
+    norms: tuple = (0.0, 0.0, 0.0)
+    details: dict = field(default_factory=dict)
+    real_error: object = None
+    left_vectors: object = None
+    partial: bool = False
+
+
+@dataclass(frozen=True)
+class SolverPath:
+    """One eigensolver path: ``solve(M, P, Q, **options) -> QEPSolution``."""
+
+    name: str
+    partial: bool
+    needs: str  # the structure it requires, in words (shown when it does not apply)
+    solve: Callable = field(repr=False, compare=False)
+
+
+SOLVERS: dict[str, SolverPath] = {}
+
+
+def register(name, *, partial, needs, driver):
+    """Add the path ``name`` to :data:`SOLVERS`; ``driver(M, P, Q, solver=name, **options)``
+    is the function that runs it (:func:`mbseig.eigen.solve_qep` or ``solve_partial``)."""
+    SOLVERS[name] = SolverPath(name, partial, needs, functools.partial(driver, solver=name))
+
+
+def dense_solvers():
+    return [k for k, v in SOLVERS.items() if not v.partial]
+
+
+def partial_solvers():
+    return [k for k, v in SOLVERS.items() if v.partial]
+
+
+def requested_path(solver, auto, reason, extras, family, what="solver"):
+    """(name, reason, extras) of the path to run: ``auto``'s choice, or the requested one when
+    the structure allows it (eigh needs P = 0, proportional needs Rayleigh damping)."""
+    from ..errors import SolverError
+
+    if solver == "auto":
+        return auto, reason, extras
+    if solver not in family:
+        raise SolverError(f"unknown {what} {solver!r} (auto, {', '.join(family)})")
+    kind, auto_kind = solver.removeprefix("partial-"), auto.removeprefix("partial-")
+    structured = ("eigh", "proportional")
+    if kind in structured and auto_kind not in structured:
+        raise SolverError(f"solver {solver!r} does not apply: {reason}")
+    if kind == "eigh" and auto_kind == "proportional":
+        raise SolverError(f"solver {solver!r} does not apply: P is not zero")
+    if kind == "proportional" and auto_kind == "eigh":
+        extras = {"alpha": 0.0, "beta": 0.0}
+    return solver, f"requested ({reason})", extras

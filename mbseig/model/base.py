@@ -1,0 +1,82 @@
+"""The element contract: what every constraint, force and configuration-dependent mass provides.
+
+The assembled model (:class:`~mbseig.model.system.Model`) knows elements only through these
+classes; adding a joint or a force is one subclass here (or in :mod:`~mbseig.model.elements`)
+plus one reader entry in :mod:`mbseig.casefile.builder`.  All arrays are local: an element acts
+on the coordinates ``q[idx]`` and returns vectors and matrices on those (docs/design.md,
+"Elements").
+
+Constraint (m_e rows of Φ(q) = 0)::
+
+    phi(q)          Φ_e(q)                      (m_e,)
+    jac(q)          ∂Φ_e/∂q[idx]                (m_e, |idx|)
+    hess(q, λ)      Σ_k λ_k ∇²Φ_e,k             (|idx|, |idx|)   stiffness of the constraint force
+    gamma(q, q̇)     −(Φ_q q̇)_q q̇                (m_e,)           so that Φ_q q̈ = γ
+    scale()         typical magnitude of Φ_e, to judge residuals
+    reaction(q, λ)  what the multipliers carry, in the user's terms (key, label, value, unit)
+
+Force (generalized force g_e(q, q̇) on q[idx])::
+
+    force(q, q̇)       g_e                                       (|idx|,)
+    jacobians(q, q̇)   (K_e, C_e) = (−∂g_e/∂q, −∂g_e/∂q̇)         (|idx|, |idx|) each
+
+A batch of identical elements (:class:`~mbseig.model.batched.SpringDamperSet`) may instead offer
+``add_force(g, q, q̇)`` and ``jacobian_coo(q, q̇)`` on the full vectors; the model uses those when
+present.  A configuration-dependent mass (a co-rotational beam) also provides ``mass(q)`` on idx.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["Constraint", "Force"]
+
+
+class Constraint:
+    """Base class of constraints (module docstring); subclasses are frozen dataclasses with at
+    least ``name`` and the methods below."""
+
+    name: str
+    n_eq: int = 1
+
+    @property
+    def idx(self) -> np.ndarray:
+        raise NotImplementedError
+
+    def phi(self, q):
+        raise NotImplementedError
+
+    def jac(self, q):
+        raise NotImplementedError
+
+    def hess(self, q, lam):
+        raise NotImplementedError
+
+    def gamma(self, q, qd):
+        raise NotImplementedError
+
+    def scale(self) -> float:
+        return 1.0
+
+    def reaction(self, q, lam) -> dict:
+        """What the multipliers carry, for reports: ``{"key", "label", "value", "unit"}`` with
+        ``key`` a field name (``axial_force``, ``force``, ``torque``, ...), ``value`` a number or
+        a list.  The default is the multipliers themselves."""
+        return {"key": "multiplier", "label": "multiplier", "value": [float(x) for x in lam],
+                "unit": ""}
+
+
+class Force:
+    """Base class of force elements (module docstring)."""
+
+    name: str
+
+    @property
+    def idx(self) -> np.ndarray:
+        raise NotImplementedError
+
+    def force(self, q, qd):
+        raise NotImplementedError
+
+    def jacobians(self, q, qd):
+        raise NotImplementedError

@@ -1,0 +1,90 @@
+"""Small numerical helpers shared by every stage (the bottom layer, above :mod:`mbseig.errors`).
+
+- sparse assembly: :func:`scatter` (dense local blocks) and :func:`coo_sum` (COO triplets);
+- the rank of a constraint Jacobian and the orthonormal basis of its null space, one rule for
+  the whole pipeline (docs/design.md, "Tolerances"): σ_k counts when σ_k > rank_tol · σ_max;
+- column norms of real or complex blocks without complex temporaries;
+- :func:`jsonable`, strict-JSON values (non-finite floats become null).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+__all__ = ["scatter", "coo_sum", "dense", "constraint_rank", "null_space_basis", "colnorm",
+           "unit_columns", "jsonable"]
+
+
+def scatter(n_rows, n_cols, blocks):
+    """Sum of dense local blocks (row indices, column indices, values) into a CSR matrix."""
+    triplets = []
+    for r, c, v in blocks:
+        if np.size(v) == 0:
+            continue
+        rr, cc = np.meshgrid(r, c, indexing="ij")
+        triplets.append((rr.ravel(), cc.ravel(), np.asarray(v, dtype=float).ravel()))
+    return coo_sum(n_rows, n_cols, triplets)
+
+
+def coo_sum(n_rows, n_cols, triplets):
+    """Sum of (rows, cols, values) triplets as CSR."""
+    triplets = [t for t in triplets if t[0].size]
+    if not triplets:
+        return sp.csr_matrix((n_rows, n_cols))
+    r, c, v = (np.concatenate(x) for x in zip(*triplets))
+    return sp.coo_matrix((v, (r, c)), shape=(n_rows, n_cols)).tocsr()
+
+
+def dense(A) -> np.ndarray:
+    """A dense float array of a dense or sparse matrix."""
+    return A.toarray() if sp.issparse(A) else np.asarray(A, dtype=float)
+
+
+def constraint_rank(Phi_q, rank_tol):
+    """(rank, singular values) of Φ_q with the relative tolerance rank_tol · σ_max."""
+    if Phi_q.shape[0] == 0:
+        return 0, np.zeros(0)
+    s = sla.svd(dense(Phi_q), compute_uv=False)
+    return _rank(s, rank_tol), s
+
+
+def _rank(s, rank_tol):
+    return int(np.sum(s > rank_tol * s[0])) if s.size and s[0] > 0 else 0
+
+
+def null_space_basis(Phi_q, n, rank_tol):
+    """(N, rank): orthonormal basis of null(Φ_q) from the SVD, rank as :func:`constraint_rank`."""
+    if Phi_q.shape[0] == 0:
+        return np.eye(n), 0
+    _, s, vt = sla.svd(dense(Phi_q), full_matrices=True)
+    rank = _rank(s, rank_tol)
+    return vt[rank:].T.copy(), rank
+
+
+def colnorm(X):
+    """Column 2-norms of a real or complex block without complex temporaries."""
+    if np.iscomplexobj(X):
+        return np.sqrt(np.einsum("ij,ij->j", X.real, X.real) + np.einsum("ij,ij->j", X.imag, X.imag))
+    return np.sqrt(np.einsum("ij,ij->j", X, X))
+
+
+def unit_columns(X):
+    """X with unit columns (zero columns left as they are)."""
+    nrm = colnorm(X)
+    nrm[nrm == 0] = 1.0
+    return X / nrm
+
+
+def jsonable(x):
+    """Floats with non-finite values as None, so that the output is strict JSON."""
+    if isinstance(x, float):
+        return x if math.isfinite(x) else None
+    if isinstance(x, dict):
+        return {k: jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [jsonable(v) for v in x]
+    return x

@@ -1,0 +1,79 @@
+"""The whole pipeline on one case and parameter point, and its JSON form (docs/design.md §8).
+
+    case ─► Model ─► equilibrium ─► linearize ─► modes        (analyze)
+
+``case`` is a path (read once here), a parsed :class:`~mbseig.casefile.CaseSpec` (a model
+factory) or an already built model.
+"""
+
+from __future__ import annotations
+
+from ..numerics import jsonable
+from .point import Analysis, analyze_model, as_spec
+from .refine import refine_analysis
+
+__all__ = ["Analysis", "analyze", "analyze_model", "modes_json", "as_spec"]
+
+
+def analyze(case=None, *, config=None, params=None, solver="auto", constraint_stiffness=True,
+            modes_options=None, model=None, refine=None) -> Analysis:
+    """Run the pipeline on ``case`` (a path or a :class:`CaseSpec`), or on a built ``model``.
+
+    refine : {"modes", "f_max", "accuracy", "max_elements"} to refine the case's
+        ``elements = "auto"`` beams for those modes (:mod:`mbseig.studies.refine`); a case's own
+        ``[refinement]`` table does the same.
+    """
+    opts = {"solver": solver, "constraint_stiffness": constraint_stiffness,
+            "modes_options": modes_options}
+    if model is not None:
+        return analyze_model(model, **opts)
+    spec = as_spec(case)
+    model = spec.build(config, **(params or {}))
+    if refine or (getattr(model, "flexible", None) or {}).get("refinement"):
+        return refine_analysis(spec, config=config, params=params, request=refine, model=model,
+                               **opts)
+    return analyze_model(model, **opts)
+
+
+def modes_json(a: Analysis) -> dict:
+    """The fixed ``mbseig modes --json`` object (extra keys only extend it)."""
+    md, lin, eq, model = a.modes, a.linear, a.eq, a.model
+    out = {
+        "case": model.name,
+        "parameters": dict(model.parameters),
+        "n_coordinates": int(model.n),
+        "n_constraints": int(model.n_constraints),
+        "n_redundant": int(eq.n_redundant),
+        "dof": int(lin.dof),
+        "solver": md.solver,
+        "equilibrium": {"residual": float(eq.residual), "iterations": int(eq.iterations)},
+        "verdict": md.verdict,
+        "modes": [],
+        "solver_reason": md.solver_reason,
+        "n_infinite": int(md.n_infinite),
+        "redundant_constraints": list(eq.redundant),
+        "tolerances": {k: float(v) for k, v in md.tolerances.items() if isinstance(v, (int, float))},
+    }
+    flexible = (getattr(model, "flexible", None) or {}).get("bodies")
+    if flexible:  # extension: theory, slenderness and mesh of each beam / FE body
+        out["flexible_bodies"] = {nm: dict(r) for nm, r in flexible.items()}
+    if a.refinement is not None:
+        out["refinement"] = a.refinement.as_dict()
+    for k in range(len(md)):
+        s = md.eigenvalues[k]
+        out["modes"].append({
+            "index": k + 1,
+            "eigenvalue": [float(s.real), float(s.imag)],
+            "delta": float(md.delta[k]),
+            "omega_n": float(md.omega_n[k]),
+            "omega_d": float(md.omega_d[k]),
+            "freq_hz": float(md.freq_hz[k]),
+            "zeta": float(md.zeta[k]),
+            "stability": md.stability[k],
+            "kind": md.kind[k],
+            "backward_error": float(md.backward_error[k]),
+            "condition": float(md.condition[k]),
+            "tolerance": float(md.tolerance[k]),
+            "dominant": [[nm, float(v)] for nm, v in md.dominant[k]],
+        })
+    return jsonable(out)
