@@ -21,15 +21,14 @@ independent vector; sorted by ω_n, then δ, then ω (deterministic).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 import warnings
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from .eigen import SOLVERS, EPS, solve_partial, solve_qep
+from .eigen import EPS, SOLVERS, solve_partial, solve_qep
 from .errors import SolverError
 
 __all__ = ["Modes", "modes", "STABILITY_ORDER", "tolerances", "stability", "worst"]

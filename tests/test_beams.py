@@ -17,11 +17,11 @@ import scipy.optimize as so
 from conftest import CASES, write_case
 
 import mbseig
-from mbseig.studies import analyze
-from mbseig.errors import CaseError
 from mbseig.casefile.flexible import BeamTheoryWarning
+from mbseig.errors import CaseError
 from mbseig.model.affine import Affine
 from mbseig.model.beams import THEORIES, BeamElement, BeamSection, RotationLock
+from mbseig.studies import analyze
 
 RTOL_JAC = 1e-6  # central differences, step 1e-7 on O(1) coordinates
 ACCURACY = 1e-3  # the accuracy the cases request and the issue asks for (0.1 %)

@@ -6,8 +6,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mbseig.errors import ExpressionError
 from mbseig.casefile.expr import evaluate
+from mbseig.errors import ExpressionError
 
 numbers = st.floats(-1e3, 1e3, allow_nan=False).map(lambda x: round(x, 6))
 

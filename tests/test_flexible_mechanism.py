@@ -11,9 +11,9 @@ import pytest
 from conftest import CASES, write_case
 
 import mbseig
-from mbseig.studies import analyze
 from mbseig.errors import CaseError
 from mbseig.model.fe_body import export_fe_body
+from mbseig.studies import analyze
 
 FLEX = CASES / "four_bar_flexible.toml"
 

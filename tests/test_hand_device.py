@@ -14,10 +14,10 @@ import pytest
 from conftest import CASES
 
 import mbseig
-from mbseig.studies import analyze
 from mbseig.check import check_modes
-from mbseig.statics.reactions import pin_reactions, posture, reactions, rom_flags
 from mbseig.errors import CaseError
+from mbseig.statics.reactions import pin_reactions, posture, reactions, rom_flags
+from mbseig.studies import analyze
 
 CASE = CASES / "hand_device.toml"
 

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 from conftest import write_case
 
-from mbseig.studies import analyze
 from mbseig.errors import EquilibriumError
+from mbseig.studies import analyze
 
 CASE = """
 schema_version = 1

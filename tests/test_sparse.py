@@ -14,8 +14,8 @@ from conftest import CASES, write_case
 import mbseig
 from mbseig.casefile import batch as case_batch
 from mbseig.cli import main
-from mbseig.errors import CaseError, SolverError
 from mbseig.eigen import solve_partial
+from mbseig.errors import CaseError, SolverError
 
 
 def chain(n, k=1000.0, m=1.0):

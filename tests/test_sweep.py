@@ -147,8 +147,9 @@ def test_undamped_flutter_onset_of_the_device():
     """C4 without damping: flutter starts where the two eigenvalues μ of M⁻¹Q (s² = −μ) collide,
     i.e. where the 2×2 discriminant (a − d)²/4 + b c vanishes (independent root, xtol 1e-12).
     The sweep's boundary (tracked by MAC, Brent on δ + tol) must agree to 1e-7."""
-    import mbseig
     from conftest import CASES
+
+    import mbseig
 
     case = CASES / "hand_device.toml"
 

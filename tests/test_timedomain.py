@@ -17,9 +17,9 @@ from conftest import CASES, write_case
 from expected import expected_eigenvalues
 
 import mbseig
-from mbseig.studies import analyze
-from mbseig.cli import main
 from mbseig.check import check_modes
+from mbseig.cli import main
+from mbseig.studies import analyze
 
 G = 9.81
 

@@ -14,9 +14,11 @@ Naive methods, as commonly written:
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.linalg as sla
 
 from ..casefile import load_case
 from ..check import check_modes
@@ -103,8 +105,6 @@ ZIEGLER_CRITICAL = 3.5 - np.sqrt(2.0)
 
 
 def ziegler_follower():
-    import scipy.linalg as sla
-
     load = 2.2  # c/l; above F_cr = 2.0858
     M, P, Q = ziegler_matrices(load)
     md = modes(M, P, Q)
@@ -252,8 +252,6 @@ ALL = [pendulum_constraint_stiffness, four_bar_constraint_stiffness, ziegler_fol
 
 
 def run_all():
-    import warnings
-
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         return [f() for f in ALL]

@@ -29,8 +29,10 @@ from __future__ import annotations
 import json
 import math
 import os
+import platform
 import subprocess
 import sys
+import tempfile
 import time
 import warnings
 from contextlib import nullcontext
@@ -44,6 +46,7 @@ from ..check import check_modes
 from ..eigen import solve_qep
 from ..linear import linearize
 from ..modal import modes
+from ..model.batched import spring_forces
 from ..statics import equilibrium
 from .cases import case_path
 from .failcases import run_all
@@ -286,25 +289,21 @@ free_length = 0.35
 
 
 def _complex_g(model):
-    """g(q) of the spring batches in complex-safe arithmetic (l = √(d·d), no conjugation)."""
-    batches = [f for f in model.forces if hasattr(f, "member_forces")]
+    """g(q) of the model's springs for complex q: mbseig's own spring law
+    (:func:`mbseig.model.batched.spring_forces`, complex-step safe: l = √(d·d)) on q + ih."""
     singles = [f for f in model.forces if not hasattr(f, "member_forces")]
+    batches = [f for f in model.forces if hasattr(f, "member_forces")]
 
     def g(q):
         out = np.zeros(q.shape[0], dtype=q.dtype)
+        zero = np.zeros_like(q)
         for f in singles:  # SpringDamper on an affine difference map
-            d = f.diff.C @ q[f.diff.idx] + f.diff.d
-            l = np.sqrt(np.sum(d * d))
-            np.add.at(out, f.diff.idx, -(f.diff.C.T @ (f.stiffness * (l - f.free_length) / l * d)))
+            np.add.at(out, f.idx, -(f.diff.C.T @ spring_forces(*f.members(q, zero))[0]))
         for b in batches:
-            qa = np.where(b.ia >= 0, q[np.maximum(b.ia, 0)], b.pa)
-            qb = np.where(b.ib >= 0, q[np.maximum(b.ib, 0)], b.pb)
-            d = qb - qa
-            l = np.sqrt(np.sum(d * d, axis=1))
-            f = (b.stiffness * (l - b.free_length) / l)[:, None] * d
+            fm = spring_forces(*b.members(q, zero))
             for idx, sign in ((b.ia, 1.0), (b.ib, -1.0)):
                 ok = idx >= 0
-                np.add.at(out, idx[ok], sign * f[ok])
+                np.add.at(out, idx[ok], sign * fm[ok])
         return out
 
     return g
@@ -391,8 +390,6 @@ def bench_timedomain(log):
 # ---------------------------------------------------------------------------------------------
 def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=None, log=print):
     """Run the benchmark and write the report; returns the result dict."""
-    import tempfile
-
     out_dir = Path(out_dir or "reports")
     out_dir.mkdir(parents=True, exist_ok=True)
     repeats = repeats or (1 if quick else 3)
@@ -449,8 +446,6 @@ def _json_default(x):
 
 
 def _machine():
-    import platform
-
     import scipy
 
     return {"python": platform.python_version(), "numpy": np.__version__, "scipy": scipy.__version__,

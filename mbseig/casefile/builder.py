@@ -97,7 +97,7 @@ class Builder:
         for item, label, names in expand("masses", self.data.get("masses", []), self.params, batch):
             f = Fields(item, label, names)
             f.raw("name", None)
-            point = self._basic_point(f, f.text("point"))
+            point = self.basic_point(f, f.text("point"))
             m = f.num("mass", positive=True)
             f.done()
             idx = self.point_index[point]
@@ -116,7 +116,7 @@ class Builder:
             pts = f.raw("points")
             if not isinstance(pts, list) or len(pts) != 2 or not all(isinstance(p, str) for p in pts):
                 raise f.error("points must be a list of two basic point names")
-            pi, pj = (self._basic_point(f, template(p, names, f)) for p in pts)
+            pi, pj = (self.basic_point(f, template(p, names, f)) for p in pts)
             if pi == pj:
                 raise f.error("a body needs two different basic points")
             init_len = float(np.linalg.norm(self.point_pos[pj] - self.point_pos[pi]))
@@ -130,7 +130,7 @@ class Builder:
             f.done()
             if not isinstance(marker_table, dict):
                 raise f.error("markers must be a table name = [x, y]")
-            ri, rj = self._affine_of(pi), self._affine_of(pj)
+            ri, rj = self.affine_of(pi), self.affine_of(pj)
             qb = combine([(1.0, ri), (1.0, rj)], stack=True)
             Mb = body_mass_matrix(m, inertia, tuple(com), L)
             mass_blocks.append(self._embed(qb, Mb))
@@ -142,7 +142,7 @@ class Builder:
                 loc = Fields({"local": local}, f"{label}.markers.{mname}", names).vec("local", 2)
                 self.markers[f"{bname}.{mname}"] = body_point(ri, rj, loc, L)
             rod = DistanceConstraint(f"{label} (rigid length)", rj - ri, L)
-            self._add_constraint(constraints, rod, f)
+            self.add_constraint(constraints, rod, f)
 
         mass_elements = []  # configuration-dependent masses (co-rotational beams)
         flexible_record = flexible.assemble(self, forces, constraints, mass_blocks, mass_elements,
@@ -210,21 +210,21 @@ class Builder:
         return (aff.idx, aff.idx, aff.C.T @ local @ aff.C)
 
     # -- references ----------------------------------------------------------------------
-    def _basic_point(self, f, pname):
+    def basic_point(self, f, pname):
         if pname not in self.point_index:
             raise f.error(f"unknown point {pname!r}")
         return pname
 
-    def _affine_of(self, pname):
+    def affine_of(self, pname):
         return Affine.select(self.point_index[pname], self.point_pos[pname])
 
-    def _point_ref(self, f, key):
+    def point_ref(self, f, key):
         """A basic point name, a body marker 'body.marker', or {body = ..., local = [x, y]}."""
         ref = f.raw(key)
         if isinstance(ref, str):
             ref = template(ref, f.names, f)
             if ref in self.point_index:
-                return self._affine_of(ref)
+                return self.affine_of(ref)
             if ref in self.markers:
                 return self.markers[ref]
             raise f.error(f"unknown point {ref!r} in {key}")
@@ -233,7 +233,7 @@ class Builder:
             body = self.body(sub, sub.text("body"))
             local = sub.vec("local", 2)
             sub.done()
-            return self._body_point(body, local)
+            return self.body_point(body, local)
         raise f.error(f"{key} must be a point name or a table {{body, local}}")
 
     def body(self, f, bname):
@@ -241,26 +241,26 @@ class Builder:
             raise f.error(f"unknown body {bname!r}")
         return bname
 
-    def _body_point(self, bname, local):
+    def body_point(self, bname, local):
         b = self.bodies[bname]
         pi, pj = b["points"]
-        return body_point(self._affine_of(pi), self._affine_of(pj), local, b["length"])
+        return body_point(self.affine_of(pi), self.affine_of(pj), local, b["length"])
 
-    def _body_dir(self, bname, local=(1.0, 0.0)):
+    def body_dir(self, bname, local=(1.0, 0.0)):
         b = self.bodies[bname]
         pi, pj = b["points"]
-        return body_direction(self._affine_of(pi), self._affine_of(pj), local, b["length"])
+        return body_direction(self.affine_of(pi), self.affine_of(pj), local, b["length"])
 
-    def _two_points(self, f):
+    def two_points(self, f):
         pts = f.raw("points")
         if not isinstance(pts, list) or len(pts) != 2:
             raise f.error("points must be a list of two point references")
         f.t = {**f.t, "_a": pts[0], "_b": pts[1]}
-        a, b = self._point_ref(f, "_a"), self._point_ref(f, "_b")
+        a, b = self.point_ref(f, "_a"), self.point_ref(f, "_b")
         f.used |= {"_a", "_b"}
         return a, b
 
-    def _add_constraint(self, constraints, c, f):
+    def add_constraint(self, constraints, c, f):
         if c.idx.size == 0:
             if np.any(np.abs(c.phi(self.q0)) > 1e-12 * c.scale()):
                 raise f.error("constraint between fixed points cannot be satisfied")
@@ -272,21 +272,21 @@ class Builder:
         kind = f.text("type")
         name = f.text("name", None)
         if kind == "distance":
-            a, b = self._two_points(f)
+            a, b = self.two_points(f)
             diff = b - a
             L = f.num("length", float(np.linalg.norm(diff(self.q0))), positive=True)
             f.done()
-            self._add_constraint(constraints, DistanceConstraint(f.label, diff, L), f)
+            self.add_constraint(constraints, DistanceConstraint(f.label, diff, L), f)
         elif kind == "fixed":
-            p = self._point_ref(f, "point")
+            p = self.point_ref(f, "point")
             target = f.vec("position", self.dim, p(self.q0))
             f.done()
             c = LinearConstraint(f.label, p, np.eye(self.dim), target, self.length_scale)
-            self._add_constraint(constraints, c, f)
+            self.add_constraint(constraints, c, f)
         elif kind in ("slider", "point_on_line"):
             if self.dim == 1:
                 raise f.error("a slider needs dimension 2 or 3")
-            p = self._point_ref(f, "point")
+            p = self.point_ref(f, "point")
             origin = f.vec("origin", self.dim, p(self.q0))
             direction = f.vec("direction", self.dim)
             f.done()
@@ -296,21 +296,21 @@ class Builder:
             # rows: an orthonormal basis of the directions normal to the line
             G = _normal_basis(direction / norm)
             c = LinearConstraint(f.label, p, G, G @ origin, self.length_scale)
-            self._add_constraint(constraints, c, f)
+            self.add_constraint(constraints, c, f)
         elif kind == "attach":
             if self.dim != 2:
                 raise f.error("attach needs dimension = 2 (planar bodies)")
-            p = self._point_ref(f, "point")
+            p = self.point_ref(f, "point")
             body = self.body(f, f.text("body"))
             b = self.bodies[body]
             local = f.vec("local", 2, None)
             f.done()
             if local is None:
                 local = _local_coordinates(self, body, p(self.q0))
-            diff = p - self._body_point(body, local)
+            diff = p - self.body_point(body, local)
             c = LinearConstraint(f.label, diff, np.eye(2), np.zeros(2), self.length_scale)
             self.element_body[f.label] = body
-            self._add_constraint(constraints, c, f)
+            self.add_constraint(constraints, c, f)
         elif kind == "angle_driver":
             self._angle_driver(f, constraints)
         else:
@@ -350,7 +350,7 @@ class Builder:
             if bname == "ground":
                 dirs.append(Affine.constant(f.vec("ground_direction", 2, [1.0, 0.0])))
             else:
-                dirs.append(self._body_dir(self.body(f, bname)))
+                dirs.append(self.body_dir(self.body(f, bname)))
         sense_txt = f.text("sense", "ccw")
         if sense_txt not in ("ccw", "cw"):
             raise f.error("sense must be 'ccw' or 'cw'")
@@ -361,7 +361,7 @@ class Builder:
         kind = f.text("type")
         f.text("name", None)
         if kind in ("spring", "damper", "spring_damper"):
-            a, b = self._two_points(f)
+            a, b = self.two_points(f)
             diff = b - a
             d0 = diff(self.q0)
             init = float(d0[0]) if self.dim == 1 else float(np.linalg.norm(d0))
@@ -389,7 +389,7 @@ class Builder:
                     gdir = f.vec("ground_direction", 2, [1.0, 0.0])
                     dirs.append(Affine.constant(gdir))
                 else:
-                    dirs.append(self._body_dir(self.body(f, bname)))
+                    dirs.append(self.body_dir(self.body(f, bname)))
             k = f.num("stiffness", 0.0, nonnegative=True)
             c = f.num("damping", 0.0, nonnegative=True)
             sense_txt = f.text("sense", "ccw")
@@ -403,7 +403,7 @@ class Builder:
             if stacked.idx.size:
                 forces.append(TorsionalSpringDamper(f.label, stacked, k, c, a0, sense))
         elif kind == "force":
-            p = self._point_ref(f, "point")
+            p = self.point_ref(f, "point")
             vec = f.vec("vector", self.dim)
             f.done()
             np.add.at(g_const, p.idx, p.C.T @ vec)
@@ -418,8 +418,8 @@ class Builder:
             nd = np.linalg.norm(direction)
             if nd == 0:
                 raise f.error("direction must not be zero")
-            p = self._body_point(body, at)
-            u = self._body_dir(body, direction / nd)
+            p = self.body_point(body, at)
+            u = self.body_dir(body, direction / nd)
             self.element_body[f.label] = body
             forces.append(FollowerForce(f.label, combine([(1.0, p), (1.0, u)], stack=True), mag))
         else:

@@ -299,7 +299,7 @@ def _node_affines(spec, k):
 def _lock(b, label, body, theta, f_error):
     if body not in b.bodies:
         raise CaseError(f'end {body!r} is neither "free", "clamped" nor a body', element=label)
-    u = b._body_dir(body)
+    u = b.body_dir(body)
     stacked = combine([(1.0, u), (1.0, theta)], stack=True)
     ux, uy, th = stacked(np.array(b.q_init))
     return RotationLock(f"{label} (rotation follows {body})", stacked, th - math.atan2(uy, ux))
@@ -330,7 +330,7 @@ def _assemble_beam(b, spec, q_init, forces, constraints, mass_blocks, mass_eleme
         if what in ("free", "clamped"):
             continue
         c = _lock(b, spec.label, what, nodes[k][1], None)
-        b._add_constraint(constraints, c, _ErrorOnly(spec.label))
+        b.add_constraint(constraints, c, _ErrorOnly(spec.label))
     for k in range(1, n):
         b.markers[f"{spec.name}.n{k}"] = nodes[k][0]
     s = spec.section
@@ -356,7 +356,7 @@ def _assemble_fe(b, spec, constraints, forces, mass_blocks, q_init):
     terms = []
     for p, t in zip(spec["interface"], spec["theta_idx"] or [None] * len(spec["interface"])):
         pos0 = b.point_pos[p]
-        terms.append((1.0, b._affine_of(p) - Affine.constant(pos0)))
+        terms.append((1.0, b.affine_of(p) - Affine.constant(pos0)))
         if spec["ndof"] == 3:
             terms.append((1.0, Affine.select([t], [0.0])))
     if spec["eta_idx"]:
@@ -371,7 +371,7 @@ def _assemble_fe(b, spec, constraints, forces, mass_blocks, q_init):
             continue
         theta = Affine.select([t], [0.0])
         c = _lock(b, spec["label"], rot, theta, None)
-        b._add_constraint(constraints, c, _ErrorOnly(spec["label"]))
+        b.add_constraint(constraints, c, _ErrorOnly(spec["label"]))
     return {"type": "fe_body", "interface": list(spec["interface"]),
             "interface_dofs": spec["ndof"], "modal_coordinates": len(spec["eta_idx"]),
             "size": int(spec["M"].shape[0])}

@@ -10,13 +10,12 @@ constraint drift cannot fake a decay (docs/design.md, "Time-domain check").
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
 
-from ..errors import SimulationError
+from ..errors import CaseError, SimulationError
 from ..model.linear_case import LinearCase
 from ..numerics import dense, null_space_basis
 

@@ -81,6 +81,7 @@ import numpy as np
 
 from ..errors import CaseError, SimulationError
 from ..model.linear_case import LinearCase
+from ..plots import plot_check
 from ..statics import solved
 from ..statics.reactions import reaction_forces
 from .dynamics import ForwardDynamics, simulate
@@ -228,8 +229,6 @@ class CheckResult:
 
     def plot(self, directory) -> list:
         """Write one PNG per simulated mode to ``directory``; returns the paths."""
-        from ..plots import plot_check
-
         return plot_check(self, directory)
 
 

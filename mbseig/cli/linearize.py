@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -104,8 +105,6 @@ def _write(path, arrays, meta):
 
             scipy.io.savemat(str(path), {**arrays, "coordinate_names": meta["coordinate_names"]})
         else:
-            import json
-
             path.write_text(json.dumps(jsonable({**meta, **{k: _json_value(v) for k, v in arrays.items()}})))
     except OSError as exc:
         raise CaseError(f"cannot write: {exc.strerror or exc}", file=str(path), element="--out") from None

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 
 from ..casefile import parse_param_overrides
+from ..errors import CaseError
 from .common import add_case_arguments, print_json
 
 
@@ -36,15 +38,11 @@ def run(args) -> int:
     ranges = [parse_range(item) for item in args.param if ":" in item]
     fixed = parse_param_overrides([item for item in args.param if ":" not in item])
     if not ranges:
-        from ..errors import CaseError
-
         raise CaseError("give at least one --param NAME=START:STOP:COUNT", element="--param")
     show = args.progress if args.progress is not None else sys.stderr.isatty()
     res = run_sweep(args.case, ranges, config=args.config, fixed=fixed, jobs=args.jobs,
                     scheduler=args.scheduler, progress=progress_bar() if show else None,
                     xtol_rel=args.xtol_rel)
-    from pathlib import Path
-
     stem = Path(args.case).stem + (f"-{args.config}" if args.config else "")
     paths = write_outputs(res, args.out or f"sweep-{stem}")
     if args.json:

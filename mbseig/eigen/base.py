@@ -14,6 +14,8 @@ from typing import Callable
 
 import numpy as np
 
+from ..errors import SolverError
+
 __all__ = ["QEPSolution", "SolverPath", "SOLVERS", "register", "dense_solvers", "partial_solvers"]
 
 
@@ -78,8 +80,6 @@ def partial_solvers():
 def requested_path(solver, auto, reason, extras, family, what="solver"):
     """(name, reason, extras) of the path to run: ``auto``'s choice, or the requested one when
     the structure allows it (eigh needs P = 0, proportional needs Rayleigh damping)."""
-    from ..errors import SolverError
-
     if solver == "auto":
         return auto, reason, extras
     if solver not in family:

@@ -26,10 +26,16 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from ..errors import SolverError
-from .base import SOLVERS, QEPSolution, dense_solvers, register, requested_path
-from .measures import (better_half, backward_errors, conditions, is_symmetric,
-                       proportional_real_error, rayleigh_fit, undamped_pairs)
 from ..numerics import unit_columns
+from .base import SOLVERS, QEPSolution, dense_solvers, register, requested_path
+from .measures import (
+    better_half,
+    conditions,
+    is_symmetric,
+    proportional_real_error,
+    rayleigh_fit,
+    undamped_pairs,
+)
 
 __all__ = ["solve_qep", "choose_solver"]
 

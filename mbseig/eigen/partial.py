@@ -36,8 +36,15 @@ import scipy.sparse.linalg as spla
 from ..errors import SolverError
 from ..numerics import unit_columns
 from .base import QEPSolution, partial_solvers, register, requested_path
-from .measures import (backward_errors, better_half, conditions, fro, is_symmetric,
-                       proportional_real_error, rayleigh_fit, undamped_pairs)
+from .measures import (
+    better_half,
+    conditions,
+    fro,
+    is_symmetric,
+    proportional_real_error,
+    rayleigh_fit,
+    undamped_pairs,
+)
 
 __all__ = ["solve_partial", "sparse_structure"]
 

@@ -32,16 +32,23 @@ import numpy as np
 __all__ = ["Constraint", "Force"]
 
 
-class Constraint:
-    """Base class of constraints (module docstring); subclasses are frozen dataclasses with at
-    least ``name`` and the methods below."""
+class _Element:
+    """An element acting on the coordinates of one affine map (``affine_field`` names the field
+    that holds it): ``idx`` are those coordinates."""
 
     name: str
-    n_eq: int = 1
+    affine_field: str = ""
 
     @property
     def idx(self) -> np.ndarray:
-        raise NotImplementedError
+        return getattr(self, self.affine_field).idx
+
+
+class Constraint(_Element):
+    """Base class of constraints (module docstring); subclasses are frozen dataclasses with at
+    least ``name`` and the methods below."""
+
+    n_eq: int = 1
 
     def phi(self, q):
         raise NotImplementedError
@@ -66,14 +73,8 @@ class Constraint:
                 "unit": ""}
 
 
-class Force:
+class Force(_Element):
     """Base class of force elements (module docstring)."""
-
-    name: str
-
-    @property
-    def idx(self) -> np.ndarray:
-        raise NotImplementedError
 
     def force(self, q, qd):
         raise NotImplementedError

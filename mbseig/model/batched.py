@@ -25,7 +25,55 @@ import scipy.sparse as sp
 from ..errors import EquilibriumError
 from .base import Force
 
-__all__ = ["SpringDamperSet"]
+__all__ = ["SpringDamperSet", "spring_forces", "spring_tangents"]
+
+
+def _geometry(d, k, l0, label):
+    """Length l = √(d·d) (complex-step safe) and direction e of each member; a zero length is
+    allowed only for a zero free length (or no stiffness), with e = x̂."""
+    l = np.sqrt(np.einsum("ij,ij->i", d, d))
+    zero = l == 0.0
+    bad = zero & (l0 != 0.0) & (k != 0.0)
+    if np.any(bad):
+        raise EquilibriumError("spring has zero length but a non-zero free length: its "
+                               "direction is undefined", element=label(int(np.argmax(bad))))
+    e = np.divide(d, l[:, None], out=np.zeros_like(d), where=~zero[:, None])
+    e[zero, 0] = 1.0
+    return l, e
+
+
+def spring_forces(d, dd, k, l0, c, label):
+    """Force f (nb, dim) of spring-dampers on their point a (−f on b), d = r_b − r_a.
+
+    1-D: f = k (d − l0) + c ḋ (signed extension);  n-D: f = k (l − l0) e + c (e·ḋ) e.
+    ``label(k)`` names member k in errors.  The one spring law of mbseig: the single element
+    (:class:`~mbseig.model.elements.SpringDamper`) and the batch both call it.
+    """
+    if d.shape[1] == 1:
+        return k[:, None] * (d - l0[:, None]) + c[:, None] * dd
+    l, e = _geometry(d, k, l0, label)
+    mag = k * (l - l0) + c * np.einsum("ij,ij->i", e, dd)
+    return mag[:, None] * e
+
+
+def spring_tangents(d, dd, k, l0, c, label):
+    """(Kf, Cf) (nb, dim, dim): ∂f/∂d and ∂f/∂ḋ of :func:`spring_forces`."""
+    nb, dim = d.shape
+    if dim == 1:
+        return k[:, None, None] * np.ones((nb, 1, 1)), c[:, None, None] * np.ones((nb, 1, 1))
+    l, e = _geometry(d, k, l0, label)
+    I = np.eye(dim)[None]
+    E = e[:, :, None] * e[:, None, :]
+    Pn = I - E
+    safe = np.where(l > 0, l, 1.0)
+    r = np.where(l > 0, l0 / safe, 0.0)[:, None, None]
+    kk = k[:, None, None]
+    Kf = kk * ((1.0 - r) * I + r * E)
+    edd = np.einsum("ij,ij->i", e, dd)[:, None, None]
+    c_l = np.where(l > 0, c / safe, 0.0)[:, None, None]
+    Kf = Kf + c_l * (np.einsum("ij,ijk->ik", dd, Pn)[:, None, :] * e[:, :, None] + edd * Pn)
+    Kf = np.where((l > 0)[:, None, None], Kf, kk * I)
+    return Kf, c[:, None, None] * E
 
 
 @dataclass(frozen=True, eq=False)
@@ -70,25 +118,13 @@ class SpringDamperSet(Force):
     def _label(self, k):
         return self.labels[k] if k < len(self.labels) else f"{self.name} [{k}]"
 
-    def _geometry(self, d):
-        l = np.linalg.norm(d, axis=1)
-        zero = l == 0.0
-        bad = zero & (self.free_length != 0.0) & (self.stiffness != 0.0)
-        if np.any(bad):
-            raise EquilibriumError("spring has zero length but a non-zero free length: its "
-                                   "direction is undefined", element=self._label(int(np.argmax(bad))))
-        e = np.divide(d, l[:, None], out=np.zeros_like(d), where=~zero[:, None])
-        e[zero, 0] = 1.0
-        return l, e
+    def members(self, q, qd):
+        """(d, ḋ, k, l0, c, label): the arguments of :func:`spring_forces` for every member."""
+        return (*self._d(q, qd), self.stiffness, self.free_length, self.damping, self._label)
 
     def member_forces(self, q, qd):
         """f (nb, dim): the force of each member on its point a (−f on b)."""
-        d, dd = self._d(q, qd)
-        if self.dim == 1:
-            return self.stiffness[:, None] * (d - self.free_length[:, None]) + self.damping[:, None] * dd
-        l, e = self._geometry(d)
-        mag = self.stiffness * (l - self.free_length) + self.damping * np.einsum("ij,ij->i", e, dd)
-        return mag[:, None] * e
+        return spring_forces(*self.members(q, qd))
 
     def add_force(self, g, q, qd):
         f = self.member_forces(q, qd)
@@ -103,24 +139,7 @@ class SpringDamperSet(Force):
 
     def _local(self, q, qd):
         """(Kf, Cf): (nb, dim, dim) member Jacobians of f with respect to d and ḋ."""
-        nb, dim = self.ia.shape
-        if dim == 1:
-            return self.stiffness[:, None, None] * np.ones((nb, 1, 1)), \
-                self.damping[:, None, None] * np.ones((nb, 1, 1))
-        d, dd = self._d(q, qd)
-        l, e = self._geometry(d)
-        I = np.eye(dim)[None]
-        E = e[:, :, None] * e[:, None, :]
-        Pn = I - E
-        safe = np.where(l > 0, l, 1.0)
-        r = np.where(l > 0, self.free_length / safe, 0.0)[:, None, None]
-        k = self.stiffness[:, None, None]
-        Kf = k * ((1.0 - r) * I + r * E)
-        edd = np.einsum("ij,ij->i", e, dd)[:, None, None]
-        c_l = np.where(l > 0, self.damping / safe, 0.0)[:, None, None]
-        Kf = Kf + c_l * (np.einsum("ij,ijk->ik", dd, Pn)[:, None, :] * e[:, :, None] + edd * Pn)
-        Kf = np.where((l > 0)[:, None, None], Kf, k * I)
-        return Kf, self.damping[:, None, None] * E
+        return spring_tangents(*self.members(q, qd))
 
     def jacobian_coo(self, q, qd):
         """((rows, cols, K values), (rows, cols, C values)) of K = −∂g/∂q, C = −∂g/∂q̇."""

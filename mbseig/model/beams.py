@@ -158,9 +158,7 @@ class BeamElement(Force):
         object.__setattr__(self, "_Mloc", M)
         object.__setattr__(self, "Phi", Phi)
 
-    @property
-    def idx(self):
-        return self.nodes.idx
+    affine_field = "nodes"  # idx = nodes.idx
 
     # -- kinematics --------------------------------------------------------------------------
     def _kinematics(self, w):
@@ -253,11 +251,7 @@ class RotationLock(Constraint):
     name: str
     stacked: Affine
     offset: float
-    n_eq: int = 1
-
-    @property
-    def idx(self):
-        return self.stacked.idx
+    affine_field = "stacked"  # idx = stacked.idx
 
     def _grad(self, w):
         ux, uy, th = w

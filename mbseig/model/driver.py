@@ -56,11 +56,7 @@ class AngleDriver(Constraint):
     dirs: Affine
     angle_target: float
     sense: float = 1.0
-    n_eq: int = 1
-
-    @property
-    def idx(self):
-        return self.dirs.idx
+    affine_field = "dirs"  # idx = dirs.idx
 
     def angle(self, q) -> float:
         return relative_angle(self.dirs, q, self.sense, self.name)[0]

@@ -20,6 +20,7 @@ import numpy as np
 from ..errors import EquilibriumError
 from .affine import J2, Affine, combine
 from .base import Constraint, Force
+from .batched import spring_forces, spring_tangents
 
 __all__ = [
     "body_mass_matrix",
@@ -77,11 +78,7 @@ class DistanceConstraint(Constraint):
     name: str
     diff: Affine
     length: float
-    n_eq: int = 1
-
-    @property
-    def idx(self):
-        return self.diff.idx
+    affine_field = "diff"  # idx = diff.idx
 
     def phi(self, q):
         d = self.diff(q)
@@ -121,9 +118,7 @@ class LinearConstraint(Constraint):
     def n_eq(self):
         return self.G.shape[0]
 
-    @property
-    def idx(self):
-        return self.point.idx
+    affine_field = "point"  # idx = point.idx
 
     def phi(self, q):
         return self.G @ self.point(q) - self.b
@@ -165,52 +160,22 @@ class SpringDamper(Force):
     free_length: float
     damping: float = 0.0
 
-    @property
-    def idx(self):
-        return self.diff.idx
+    affine_field = "diff"  # idx = diff.idx
 
-    def _geometry(self, q):
-        d = self.diff(q)
-        l = float(np.linalg.norm(d))
-        if l == 0.0:
-            if self.free_length != 0.0 and self.stiffness != 0.0:
-                raise EquilibriumError(
-                    "spring has zero length but a non-zero free length: its direction is undefined",
-                    element=self.name,
-                )
-            e = np.zeros_like(d)
-            if d.size:
-                e[0] = 1.0
-            return d, l, e
-        return d, l, d / l
+    def members(self, q, qd):
+        """d, ḋ and the parameters as a batch of one member (:mod:`mbseig.model.batched`)."""
+        D = self.diff.C
+        arr = lambda x: np.array([x], dtype=float)
+        return (self.diff(q)[None], (D @ qd[self.idx])[None], arr(self.stiffness),
+                arr(self.free_length), arr(self.damping), lambda k: self.name)
 
     def force(self, q, qd):
-        D = self.diff.C
-        if self.diff.dim == 1:
-            d = self.diff(q)
-            f = self.stiffness * (d - self.free_length) + self.damping * (D @ qd[self.idx])
-            return -(D.T @ f)
-        d, l, e = self._geometry(q)
-        dd = D @ qd[self.idx]
-        f = self.stiffness * (l - self.free_length) * e + self.damping * (e @ dd) * e
-        return -(D.T @ f)
+        return -(self.diff.C.T @ spring_forces(*self.members(q, qd))[0])
 
     def jacobians(self, q, qd):
         D = self.diff.C
-        if self.diff.dim == 1:
-            DtD = D.T @ D
-            return self.stiffness * DtD, self.damping * DtD
-        d, l, e = self._geometry(q)
-        dd = D @ qd[self.idx]
-        n = d.size
-        E = np.outer(e, e)
-        if l == 0.0:  # free length zero: f = k d exactly
-            Kf = self.stiffness * np.eye(n)
-        else:
-            P = np.eye(n) - E
-            Kf = self.stiffness * ((1.0 - self.free_length / l) * np.eye(n) + self.free_length / l * E)
-            Kf = Kf + self.damping / l * (np.outer(e, dd) @ P + (e @ dd) * P)
-        return D.T @ Kf @ D, self.damping * (D.T @ E @ D)
+        Kf, Cf = spring_tangents(*self.members(q, qd))
+        return D.T @ Kf[0] @ D, D.T @ Cf[0] @ D
 
 
 def _angle_derivatives(v):
@@ -256,9 +221,7 @@ class TorsionalSpringDamper(Force):
     angle0: float
     sense: float = 1.0
 
-    @property
-    def idx(self):
-        return self.dirs.idx
+    affine_field = "dirs"  # idx = dirs.idx
 
     def angle(self, q):
         return relative_angle(self.dirs, q, self.sense, self.name)[0]
@@ -294,9 +257,7 @@ class FollowerForce(Force):
     stacked: Affine  # [r_P; u] on the union of their indices (4 rows)
     magnitude: float
 
-    @property
-    def idx(self):
-        return self.stacked.idx
+    affine_field = "stacked"  # idx = stacked.idx
 
     def force(self, q, qd):
         Cp = self.stacked.C[:2]

@@ -8,8 +8,10 @@ U = ½ zᵀ K z, T = ½ żᵀ M ż with z = C q + d, z = [interface dofs; modal 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
+import scipy.linalg as sla
 
 from ..errors import CaseError
 from .affine import Affine
@@ -26,9 +28,7 @@ class LinearFEBody(Force):
     z: Affine
     K: np.ndarray
 
-    @property
-    def idx(self):
-        return self.z.idx
+    affine_field = "z"  # idx = z.idx
 
     def force(self, q, qd):
         return -(self.z.C.T @ (self.K @ self.z(q)))
@@ -48,8 +48,6 @@ def craig_bampton(M, K, boundary, n_modes=None):
     (all of them when None: then T is square and the reduction exact).  Returns (Tᵀ M T, Tᵀ K T, T)
     with the boundary dofs first, in the order given.
     """
-    import scipy.linalg as sla
-
     M, K = np.asarray(M, dtype=float), np.asarray(K, dtype=float)
     n = M.shape[0]
     b = np.asarray(boundary, dtype=np.intp)
@@ -75,8 +73,6 @@ def export_fe_body(model, interface, path, *, n_modes=None, q=None, lam=None):
         .npz gets arrays ``M`` and ``K``; ending in .mtx gives ``<stem>_M.mtx`` and
         ``<stem>_K.mtx`` (MatrixMarket).  Returns the written file names.
     """
-    from pathlib import Path
-
     if model.n_constraints:
         raise CaseError("export_fe_body needs a model without constraints (a free body)",
                         element="export")

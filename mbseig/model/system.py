@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from ..numerics import coo_sum, scatter as _scatter
+from ..numerics import coo_sum, scatter
 
 __all__ = ["Model"]
 
@@ -88,7 +88,7 @@ class Model:
         if q is None or not self.mass_elements:
             return self.mass
         blocks = [(e.idx, e.idx, e.mass(q) - M_ref) for e, M_ref in self.mass_elements]
-        return (self.mass + _scatter(self.n, self.n, blocks)).tocsr()
+        return (self.mass + scatter(self.n, self.n, blocks)).tocsr()
 
     # ---- forces --------------------------------------------------------------------------
     def generalized_force(self, q, qd=None) -> np.ndarray:
@@ -115,7 +115,7 @@ class Model:
             K, C = f.jacobians(q, qd)
             kb.append((f.idx, f.idx, K))
             cb.append((f.idx, f.idx, C))
-        K, C = _scatter(self.n, self.n, kb), _scatter(self.n, self.n, cb)
+        K, C = scatter(self.n, self.n, kb), scatter(self.n, self.n, cb)
         if kt:
             K, C = K + coo_sum(self.n, self.n, kt), C + coo_sum(self.n, self.n, ct)
         return K, C
@@ -129,13 +129,13 @@ class Model:
     def phi_q(self, q) -> sp.csr_matrix:
         off = self._row_offsets()
         blocks = [(np.arange(off[k], off[k + 1]), c.idx, c.jac(q)) for k, c in enumerate(self.constraints)]
-        return _scatter(self.n_constraints, self.n, blocks)
+        return scatter(self.n_constraints, self.n, blocks)
 
     def constraint_hessian(self, q, lam) -> sp.csr_matrix:
         """H(λ) = Σ_k λ_k ∇²Φ_k(q), the stiffness of the constraint forces."""
         off = self._row_offsets()
         blocks = [(c.idx, c.idx, c.hess(q, lam[off[k]:off[k + 1]])) for k, c in enumerate(self.constraints)]
-        return _scatter(self.n, self.n, blocks)
+        return scatter(self.n, self.n, blocks)
 
     def gamma(self, q, qd) -> np.ndarray:
         """γ = −(Φ_q q̇)_q q̇, so that Φ_q q̈ = γ on the constraint manifold."""

@@ -28,7 +28,9 @@ collision) it is the collision itself to O(tol²).
 
 from __future__ import annotations
 
+import csv
 import itertools
+import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -392,9 +394,6 @@ def _merge_conjugates(boundaries, xtol):
 def write_outputs(res: SweepResult, out_dir) -> list[Path]:
     """sweep.json, tracks.csv, boundaries.csv, root_locus.png, modes_vs_parameter.png and, for
     two swept parameters, stability_map.png.  Returns the written paths."""
-    import csv
-    import json
-
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = []
