@@ -30,6 +30,7 @@ import scipy.sparse as sp
 
 from .eigen import EPS, SOLVERS, solve_partial, solve_qep
 from .errors import SolverError
+from .linear import LinearModel
 
 __all__ = ["Modes", "modes", "STABILITY_ORDER", "tolerances", "stability", "worst"]
 
@@ -83,13 +84,15 @@ class Modes:
         return "\n".join(rows)
 
 
-def modes(M, P, Q, *, solver: str = "auto", N=None, coordinate_names=None,
+def modes(M, P=None, Q=None, *, solver: str = "auto", N=None, coordinate_names=None,
           stability_rtol: float = 1e-12, stability_atol: float = 0.0, safety: float = 10.0,
           n_dominant: int = 3, rigid_rank_tol: float = 1e-6, n_modes: int | None = None,
           target: float | None = None, band=None, constraints=None, eta_warn: float = 1e-12,
           **solver_options) -> Modes:
     """Solve and classify the modes of (M s² + P s + Q) x = 0.
 
+    M may be a :class:`~mbseig.linear.LinearModel` instead of a matrix: its M, P, Q, N,
+    coordinate names and (large constrained models) constraint Jacobian are used.
     N, coordinate_names : null-space basis and full-coordinate names for mode shapes (q = N x).
     stability_rtol, stability_atol, safety : see the module docstring.
     rigid_rank_tol : relative pivot threshold for counting independent rigid-body vectors.
@@ -101,6 +104,13 @@ def modes(M, P, Q, *, solver: str = "auto", N=None, coordinate_names=None,
     Other keywords go to :func:`mbseig.eigen.solve_qep` (``sym_tol``, ``rayleigh_tol``, ``scale``,
     ``left``) or to :func:`mbseig.eigen.solve_partial`.
     """
+    if isinstance(M, LinearModel):
+        lin = M
+        M, P, Q, N, coordinate_names = lin.M, lin.P, lin.Q, lin.N, lin.coordinate_names
+        if constraints is None:
+            constraints = lin.constraint_jacobian
+    if P is None or Q is None:
+        raise SolverError("modes(M, P, Q) needs P and Q (or a LinearModel alone)")
     path = SOLVERS.get(solver)
     partial = (n_modes is not None or target is not None or band is not None
                or constraints is not None or (path is not None and path.partial))
