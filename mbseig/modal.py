@@ -1,4 +1,4 @@
-"""Modes and their stability (DESIGN §6).
+"""Stage 4: modes and their stability (docs/design.md, "Tolerances").
 
 For an eigenvalue s_k = −δ_k + iω_k:  ω_n = |s|,  ζ = δ/|s|,  f = ω/2π, and
 
@@ -109,8 +109,8 @@ def modes(M, P=None, Q=None, *, solver: str = "auto", N=None, coordinate_names=N
         M, P, Q, N, coordinate_names = lin.M, lin.P, lin.Q, lin.N, lin.coordinate_names
         if constraints is None:
             constraints = lin.constraint_jacobian
-    if P is None or Q is None:
-        raise SolverError("modes(M, P, Q) needs P and Q (or a LinearModel alone)")
+    if Q is None:
+        raise SolverError("modes(M, P, Q) needs Q (or a LinearModel alone)")
     path = SOLVERS.get(solver)
     partial = (n_modes is not None or target is not None or band is not None
                or constraints is not None or (path is not None and path.partial))

@@ -242,11 +242,9 @@ class Batcher:
             raise _Decline
         live = np.any(ia >= 0, axis=1) | np.any(ib >= 0, axis=1)
         sel = np.flatnonzero(live)
-        first = int(ivals[0])
         labels = _Labels(label, var, ivals[sel].astype(np.int64))
         self.forces.append(SpringDamperSet(label, ia[sel], ib[sel], pa[sel], pb[sel], k[sel],
                                            np.asarray(l0, float)[sel], c[sel], labels))
-        del first
 
 
 class _Labels:

@@ -270,7 +270,7 @@ class Builder:
     # -- joints --------------------------------------------------------------------------
     def _joint(self, f, constraints):
         kind = f.text("type")
-        name = f.text("name", None)
+        f.text("name", None)  # names are for references (sets, report) and messages
         if kind == "distance":
             a, b = self.two_points(f)
             diff = b - a
@@ -316,7 +316,6 @@ class Builder:
         else:
             raise f.error(
                 f"unknown joint type {kind!r} (distance, fixed, slider, attach, angle_driver)")
-        del name
 
     def _angle_driver(self, f, constraints):
         """Prescribed relative angle (driving constraint); with ``sets`` an inverse-statics
@@ -379,24 +378,9 @@ class Builder:
         elif kind == "torsional":
             if self.dim != 2:
                 raise f.error("torsional springs need dimension = 2")
-            bodies = f.raw("bodies")
-            if not isinstance(bodies, list) or len(bodies) != 2:
-                raise f.error("bodies must be [body1, body2]; use \"ground\" for the fixed frame")
-            dirs = []
-            for k_, bname in enumerate(bodies):
-                bname = template(str(bname), f.names, f)
-                if bname == "ground":
-                    gdir = f.vec("ground_direction", 2, [1.0, 0.0])
-                    dirs.append(Affine.constant(gdir))
-                else:
-                    dirs.append(self.body_dir(self.body(f, bname)))
+            stacked, sense = self.angle_pair(f)
             k = f.num("stiffness", 0.0, nonnegative=True)
             c = f.num("damping", 0.0, nonnegative=True)
-            sense_txt = f.text("sense", "ccw")
-            if sense_txt not in ("ccw", "cw"):
-                raise f.error("sense must be 'ccw' or 'cw'")
-            sense = 1.0 if sense_txt == "ccw" else -1.0
-            stacked = combine([(1.0, dirs[0]), (1.0, dirs[1])], stack=True)
             probe = TorsionalSpringDamper(f.label, stacked, k, c, 0.0, sense)
             a0 = f.num("angle0", probe.angle(self.q0) if stacked.idx.size else 0.0)
             f.done()

@@ -296,7 +296,7 @@ def _node_affines(spec, k):
     return pos, theta
 
 
-def _lock(b, label, body, theta, f_error):
+def _lock(b, label, body, theta):
     if body not in b.bodies:
         raise CaseError(f'end {body!r} is neither "free", "clamped" nor a body', element=label)
     u = b.body_dir(body)
@@ -329,7 +329,7 @@ def _assemble_beam(b, spec, q_init, forces, constraints, mass_blocks, mass_eleme
         what = spec.ends[end]
         if what in ("free", "clamped"):
             continue
-        c = _lock(b, spec.label, what, nodes[k][1], None)
+        c = _lock(b, spec.label, what, nodes[k][1])
         b.add_constraint(constraints, c, _ErrorOnly(spec.label))
     for k in range(1, n):
         b.markers[f"{spec.name}.n{k}"] = nodes[k][0]
@@ -370,7 +370,7 @@ def _assemble_fe(b, spec, constraints, forces, mass_blocks, q_init):
         if rot in ("free", "clamped"):
             continue
         theta = Affine.select([t], [0.0])
-        c = _lock(b, spec["label"], rot, theta, None)
+        c = _lock(b, spec["label"], rot, theta)
         b.add_constraint(constraints, c, _ErrorOnly(spec["label"]))
     return {"type": "fe_body", "interface": list(spec["interface"]),
             "interface_dofs": spec["ndof"], "modal_coordinates": len(spec["eta_idx"]),

@@ -1,4 +1,4 @@
-"""Time-domain cross-check of predicted modes (DESIGN §7).
+"""Time-domain cross-check of predicted modes (docs/design.md, "Time-domain check").
 
 Each checked mode is proved against a simulation of the *nonlinear* model, not of the linear one
 that predicted it, so that a wrong linearization cannot pass.

@@ -1,4 +1,5 @@
-"""Partial spectrum of large sparse models: shift-invert Krylov methods (DESIGN §5).
+"""Partial spectrum of large sparse models: shift-invert Krylov methods
+(docs/design.md, "Eigensolvers").
 
 The modes asked for (``n_modes`` nearest a target frequency, or every mode in a band of ω_n)
 of (M s² + P s + Q) x = 0 with sparse M, P, Q, without ever forming a dense matrix.  Paths

@@ -177,12 +177,6 @@ class BeamElement(Force):
         _, l, _, _, phi = self._kinematics(self.nodes(q))
         return np.array([l - self.l0, phi[0], phi[1]])
 
-    def axial_force(self, q):
-        """N = EA ε̄ (positive in tension)."""
-        u, p1, p2 = self.local_deformation(q)
-        phi = np.array([p1, p2])
-        return self.section.E * self.section.A * (u / self.l0 + 0.5 * phi @ self._G @ phi)
-
     def _parts(self, w):
         d, l, e, n, phi = self._kinematics(w)
         s, l0 = self.section, self.l0

@@ -1,6 +1,6 @@
 """Element kernels: inertia, constraints and forces on affine point maps.
 
-Sign conventions (DESIGN §2, §4):
+Sign conventions (docs/design.md, "Equations" and "Linearization"):
 
     M q̈ + Φ_qᵀ λ = g(q, q̇),        K = −∂g/∂q,   C = −∂g/∂q̇,   H(λ) = Σ_k λ_k ∇²Φ_k.
 

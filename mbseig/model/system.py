@@ -148,5 +148,3 @@ class Model:
             return np.zeros(0)
         return np.concatenate([np.full(c.n_eq, c.scale()) for c in self.constraints])
 
-    def point_position(self, name: str, q) -> np.ndarray:
-        return self.points[name](q)

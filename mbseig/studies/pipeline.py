@@ -1,4 +1,4 @@
-"""The whole pipeline on one case and parameter point, and its JSON form (docs/design.md §8).
+"""The whole pipeline on one case and parameter point, and its JSON form (the fixed `mbseig modes --json` interface).
 
     case ─► Model ─► equilibrium ─► linearize ─► modes        (analyze)
 

@@ -29,10 +29,6 @@ class Analysis:
     modes: Modes
     refinement: object = None  # mbseig.studies.refine.Refinement when beams were refined
 
-    @property
-    def case_name(self) -> str:
-        return self.model.name
-
 
 def as_spec(case) -> CaseSpec:
     """A :class:`CaseSpec` from a path or a spec (a path is read and parsed here, once)."""

@@ -249,10 +249,6 @@ class SweepResult:
     def values(self):
         return self.axes[0][1]
 
-    def verdict_grid(self):
-        """Verdicts on the grid, shape (len(axis 0), len(lines))."""
-        return np.array([[pt.get("verdict", "error") for pt in line] for line in self.points]).T
-
     def abscissa_grid(self):
         """Spectral abscissa max Re s on the grid, shape (len(axis 0), len(lines))."""
         out = np.full((len(self.values), len(self.lines)), np.nan)
