@@ -282,6 +282,7 @@ def speed_accuracy(res):
     ax.set_ylabel("relative error (vs closed form / complex step)")
     ax.set_title("mbseig: error against wall time (labels: size)")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
+    if methods:
+        ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
     fig.tight_layout()
     return fig

@@ -318,7 +318,8 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
             continue
         t0 = time.perf_counter()
         try:
-            mc = _check_one(dyn, Mr, Pr, Qr, N, s, modes.vectors[:, j], names, base, opts)
+            mc = _check_one(dyn, Mr, Pr, N, s, modes.vectors[:, j], _left_row(modes, j, Mr, Pr, Qr),
+                            names, base, opts)
         except SimulationError as exc:
             raise exc.located(file=getattr(model, "source", None), element=f"mode {k}") from None
         dscale = max(abs(mc.predicted_delta), (zero_delta_tol / delta_rtol) * abs(s))
@@ -326,7 +327,7 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
         passed = bool(err_d <= delta_rtol and mc.rel_error_omega <= omega_rtol)
         results.append(replace(mc, rel_error_delta=err_d, passed=passed,
                                elapsed=time.perf_counter() - t0))
-    reactions = () if isinstance(model, LinearCase) else tuple(reaction_forces(model, eq))
+    reactions = tuple(reaction_forces(model, eq))
     return CheckResult(
         name=model.name, parameters=dict(model.parameters), modes=tuple(results),
         tolerances={"delta_rtol": delta_rtol, "omega_rtol": omega_rtol,
@@ -338,6 +339,18 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
         integrator=method, elapsed=time.perf_counter() - t_start, reactions=reactions,
         constraint_stiffness=bool(getattr(lin, "constraint_stiffness", True)),
         actuators=tuple(dict(r) for r in getattr(model, "drivers", ()) or ()))
+
+
+def _left_row(modes, j, Mr, Pr, Qr, repeat_rtol=1e-8):
+    """yᴴ of listed mode j, for the modal coordinate: the eigensolver's left vector
+    (``Modes.left_vectors``) when s_j is a simple eigenvalue; for a repeated one (another
+    eigenvalue within ``repeat_rtol``·max(|s|, 1)), the left null vector of s²M + sP + Q best
+    aligned with (2sM + P)x, so that the modal coordinate of this shape is picked out."""
+    s, x = complex(modes.eigenvalues[j]), modes.vectors[:, j]
+    near = np.abs(modes.all_eigenvalues - s) <= repeat_rtol * max(abs(s), 1.0)
+    if modes.left_vectors is not None and int(np.sum(near)) == 1:
+        return np.asarray(modes.left_vectors[:, j])  # conjugated left vector: yᴴ = ȳᵀ
+    return _left_vector(Mr, Pr, Qr, s, x).conj()
 
 
 def _left_vector(Mr, Pr, Qr, s, x, rtol=1e-8):
@@ -354,7 +367,7 @@ def _left_vector(Mr, Pr, Qr, s, x, rtol=1e-8):
     return Y @ b
 
 
-def _check_one(dyn, Mr, Pr, Qr, N, s, x, names, base, o):
+def _check_one(dyn, Mr, Pr, N, s, x, yh, names, base, o):
     delta, omega = -s.real, abs(s.imag)
     real_mode = base["kind"] in ("overdamped", "divergence")
     if real_mode:
@@ -387,10 +400,12 @@ def _check_one(dyn, Mr, Pr, Qr, N, s, x, names, base, o):
                    atol_position=o["ode_rtol"] * smallest,
                    atol_velocity=o["ode_rtol"] * smallest * abs(s))
     # modal coordinate from the reduced state x = Nᵀ u, ẋ = Nᵀ v
-    y = _left_vector(Mr, Pr, Qr, s, x)
     X, Xd = N.T @ sim.u, N.T @ sim.v
-    den = y.conj() @ ((2 * s * Mr + Pr) @ x)
-    eta = (y.conj() @ ((s * Mr + Pr) @ X + Mr @ Xd)) / den
+    den = yh @ ((2 * s * Mr + Pr) @ x)
+    if den == 0:
+        raise SimulationError(f"eigenvalue {s:.6g} is defective (yᴴ(2sM + P)x = 0): its modal "
+                              f"coordinate is undefined")
+    eta = (yh @ ((s * Mr + Pr) @ X + Mr @ Xd)) / den
     meas_delta, meas_omega, resid, eta0 = _fit_exponential(sim.t, eta)
     if real_mode:  # η is real: its phase is constant (0 or π), the fitted slope a residue
         meas_omega = abs(meas_omega)

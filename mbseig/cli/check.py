@@ -8,7 +8,7 @@ from __future__ import annotations
 from ..check import INTEGRATORS, check_modes, parse_mode_list
 from ..eigen import dense_solvers
 from ..studies import analyze
-from .common import add_case_arguments, case_kwargs, print_json
+from .common import add_case_arguments, case_kwargs, print_json, print_reactions
 
 
 def register(sub):
@@ -64,13 +64,7 @@ def run(args) -> int:
         print(f"constraint drift before projection <= {max(m.constraint_drift for m in sim):.1e} "
               f"(relative); largest projection {max(m.max_projection for m in sim):.1e}; "
               f"{sum(m.nfev for m in sim)} force evaluations in {res.elapsed:.2f} s")
-    if res.reactions:
-        print("reactions at equilibrium (multipliers λ; force on each point = −Φ_qᵀλ):")
-        for r in res.reactions:
-            lam = ", ".join(f"{x:.6g}" for x in r["multipliers"])
-            forces = "; ".join(f"{p} ({', '.join(f'{v:.6g}' for v in f)})"
-                               for p, f in r["forces"].items())
-            print(f"  {r['element']}: λ = {lam}; on {forces}")
+    print_reactions(res.reactions)
     for rec in res.actuators:
         print(f"actuator {rec.get('driver', '?')}: effort {rec.get('effort', float('nan')):.6g} "
               f"{rec.get('effort_unit', '')}".rstrip())

@@ -8,7 +8,7 @@ import sys
 from ..casefile import parse_param_overrides
 from ..numerics import jsonable
 
-__all__ = ["add_case_arguments", "case_kwargs", "print_json"]
+__all__ = ["add_case_arguments", "case_kwargs", "print_json", "print_reactions"]
 
 
 def add_case_arguments(parser):
@@ -27,3 +27,18 @@ def case_kwargs(args) -> dict:
 def print_json(obj):
     json.dump(jsonable(obj), sys.stdout, indent=1, allow_nan=False)
     sys.stdout.write("\n")
+
+
+def print_reactions(rows):
+    """The reaction table of :func:`mbseig.statics.reactions.reaction_forces`, one line a
+    constraint: multipliers, what they carry (the element's own label and unit), point forces."""
+    if not rows:
+        return
+    print("reactions at equilibrium (multipliers λ; force on each point = −Φ_qᵀλ):")
+    for r in rows:
+        lam = ", ".join(f"{x:.6g}" for x in r["multipliers"])
+        c = r["reaction"]
+        value = c["value"] if isinstance(c["value"], list) else [c["value"]]
+        carried = f"{c['label']} {', '.join(f'{v:.6g}' for v in value)} {c['unit']}".rstrip()
+        forces = "; ".join(f"{p} ({', '.join(f'{v:.6g}' for v in f)})" for p, f in r["forces"].items())
+        print(f"  {r['element']}: λ = {lam}; {carried}; on {forces}")

@@ -6,8 +6,9 @@ import math
 
 from ..eigen import SOLVERS
 from ..errors import CaseError
+from ..statics.reactions import reaction_forces
 from ..studies import analyze, modes_json
-from .common import add_case_arguments, case_kwargs, print_json
+from .common import add_case_arguments, case_kwargs, print_json, print_reactions
 
 
 def register(sub):
@@ -28,7 +29,8 @@ def register(sub):
     p.add_argument("--accuracy", type=float, default=None, metavar="A",
                    help="relative accuracy of the refined modes (default: the case's, else 1e-3)")
     p.add_argument("--reactions", action="store_true",
-                   help="also print the constraint multipliers (joint reactions) at equilibrium")
+                   help="also print the joint reactions at equilibrium (multipliers, what they "
+                        "carry, forces on the points)")
     p.set_defaults(run=run)
 
 
@@ -89,8 +91,7 @@ def run(args) -> int:
     if args.json:
         out = modes_json(a)
         if args.reactions:
-            out["reactions"] = [{"element": nm, "multipliers": [float(x) for x in lam]}
-                                for nm, lam in a.eq.reactions]
+            out["reactions"] = reaction_forces(a.model, a.eq)
         print_json(out)
         return 0
     m, eq, lin = a.model, a.eq, a.linear
@@ -105,7 +106,5 @@ def run(args) -> int:
     print(a.modes.table())
     print(f"verdict: {a.modes.verdict}")
     if args.reactions:
-        print("reactions (constraint multipliers λ; force = −Φ_qᵀλ):")
-        for nm, lam in eq.reactions:
-            print(f"  {nm}: " + ", ".join(f"{x:.6g}" for x in lam))
+        print_reactions(reaction_forces(a.model, eq))
     return 0

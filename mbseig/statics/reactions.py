@@ -36,7 +36,7 @@ from ..model.elements import DistanceConstraint, FollowerForce, LinearConstraint
 from .newton import solved
 
 __all__ = ["posture", "reactions", "actuator_effort", "rom_flags", "pin_reactions",
-           "element_forces", "reaction_forces"]
+           "reaction_forces"]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -68,39 +68,27 @@ def _constraint_multipliers(model, lam):
     return out
 
 
-def element_forces(model, eq) -> list[dict]:
-    """Every constraint's multipliers and what they carry, as the element states it
-    (:meth:`mbseig.model.base.Constraint.reaction`): the axial force of a rigid length, the force
-    on the point of a fixed/slider/attach joint, the torque of a driver, ..."""
+def reaction_forces(model, eq) -> list[dict]:
+    """Per constraint element, at the equilibrium: its multipliers λ, what they carry as the
+    element states it (:meth:`mbseig.model.base.Constraint.reaction`: the axial force of a rigid
+    length, the force on the point of a fixed/slider/attach joint, the torque of a driver, ...)
+    under its own key and as ``reaction`` {key, label, value, unit}, and the force −Φ_qᵀλ it
+    exerts on each point (``forces``: point → components).  The one table of reactions that
+    ``mbseig check``, ``mbseig modes --reactions`` and the reports print."""
     model = solved(model, eq)
+    names = model.coordinate_names
     rows = []
     for name, (c, lam) in _constraint_multipliers(model, eq.lam).items():
-        r = c.reaction(eq.q, lam)
-        rows.append({"element": name, "multipliers": [float(x) for x in lam],
-                     r["key"]: r["value"], "reaction": r})
-    return rows
-
-
-def reaction_forces(model, eq) -> list:
-    """Per constraint element: its multipliers λ and the reaction −Φ_qᵀλ it exerts on each point.
-
-    Returns a list of ``{"element", "multipliers", "forces": {point: [fx, fy, ...]}}``.
-    """
-    model = solved(model, eq)
-    if not model.n_constraints:
-        return []
-    names = model.coordinate_names
-    out = []
-    for name, (c, lam) in _constraint_multipliers(model, eq.lam).items():
-        f_local = -(c.jac(eq.q).T @ lam)
         forces: dict = {}
-        for i, val in zip(c.idx, f_local):
+        for i, val in zip(c.idx, -(c.jac(eq.q).T @ lam)):
             point, _, axis = names[i].rpartition(".")
             forces.setdefault(point, {})[axis] = float(val) + 0.0  # + 0.0: no "-0" in reports
-        out.append({"element": name, "multipliers": [float(x) for x in lam],
-                    "forces": {p: [v.get(ax, 0.0) for ax in "xyz"[:model.dimension]]
-                               for p, v in forces.items()}})
-    return out
+        r = c.reaction(eq.q, lam)
+        rows.append({"element": name, "multipliers": [float(x) for x in lam], r["key"]: r["value"],
+                     "reaction": r,
+                     "forces": {p: [v.get(ax, 0.0) for ax in "xyz"[:model.dimension]]
+                                for p, v in forces.items()}})
+    return rows
 
 
 def pin_reactions(model, eq) -> list[dict]:
@@ -157,7 +145,7 @@ def reactions(model, eq) -> dict:
         "posture": posture(model, eq.q),
         "out_of_range": rom_flags(model, eq.q),
         "pins": pin_reactions(model, eq),
-        "constraints": element_forces(model, eq),
+        "constraints": reaction_forces(model, eq),
         "actuator": actuator_effort(model, eq),
         "drivers": [dict(d) for d in model.drivers],
     }
