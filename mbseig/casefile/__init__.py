@@ -30,6 +30,7 @@ from ..errors import CaseError, MbseigError
 from .builder import Builder
 from .expr import evaluate
 from .matrices import linear_case, matrix_file
+from .spatial import SpatialBuilder
 
 __all__ = ["CaseSpec", "read_case", "load_case", "parse_param_overrides", "SCHEMA_VERSION"]
 
@@ -140,7 +141,8 @@ def _build(spec, config, overrides, mesh):
                            expected)
     if kind != "multibody":
         raise CaseError(f"kind must be 'multibody' or 'linear', got {kind!r}", element="case")
-    return Builder(data, spec.name, spec.source, params, description, expected,
+    builder = SpatialBuilder if data.get("dimension") == 3 else Builder
+    return builder(data, spec.name, spec.source, params, description, expected,
                    files=spec.read_matrix, mesh=mesh).build()
 
 
