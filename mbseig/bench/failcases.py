@@ -152,7 +152,7 @@ def badly_scaled_matrices(n=12, seed=4, damping=1e-7):
     return np.diag(m), chain(c), chain(k)
 
 
-def large_undamped(n=400):
+def large_undamped(n=120):
     k, m = 1000.0, 1.0
     K = 2 * k * np.eye(n) - k * np.eye(n, k=1) - k * np.eye(n, k=-1)
     M = m * np.eye(n)

@@ -70,6 +70,26 @@ def _targets(res):
     return out
 
 
+def _nlevp_lines(rows):
+    """Section "NLEVP quadratic eigenproblems": one row per problem of mbseig/bench/nlevp.py."""
+    if not rows:
+        return []
+    cols = ("problem", "n", "verdict", "reference verdict", "solver", "listed", "infinite",
+            "max η", "time", "refusal")
+    out = ["", "## NLEVP quadratic eigenproblems (built from the collection's definitions)", "",
+           "Each problem through `mbseig.modes` (mbseig/bench/nlevp.py): the verdict against the "
+           "reference's, the path, the largest backward error of the listed modes, or the one-line "
+           "refusal where double precision cannot resolve the problem.", ""]
+    out.append("| " + " | ".join(cols) + " |")
+    out.append("|" + "---|" * len(cols))
+    for r in rows:
+        cells = (r["method"], r["n"], r["verdict"], f"{r['expected']} ({r['reference']})",
+                 r["solver"], r["n_listed"], r["n_infinite"], _f(r["eta"], ".1e"),
+                 f"{r['time']:.3f} s", r["refused"] or "–")
+        out.append("| " + " | ".join(str(c) for c in cells) + " |")
+    return out
+
+
 def write_report(res, out_dir):
     out_dir = Path(out_dir)
     cfg = res["config"]
@@ -155,6 +175,7 @@ def write_report(res, out_dir):
                  "on a marginal mode can turn growth into apparent decay; the check's 1 % tolerance catches it.")
     else:
         L.append(res.get("timedomain_note") or "not run")
+    L.extend(_nlevp_lines(_rows(res, "nlevp")))
     fails = res.get("failures")
     if fails:
         L += ["", "## Stability where methods fail", "",

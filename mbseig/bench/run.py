@@ -22,6 +22,8 @@ jacobians  analytic K of a 2-D spring network against forward and central differ
 constraint linearization with and without the constraint-force stiffness.
 timedomain the time-domain check's integrator (mbseig.check) against loose settings.
 failures   mbseig.bench.failcases: where naive methods give the wrong verdict.
+nlevp      quadratic eigenproblems of the NLEVP collection (mbseig.bench.nlevp), each with its
+           verdict, backward error or refusal.
 """
 
 from __future__ import annotations
@@ -50,6 +52,7 @@ from ..model.batched import spring_forces
 from ..statics import equilibrium
 from .cases import case_path
 from .failcases import run_all
+from .nlevp import bench_nlevp
 from .report import write_report
 
 __all__ = ["run_bench"]
@@ -393,7 +396,8 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
     out_dir = Path(out_dir or "reports")
     out_dir.mkdir(parents=True, exist_ok=True)
     repeats = repeats or (1 if quick else 3)
-    all_sections = ("dense", "structured", "partial", "jacobians", "constraint", "timedomain", "failures")
+    all_sections = ("dense", "structured", "partial", "jacobians", "constraint", "timedomain", "failures",
+                    "nlevp")
     sections = sections or all_sections
     cfg = {
         "quick": quick, "repeats": repeats, "threads": threads,
@@ -425,6 +429,8 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
             rows, why = bench_timedomain(log)
             res["rows"] += rows
             res["timedomain_note"] = why
+        if "nlevp" in sections:
+            res["rows"] += bench_nlevp(log)
         if "failures" in sections:
             res["failures"] = [{k: getattr(c, k) for k in ("name", "naive_method", "naive", "mbseig",
                                                            "reference", "naive_wrong", "mbseig_right")}

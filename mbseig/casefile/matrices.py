@@ -1,7 +1,21 @@
 """Linear cases: ``kind = "linear"`` with a ``[matrices]`` table of M, P, Q (lists of rows,
-``.npz``/``.mtx`` files, or parameter-weighted sums of such terms)."""
+``.npz``/``.mtx`` files, or parameter-weighted sums of such terms).
+
+The matrix rule (every loader, inline rows and files alike): a matrix is real, square, non-empty,
+of at most ``MAX_ORDER`` rows, with finite entries, and a sum of terms stays finite.  Anything
+else is refused with one line naming the file and the element (``matrices.Q``), never cast: a
+complex matrix (e.g. hysteretic damping (1 + iμ)K) is refused the same way by the .npz and .mtx
+loaders (its imaginary part has no time-domain model in the check, the linearization outputs
+and the reports; :func:`mbseig.modes` takes complex M, P, Q directly), a complex array whose
+imaginary part is exactly zero is real.  Integer files are read as floats when every entry is
+exactly representable (|k| ≤ 2⁵³), and refused otherwise; object arrays, truncated or empty
+files and missing keys are refused.  Very large or subnormal entries are accepted: the
+eigensolver scales M, P, Q (mbseig.eigen.dense).
+"""
 
 from __future__ import annotations
+
+import zipfile
 
 import numpy as np
 import scipy.sparse as sp
@@ -11,7 +25,10 @@ from ..model.linear_case import LinearCase
 from .expr import evaluate
 from .fields import Fields
 
-__all__ = ["linear_case", "matrix_value", "matrix_file"]
+__all__ = ["linear_case", "matrix_value", "matrix_file", "MAX_ORDER"]
+
+MAX_ORDER = 5000  # rows of one matrix of a linear case: stored dense (the dense eigen limit)
+_EXACT_INT = 2**53
 
 
 def linear_case(data, name, source, files, params, description, expected):
@@ -51,9 +68,14 @@ def matrix_value(value, label, params, files):
             factor = f.num("factor", 1.0)
             A = matrix_value(f.raw("matrix"), f"{label}[{k}].matrix", params, files)
             f.done()
-            total = factor * A if total is None else total + factor * A
-            if total.shape != A.shape:
-                raise CaseError("terms have different shapes", element=label)
+            if total is not None and total.shape != A.shape:
+                raise CaseError(f"terms have different shapes ({total.shape[0]}×{total.shape[1]} "
+                                f"and {A.shape[0]}×{A.shape[1]})", element=label)
+            with np.errstate(over="ignore", invalid="ignore"):  # judged just below
+                total = factor * A if total is None else total + factor * A
+            if not np.all(np.isfinite(total)):
+                raise CaseError(f"the sum of terms overflows at term {k} (factor {factor:g}): "
+                                f"a matrix must stay finite", element=label)
         return total
     if isinstance(value, dict):
         f = Fields(value, label, params)
@@ -74,24 +96,77 @@ def matrix_value(value, label, params, files):
 
 
 def matrix_file(path, key, label):
+    """The real square matrix stored under ``key`` of an .npz file, or in an .mtx file; every
+    problem is one CaseError naming the file and ``label`` (module docstring)."""
+    name = path.name
+    if path.suffix not in (".npz", ".mtx"):
+        raise CaseError(f"matrix files must be .npz or .mtx, got {name!r}", element=label)
     try:
-        if path.suffix == ".npz":
-            with np.load(path, allow_pickle=False) as z:
-                if key is None or key not in z:
-                    raise CaseError(f"{path.name} has no array {key!r} (has {', '.join(z)})",
-                                    element=label)
-                A = np.asarray(z[key], dtype=float)
-        elif path.suffix == ".mtx":
-            import scipy.io
+        A = _read_npz(path, key, label) if path.suffix == ".npz" else _read_mtx(path, label)
+    except CaseError:
+        raise
+    except (OSError, EOFError, ValueError, TypeError, OverflowError, IndexError, KeyError,
+            MemoryError, zipfile.BadZipFile, zipfile.LargeZipFile) as exc:
+        why = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise CaseError(f"{name}: cannot be read as a {path.suffix[1:]} matrix file "
+                        f"({type(exc).__name__}: {why})", element=label) from None
+    return _checked(A, name, label)
 
-            A = scipy.io.mmread(str(path))
-            A = A.toarray() if sp.issparse(A) else np.asarray(A, dtype=float)
-        else:
-            raise CaseError(f"matrix files must be .npz or .mtx, got {path.name!r}", element=label)
-    except OSError as exc:
-        raise CaseError(f"cannot read {path}: {exc}", element=label) from None
-    except ValueError as exc:
-        raise CaseError(f"cannot read {path}: {exc}", element=label) from None
-    if A.ndim != 2 or A.shape[0] != A.shape[1] or not np.all(np.isfinite(A)):
-        raise CaseError(f"{path.name}: matrix must be square and finite", element=label)
+
+def _read_npz(path, key, label):
+    name = path.name
+    if path.stat().st_size == 0:
+        raise CaseError(f"{name}: the file is empty", element=label)
+    with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:  # fh: closed even
+        keys = list(z.keys())  # when np.load fails on a truncated archive
+        if key is None or key not in keys:
+            have = ", ".join(keys) if keys else "no arrays"
+            asked = "no key given" if key is None else f"no array {key!r}"
+            raise CaseError(f"{name}: {asked} (it has {have})", element=label)
+        return z[key]
+
+
+def _read_mtx(path, label):
+    import scipy.io
+
+    name = path.name
+    if path.stat().st_size == 0:
+        raise CaseError(f"{name}: the file is empty", element=label)
+    rows, cols, entries, fmt, field, symmetry = scipy.io.mminfo(str(path))
+    if rows != cols or rows == 0:
+        raise CaseError(f"{name}: matrix must be square and non-empty, the header says "
+                        f"{rows}×{cols}", element=label)
+    if rows > MAX_ORDER:
+        raise CaseError(f"{name}: {rows} rows is beyond the {MAX_ORDER} of a linear case "
+                        f"(matrices are stored dense)", element=label)
+    A = scipy.io.mmread(str(path))
+    return A.toarray() if sp.issparse(A) else np.asarray(A)
+
+
+def _checked(A, name, label):
+    A = np.asarray(A)
+    if A.dtype.kind not in "biufc":
+        raise CaseError(f"{name}: entries of type {A.dtype} are not numbers", element=label)
+    if A.ndim != 2 or A.shape[0] != A.shape[1] or A.size == 0:
+        raise CaseError(f"{name}: matrix must be square and non-empty, got shape "
+                        f"{'×'.join(str(d) for d in A.shape) or 'scalar'}", element=label)
+    if A.shape[0] > MAX_ORDER:
+        raise CaseError(f"{name}: {A.shape[0]} rows is beyond the {MAX_ORDER} of a linear case "
+                        f"(matrices are stored dense)", element=label)
+    if A.dtype.kind == "c":
+        if np.any(A.imag):
+            i, j = np.argwhere(A.imag != 0)[0]
+            raise CaseError(f"{name}: complex entry ({i}, {j}) = {complex(A[i, j])!r}: linear cases "
+                            f"take real M, P, Q (a complex stiffness has no time-domain model); "
+                            f"mbseig.modes() solves complex matrices", element=label)
+        A = A.real
+    if A.dtype.kind in "iu":
+        if np.any(np.abs(A.astype(float)) > _EXACT_INT):
+            i, j = np.argwhere(np.abs(A.astype(float)) > _EXACT_INT)[0]
+            raise CaseError(f"{name}: integer entry ({i}, {j}) = {int(A[i, j])} is not exactly a "
+                            f"double (|k| > 2^53): store the matrix as floats", element=label)
+    A = np.asarray(A, dtype=float)
+    if not np.all(np.isfinite(A)):
+        i, j = np.argwhere(~np.isfinite(A))[0]
+        raise CaseError(f"{name}: entry ({i}, {j}) = {float(A[i, j])!r} is not finite", element=label)
     return A

@@ -59,16 +59,37 @@ fitted by linear least squares, log|η| = c − δ t and unwrap(arg η) = φ + �
 (≥ ``periods`` periods or ``efolds`` e-folding times).  If the linear model is wrong, the response
 is no eigenmotion of it and η carries the true frequency and decay, which is what the fit reports.
 
-Verdict per mode::
+Verdict per mode: the tolerances are tied to what the run resolves.  The fit gives standard
+errors σ_δ, σ_ω of the slopes; with the integrator's own floor (an explicit method at ode_rtol
+adds an apparent δ, ω of order ode_rtol·|s|, measured far below that), the measurement resolves
 
-    rel_error.omega = |ω_m − ω_p| / ω_p            (|s_p| for a real mode)
-    rel_error.delta = |δ_m − δ_p| / max(|δ_p|, (zero_delta_tol / delta_rtol) |s_p|)
-    passed          = rel_error.omega ≤ omega_rtol  and  rel_error.delta ≤ delta_rtol
+    u_δ = max(resolution_k · σ_δ, ode_rtol·|s_p|),   u_ω = max(resolution_k · σ_ω, ode_rtol·|s_p|)
 
-so an undamped mode passes when |δ_m| ≤ zero_delta_tol·|s_p|.  Rigid-body modes (s = 0) are not
-fitted (the reason is recorded); instead a static probe of the nonlinear model checks that it
-offers no restoring force along them (see :func:`_probe_rigid`), so a linearization that turns an
-oscillation into a rigid-body mode cannot pass either.
+and a mode passes when
+
+    |δ_m − δ_p| ≤ max(delta_rtol·|δ_p|, u_δ)   and   |ω_m − ω_p| ≤ max(omega_rtol·ω_p, u_ω)
+
+(ω_p = |s_p| for a real mode); ``rel_error`` reports the two errors divided by
+max(|δ_p|, u_δ/delta_rtol) and max(ω_p, u_ω/omega_rtol), so that passing means
+rel_error ≤ the rtol.  Hence a δ of the wrong sign fails whenever the run resolves δ (the
+pendulum with ζ = 2·10⁻⁶ and its damping flipped: predicted δ = −6.3·10⁻⁶, measured +6.3·10⁻⁶,
+resolved to 10⁻¹¹), and an undamped mode passes only when its measured |δ| is within the run's
+resolution.  What the run could not resolve is said in ``unresolved``: δ resolved only beyond
+``zero_delta_tol``·|s|, or ω resolved only beyond ``omega_rtol``·ω_p (a mode near critical
+damping turns through a few microradians of phase in its 3 e-folding times: its damped
+frequency is then judged to the run's resolution, not to omega_rtol, and said to be so).
+
+Run length: at most ``max_fast_periods`` = 200 periods of the fastest listed mode (an explicit
+integrator's step follows the fastest motion, excited or not, so this caps the work whatever the
+checked mode's own period: measured, a pendulum beside a 10⁷ N/m spring took 4·10⁵ force
+evaluations, 158 s, for 20 of its periods; capped, 2 % of that); a capped run says so in
+``unresolved`` and its resolutions u_δ, u_ω widen accordingly.
+
+Rigid-body modes (s = 0) are not fitted (the reason is recorded); instead a static probe of the
+nonlinear model checks that it offers no restoring force along them (see :func:`_probe_rigid`),
+compared with the force and stiffness scale of the points that mode moves, so a linearization
+that turns an oscillation into a rigid-body mode cannot pass either, whatever else the model
+holds.
 """
 
 from __future__ import annotations
@@ -128,6 +149,17 @@ class ModeCheck:
     coordinate: str = ""
     probe_omega: float = math.nan
     probe_reference: float = math.nan
+    se_delta: float = math.nan  # standard errors of the fitted slopes
+    se_omega: float = math.nan
+    amplification: float = math.nan  # state errors → modal coordinate (≈ 1; ≫ 1 near a defect)
+    amplitude_share_delta: float = 0.0  # |δ(a) − δ(a/10)| when re-run at a tenth (else 0)
+    amplitude_share_omega: float = 0.0
+    resolution_delta: float = math.nan  # u_δ: what the run resolves of δ
+    resolution_omega: float = math.nan  # u_ω
+    tolerance_delta: float = math.nan  # the δ tolerance applied: max(delta_rtol·|δ_p|, u_δ)
+    tolerance_omega: float = math.nan
+    capped: bool = False  # the run was cut at max_fast_periods of the fastest mode
+    unresolved: str = ""  # what the run could not resolve (empty: everything asked)
     t: np.ndarray = field(default_factory=lambda: np.zeros(0))
     eta: np.ndarray = field(default_factory=lambda: np.zeros(0, complex))
     response: np.ndarray = field(default_factory=lambda: np.zeros(0))
@@ -158,6 +190,10 @@ class ModeCheck:
             "coordinate": self.coordinate,
             "probe": None if math.isnan(self.probe_omega) else {
                 "omega_eff": float(self.probe_omega), "omega_ref": float(self.probe_reference)},
+            "resolution": {"delta": num(self.resolution_delta), "omega": num(self.resolution_omega)},
+            "tolerance": {"delta": num(self.tolerance_delta), "omega": num(self.tolerance_omega)},
+            "capped": bool(self.capped),
+            "unresolved": self.unresolved or None,
         }
 
 
@@ -261,7 +297,9 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
                 periods: float = 20.0, efolds: float = 3.0, samples_per_period: int = 40,
                 min_samples: int = 400, delta_rtol: float = 1e-2, omega_rtol: float = 1e-3,
                 zero_delta_tol: float = 1e-5, rigid_tol: float = 1e-3, method: str = "DOP853",
-                ode_rtol: float = 1e-10, mass_tol: float = 1e-12) -> CheckResult:
+                ode_rtol: float = 1e-10, mass_tol: float = 1e-12, resolution_k: float = 3.0,
+                max_fast_periods: float = 200.0, recheck_amplification: float = 30.0,
+                defective_amplification: float = 1e8) -> CheckResult:
     """Prove the listed ``modes`` (predicted from ``lin``) against the nonlinear ``model``.
 
     indices : 1-based mode numbers (default: all listed modes).
@@ -269,7 +307,15 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
     periods, efolds : the run lasts ``periods`` periods of an oscillatory mode, cut short at
         ``efolds`` e-folding times 1/|δ|; a real mode runs ``efolds`` e-folding times 1/|s|.
     samples_per_period, min_samples : output sampling of the modal coordinate.
-    delta_rtol, omega_rtol, zero_delta_tol : pass/fail tolerances (see the module docstring).
+    delta_rtol, omega_rtol : relative tolerances, widened to the run's resolution u_δ, u_ω only
+        (module docstring); zero_delta_tol : a δ resolved no better than zero_delta_tol·|s| is
+        reported in ``unresolved``.
+    resolution_k : standard errors of the fitted slopes counted as the run's resolution.
+    max_fast_periods : cap of the run length in periods of the fastest listed mode.
+    recheck_amplification, defective_amplification : a mode whose modal coordinate amplifies
+        state errors by more than the first (a nearly defective pair, near critical damping) is
+        run again at a tenth of the amplitude, the difference counted into its resolution; above
+        the second it is a Jordan block and is not simulated (the reason is recorded).
     rigid_tol : a rigid-body mode passes when the probed ω_eff ≤ rigid_tol · ω_ref.
     method, ode_rtol : integrator and its relative tolerance; absolute tolerances are ode_rtol
         times the smallest expected deviation.
@@ -279,7 +325,8 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
     for nm, val in (("amplitude", amplitude), ("periods", periods), ("efolds", efolds),
                     ("delta_rtol", delta_rtol), ("omega_rtol", omega_rtol),
                     ("zero_delta_tol", zero_delta_tol), ("rigid_tol", rigid_tol),
-                    ("ode_rtol", ode_rtol)):
+                    ("ode_rtol", ode_rtol), ("resolution_k", resolution_k),
+                    ("max_fast_periods", max_fast_periods)):
         if not (isinstance(val, (int, float)) and math.isfinite(val) and val > 0):
             raise CaseError(f"must be a positive number, got {val!r}", element=nm)
     n_modes = len(modes)
@@ -298,9 +345,11 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
     Mr, Pr, Qr, N = (np.asarray(lin.M, float), np.asarray(lin.P, float), np.asarray(lin.Q, float),
                      np.asarray(lin.N, float))
     names = list(model.coordinate_names)
+    fastest = float(np.max(np.abs(modes.eigenvalues), initial=0.0))
+    t_cap = max_fast_periods * 2 * np.pi / fastest if fastest > 0 else np.inf
     opts = dict(amplitude=amplitude, periods=periods, efolds=efolds,
                 samples_per_period=samples_per_period, min_samples=min_samples, method=method,
-                ode_rtol=ode_rtol, length=length)
+                ode_rtol=ode_rtol, length=length, t_cap=t_cap)
     results = []
     for k in idx:
         j = k - 1
@@ -310,22 +359,31 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
                     predicted_omega=float(modes.omega_d[j]))
         if kind == "rigid-body":
             w_eff, w_ref = _probe_rigid(dyn, Mr, N, modes.vectors[:, j], amplitude * length,
-                                        modes, eq, length)
+                                        modes, eq, length, names)
             results.append(ModeCheck(
                 **base, skipped="rigid-body mode (s = 0): no decay rate or frequency to fit; "
                                 "probed statically", probe_omega=w_eff, probe_reference=w_ref,
                 passed=bool(w_eff <= rigid_tol * w_ref)))
             continue
         t0 = time.perf_counter()
+        x, yh = modes.vectors[:, j], _left_row(modes, j, Mr, Pr, Qr)
+        amp = _amplification(Mr, Pr, s, x, yh)
+        if not amp <= defective_amplification:
+            results.append(ModeCheck(
+                **base, amplification=amp,
+                skipped=f"defective eigenvalue (a Jordan block: modal-coordinate amplification "
+                        f"{amp:.2g}): no modal coordinate isolates it, not simulated"))
+            continue
         try:
-            mc = _check_one(dyn, Mr, Pr, N, s, modes.vectors[:, j], _left_row(modes, j, Mr, Pr, Qr),
-                            names, base, opts)
+            mc = _check_one(dyn, Mr, Pr, N, s, x, yh, names, base, opts)
+            if amp > recheck_amplification:  # nearly defective: the amplitude's share, measured
+                small = _check_one(dyn, Mr, Pr, N, s, x, yh, names, base,
+                                   {**opts, "amplitude": opts["amplitude"] / 10})
+                mc = _smaller_amplitude(mc, small)
         except SimulationError as exc:
             raise exc.located(file=getattr(model, "source", None), element=f"mode {k}") from None
-        dscale = max(abs(mc.predicted_delta), (zero_delta_tol / delta_rtol) * abs(s))
-        err_d = abs(mc.measured_delta - mc.predicted_delta) / dscale
-        passed = bool(err_d <= delta_rtol and mc.rel_error_omega <= omega_rtol)
-        results.append(replace(mc, rel_error_delta=err_d, passed=passed,
+        results.append(replace(_judge(replace(mc, amplification=amp), s, delta_rtol, omega_rtol,
+                                      zero_delta_tol, resolution_k, ode_rtol),
                                elapsed=time.perf_counter() - t0))
     reactions = tuple(reaction_forces(model, eq))
     return CheckResult(
@@ -335,10 +393,56 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
                     "amplitude": amplitude, "periods": periods,
                     "efolds": efolds, "samples_per_period": samples_per_period,
                     "min_samples": min_samples, "ode_rtol": ode_rtol, "mass_tol": mass_tol,
+                    "resolution_k": resolution_k, "max_fast_periods": max_fast_periods,
+                    "recheck_amplification": recheck_amplification,
+                    "defective_amplification": defective_amplification,
                     "projection_tol": dyn.projection_tol, "length_scale": length},
         integrator=method, elapsed=time.perf_counter() - t_start, reactions=reactions,
         constraint_stiffness=bool(getattr(lin, "constraint_stiffness", True)),
         actuators=tuple(dict(r) for r in getattr(model, "drivers", ()) or ()))
+
+
+def _judge(mc, s, delta_rtol, omega_rtol, zero_delta_tol, resolution_k, ode_rtol):
+    """Pass/fail of a simulated mode against tolerances tied to the run's resolution (module
+    docstring), and what the run could not resolve."""
+    floor = ode_rtol * abs(s)
+    u_d = max(resolution_k * mc.se_delta, floor, mc.amplitude_share_delta)
+    u_w = max(resolution_k * mc.se_omega, floor, mc.amplitude_share_omega)
+    w_p = mc.predicted_omega if mc.kind not in ("overdamped", "divergence") else 0.0
+    w_scale = w_p if w_p > 0 else abs(s)
+    tol_d = max(delta_rtol * abs(mc.predicted_delta), u_d)
+    tol_w = max(omega_rtol * w_scale, u_w)
+    err_d, err_w = abs(mc.measured_delta - mc.predicted_delta), abs(mc.measured_omega - w_p)
+    notes = [mc.unresolved] if mc.unresolved else []
+    if u_d > zero_delta_tol * abs(s):
+        notes.append(f"δ resolved only to ±{u_d:.2g} (> zero_delta_tol·|s| = "
+                     f"{zero_delta_tol * abs(s):.2g})")
+    if u_w > omega_rtol * w_scale:
+        notes.append(f"ω resolved only to ±{u_w:.2g} (> omega_rtol·ω = {omega_rtol * w_scale:.2g}; "
+                     f"the run turns {abs(w_p) * mc.duration:.3g} rad)")
+    return replace(mc, rel_error_delta=err_d / (tol_d / delta_rtol),
+                   rel_error_omega=err_w / (tol_w / omega_rtol),
+                   passed=bool(err_d <= tol_d and err_w <= tol_w), resolution_delta=u_d,
+                   resolution_omega=u_w, tolerance_delta=tol_d, tolerance_omega=tol_w,
+                   unresolved="; ".join(notes))
+
+
+def _amplification(Mr, Pr, s, x, yh):
+    """How much a relative error of the state (x, ẋ ~ |s| x) grows in the modal coordinate:
+    ‖y‖(‖sM + P‖ + |s|‖M‖)‖x‖ / |yᴴ(2sM + P)x| (≈ 1 for a well separated mode, ≈ ω_n/ω_d for
+    a pair near critical damping, ∞ for a Jordan block)."""
+    den = abs(yh @ ((2 * s * Mr + Pr) @ x))
+    num = np.linalg.norm(yh) * (np.linalg.norm(s * Mr + Pr) + abs(s) * np.linalg.norm(Mr)) \
+        * np.linalg.norm(x)
+    return float(num / den) if den > 0 else math.inf
+
+
+def _smaller_amplitude(big, small):
+    """The run at a tenth of the amplitude is the measurement; how far it moved from the full
+    amplitude's is the amplitude-dependent share of the error (a bound of what remains in it
+    for any error growing like aᵖ, p ≥ 1), counted into the resolution."""
+    return replace(small, amplitude_share_delta=abs(big.measured_delta - small.measured_delta),
+                   amplitude_share_omega=abs(big.measured_omega - small.measured_omega))
 
 
 def _left_row(modes, j, Mr, Pr, Qr, repeat_rtol=1e-8):
@@ -382,6 +486,13 @@ def _check_one(dyn, Mr, Pr, N, s, x, yh, names, base, o):
         T = o["periods"] * 2 * np.pi / omega
         if delta != 0:
             T = min(T, o["efolds"] / abs(delta))
+    capped = T > o["t_cap"]
+    unresolved = ""
+    if capped:
+        unresolved = (f"run capped at T = {o['t_cap']:.4g} s ({T:.4g} s asked): "
+                      f"max_fast_periods of the fastest listed mode")
+        T = o["t_cap"]
+    if not real_mode:
         n_per = T * omega / (2 * np.pi)
         n_samples = max(o["min_samples"], int(math.ceil(o["samples_per_period"] * n_per)))
         seg_len = min(2 * np.pi / omega, 0.1 / abs(delta) if delta else np.inf)
@@ -406,7 +517,7 @@ def _check_one(dyn, Mr, Pr, N, s, x, yh, names, base, o):
         raise SimulationError(f"eigenvalue {s:.6g} is defective (yᴴ(2sM + P)x = 0): its modal "
                               f"coordinate is undefined")
     eta = (yh @ ((s * Mr + Pr) @ X + Mr @ Xd)) / den
-    meas_delta, meas_omega, resid, eta0 = _fit_exponential(sim.t, eta)
+    meas_delta, meas_omega, resid, eta0, se_d, se_w = _fit_exponential(sim.t, eta)
     if real_mode:  # η is real: its phase is constant (0 or π), the fitted slope a residue
         meas_omega = abs(meas_omega)
     # an oscillatory mode keeps the sign of its phase slope: a response turning the other way
@@ -420,19 +531,21 @@ def _check_one(dyn, Mr, Pr, N, s, x, yh, names, base, o):
         efolds=abs(delta) * T if not real_mode else abs(s) * T, amplitude=a,
         fit_residual=resid, fit_amplitude=eta0, constraint_drift=sim.constraint_drift,
         velocity_drift=sim.velocity_drift, max_projection=sim.max_projection, nfev=sim.nfev,
-        coordinate=names[jmax], t=sim.t, eta=eta, response=sim.u[jmax])
+        coordinate=names[jmax], t=sim.t, eta=eta, response=sim.u[jmax], se_delta=se_d,
+        se_omega=se_w, capped=capped, unresolved=unresolved)
 
 
-def _probe_rigid(dyn, Mr, N, x, a, modes, eq, length):
+def _probe_rigid(dyn, Mr, N, x, a, modes, eq, length, names):
     """(ω_eff, ω_ref) for a listed rigid-body mode: does the nonlinear model really offer no
     restoring force along it?
 
     The reduced accelerations at q₀ ± a N x̂ (projected onto the constraints, q̇ = 0) give by
     central differences k_eff = −x̂ᵀM_r(ẍ₊ − ẍ₋) / (2a x̂ᵀM_r x̂) and ω_eff = √|k_eff|; the
     O(a²) offset of the projected start from a curved rigid motion is even in a and cancels.
-    ω_ref, the model's own frequency scale, is the largest |s| of its other listed modes or
-    √(force scale / (length · largest mass)), whichever is larger.  A linearization that drops a
-    stiffness (the pendulum without Σλ∇²Φ) reports a rigid-body mode that fails this probe.
+    ω_ref is the scale of the mode at hand (:func:`_mode_scale`): the forces and stiffnesses on
+    the points it moves, so a stiff element elsewhere in the model cannot hide a restoring
+    force.  A linearization that drops a stiffness (the pendulum without Σλ∇²Φ) reports a
+    rigid-body mode that fails this probe.
     """
     x = x.real if np.linalg.norm(x.real) >= np.linalg.norm(x.imag) else x.imag
     full = N @ x
@@ -444,17 +557,49 @@ def _probe_rigid(dyn, Mr, N, x, a, modes, eq, length):
         acc.append(N.T @ qdd)
     k_eff = -(x @ Mr @ (acc[0] - acc[1])) / (2 * a * (x @ Mr @ x))
     w_eff = math.sqrt(abs(k_eff))
-    others = [abs(s) for s, kd in zip(modes.eigenvalues, modes.kind) if kd != "rigid-body"]
-    m_max = float(np.max(np.abs(np.diag(dyn.M)), initial=0.0)) or 1.0
-    f_scale = float(getattr(eq, "tolerances", {}).get("force_scale", 0.0) or 0.0)
-    w_ref = max(max(others, default=0.0), math.sqrt(f_scale / (length * m_max)))
+    w_ref = _mode_scale(dyn, N @ x, eq, length, names)
+    if w_ref == 0.0:  # nothing acts on these points: the model's other modes give the scale
+        others = [abs(s) for s, kd in zip(modes.eigenvalues, modes.kind) if kd != "rigid-body"]
+        w_ref = max(others, default=0.0)
     return w_eff, w_ref
+
+
+def _mode_scale(dyn, shape, eq, length, names, involved_tol=1e-3):
+    """Frequency scale of the points a mode moves: ω_ref² = max(f/(L m), k/m) over those points'
+    coordinates, with f the largest applied generalized force at equilibrium, k the largest
+    row sum of |K + Σλ∇²Φ| (forces' and constraint forces' stiffness) and m the largest row
+    sum of |M| of the coordinates that move (|shape| ≥ involved_tol·max)."""
+    mag = np.abs(shape)
+    moving = np.flatnonzero(mag >= involved_tol * mag.max()) if mag.size and mag.max() > 0 else []
+    groups = {str(names[j]).rsplit(".", 1)[0] for j in moving}
+    coords = [j for j, nm in enumerate(names) if str(nm).rsplit(".", 1)[0] in groups]
+    if not coords:
+        return 0.0
+    Mabs = np.abs(dyn.M)
+    m = float(np.max(Mabs[moving].sum(axis=1), initial=0.0))
+    if m <= 0:
+        return 0.0
+    q0 = dyn.q0
+    if dyn.linear:
+        g = np.zeros(dyn.n)
+        K = np.abs(np.asarray(dyn.Q))
+    else:
+        g = np.asarray(dyn.force(q0, np.zeros(dyn.n)))
+        K = abs(dyn.model.force_jacobians(q0)[0])
+        lam = getattr(eq, "lam", None)
+        if dyn.m and lam is not None and len(lam):
+            K = K + abs(dyn.model.constraint_hessian(q0, lam))
+        K = K.toarray() if hasattr(K, "toarray") else np.asarray(K)
+    f = float(np.max(np.abs(g[coords]), initial=0.0))
+    k = float(np.max(K[coords].sum(axis=1), initial=0.0))
+    return math.sqrt(max(f / (length * m), k / m))
 
 
 def _fit_exponential(t, eta):
     """Least-squares fit of η(t) = η₀ e^{(−δ + iω) t}: log|η| and unwrapped arg η linear in t.
 
-    Returns (δ, ω, rms residual of log η, fitted |η₀|).
+    Returns (δ, ω, rms residual of log η, fitted |η₀|, standard error of δ, of ω); the
+    standard errors are those of the two slopes from the residuals (N − 2 degrees of freedom).
     """
     mag = np.abs(eta)
     if np.any(mag == 0) or not np.all(np.isfinite(mag)):
@@ -464,5 +609,10 @@ def _fit_exponential(t, eta):
     A = np.column_stack([np.ones_like(t), t])
     (c0, c1), *_ = np.linalg.lstsq(A, logm, rcond=None)
     (p0, p1), *_ = np.linalg.lstsq(A, ph, rcond=None)
-    res = np.sqrt(np.mean((logm - c0 - c1 * t) ** 2 + (ph - p0 - p1 * t) ** 2))
-    return float(-c1), float(p1), float(res), float(np.exp(c0))
+    r_m, r_p = logm - c0 - c1 * t, ph - p0 - p1 * t
+    res = np.sqrt(np.mean(r_m**2 + r_p**2))
+    sxx = float(np.sum((t - t.mean()) ** 2))
+    dof = max(t.size - 2, 1)
+    se_d = math.sqrt(float(np.sum(r_m**2)) / dof / sxx) if sxx > 0 else math.inf
+    se_w = math.sqrt(float(np.sum(r_p**2)) / dof / sxx) if sxx > 0 else math.inf
+    return float(-c1), float(p1), float(res), float(np.exp(c0)), se_d, se_w

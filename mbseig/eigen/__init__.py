@@ -11,10 +11,10 @@
 Classification (stable / critical / unstable) is not made here but in :mod:`mbseig.modal`.
 """
 
-from .base import SOLVERS, QEPSolution, SolverPath, dense_solvers, partial_solvers
+from .base import SOLVERS, QEPSolution, SingularPencilError, SolverPath, dense_solvers, partial_solvers
 from .dense import choose_solver, solve_qep
 from .measures import EPS
 from .partial import solve_partial, sparse_structure
 
-__all__ = ["SOLVERS", "QEPSolution", "SolverPath", "dense_solvers", "partial_solvers",
+__all__ = ["SOLVERS", "QEPSolution", "SingularPencilError", "SolverPath", "dense_solvers", "partial_solvers",
            "choose_solver", "solve_qep", "solve_partial", "sparse_structure", "EPS"]

@@ -9,6 +9,19 @@ Absolute condition number from the left vector y (yᴴ(s²M + sP + Q) = 0)::
     κ = w(s) ‖x‖ ‖y‖ / |yᴴ(2sM + P)x|
 
 so that κ·η bounds the error of s to first order (docs/design.md, "Eigenpair errors").
+
+The componentwise pair (Higham & Higham 1998) perturbs each entry relative to itself, so a zero
+entry stays zero::
+
+    η_c = maxᵢ |r|ᵢ / ((|s|²|M| + |s||P| + |Q|)|x|)ᵢ,   κ_c = |y|ᵀ(|s|²|M| + |s||P| + |Q|)|x| / |yᴴ(2sM + P)x|
+
+and κ_c·η_c is an error bound of s as valid as κ·η (the computed pair is exact for a perturbation
+of M, P, Q bounded entrywise by η_c); it is much sharper for badly scaled models and structured
+zeros (an exact zero eigenvalue of a coordinate without stiffness has κ_c = 0).
+
+For |s| > 1 every quantity is evaluated on the reversed polynomial (t = 1/s:
+M + tP + t²Q, the same ratios divided by |s|²), so |s| up to the overflow threshold gives finite
+η and κ: no |s|² is ever formed.
 """
 
 from __future__ import annotations
@@ -17,19 +30,63 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ..numerics import colnorm, unit_columns
+from ..numerics import colnorm as _colnorm_fast
 
-__all__ = ["EPS", "fro", "is_symmetric", "rayleigh_fit", "backward_errors", "conditions",
-           "better_half", "undamped_roots", "undamped_pairs", "proportional_real_error"]
+__all__ = ["EPS", "colnorm", "unit_columns", "pow2_scale", "fro", "is_symmetric", "rayleigh_fit", "backward_errors", "conditions",
+           "componentwise", "better_half", "undamped_roots", "undamped_pairs",
+           "proportional_real_error"]
 
 EPS = np.finfo(float).eps
+_BIG, _SMALL = 1e150, 1e-150  # beyond these, norms are computed on a scaled copy
+
+
+def pow2_scale(X, e):
+    """X · 2^e (e broadcast against X), exactly and without the overflow that a complex
+    division by a subnormal number meets."""
+    if np.iscomplexobj(X):
+        return np.ldexp(X.real, e) + 1j * np.ldexp(X.imag, e)
+    return np.ldexp(X, e)
+
+
+def colnorm(X):
+    """Column 2-norms without underflow or overflow of the squares (entries beyond 1e±150 are
+    scaled per column first; the others take the fast path)."""
+    X = np.asarray(X)
+    if X.size == 0:
+        return np.zeros(X.shape[1] if X.ndim == 2 else 0)
+    m = np.max(np.abs(X), axis=0)
+    odd = (m > _BIG) | ((m < _SMALL) & (m > 0))
+    if not np.any(odd):
+        return _colnorm_fast(X)
+    out = np.zeros(X.shape[1])
+    ok = ~odd
+    if np.any(ok):
+        out[ok] = _colnorm_fast(X[:, ok])
+    e = np.frexp(m[odd])[1]  # scale by 2^-e: exact, no overflow even for a subnormal m
+    Xs = pow2_scale(X[:, odd], -e[None, :])
+    with np.errstate(over="ignore"):  # ≤ √n · 2 per column: the product is the true norm
+        out[odd] = np.ldexp(_colnorm_fast(Xs), e)
+    return out
+
+
+def unit_columns(X):
+    """X with unit columns (zero columns left as they are)."""
+    nrm = colnorm(X)
+    nrm[nrm == 0] = 1.0
+    return X / nrm
 
 
 def fro(A) -> float:
-    """Frobenius norm of a dense or sparse matrix."""
-    if sp.issparse(A):
-        return float(spla.norm(A)) if A.nnz else 0.0
-    return float(np.linalg.norm(A))
+    """Frobenius norm of a dense or sparse matrix, without overflow or underflow of the squares."""
+    data = A.data if sp.issparse(A) else np.asarray(A)
+    if data.size == 0:
+        return 0.0
+    big = float(np.max(np.abs(data)))
+    if big == 0.0:
+        return 0.0
+    if _SMALL < big < _BIG:
+        return float(spla.norm(A)) if sp.issparse(A) else float(np.linalg.norm(A))
+    return big * float(np.linalg.norm(np.ravel(data) / big))
 
 
 def is_symmetric(A, tol) -> bool:
@@ -52,15 +109,65 @@ def rayleigh_fit(M, P, Q, tol, *, probes=None, seed=0):
         V = np.random.default_rng(seed).standard_normal((M.shape[0], probes))
         cols, b = [(M @ V).ravel(), (Q @ V).ravel()], (P @ V).ravel()
     A = np.column_stack(cols)
-    coef, *_ = np.linalg.lstsq(A, b, rcond=None)
-    if np.linalg.norm(A @ coef - b) <= tol * np.linalg.norm(b):
-        return float(coef[0]), float(coef[1])
-    return None
+    with np.errstate(all="ignore"):  # entries near the range limits: judged by finiteness below
+        coef, *_ = np.linalg.lstsq(A, b, rcond=None)
+        fits = bool(np.all(np.isfinite(coef))) and \
+            np.linalg.norm(A @ coef - b) <= tol * np.linalg.norm(b)
+    return (float(coef[0]), float(coef[1])) if fits else None
+
+
+def _reversal(s):
+    """(t, big): t = 1/s where |s| > 1 (reversed polynomial), else s; big marks those columns."""
+    s = np.asarray(s)
+    big = np.abs(s) > 1.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(big, 1.0 / np.where(big, s, 1.0), s)
+    return t, big
+
+
+def _coefficients(s, derivative=False):
+    """Per-column coefficients of M, P, Q in the (reversed where |s| > 1) polynomial:
+    (s², s, 1) or (1, t, t²); with ``derivative``, those of M and P in 2sM + P or 2M + tP."""
+    t, big = _reversal(s)
+    one = np.ones_like(t)
+    if derivative:
+        return np.where(big, 2.0, 2.0 * t), np.where(big, t, one)
+    return np.where(big, one, t * t), t, np.where(big, t * t, one)
+
+
+def _unreverse(kappa, s, den):
+    """κ of the reversed evaluation times |s| (undo its 1/|s|); ∞ where yᴴ(2sM + P)x = 0."""
+    _, big = _reversal(s)
+    with np.errstate(over="ignore", invalid="ignore"):
+        kappa = np.where(big, kappa * np.abs(s), kappa)
+    return np.where(den > 0, kappa, np.inf)
 
 
 def _weights(s, norms):
+    """w(s) = |s|²‖M‖ + |s|‖P‖ + ‖Q‖, or w(s)/|s|² where |s| > 1 (reversed)."""
     nM, nP, nQ = norms
-    return np.abs(s) ** 2 * nM + np.abs(s) * nP + nQ
+    t, big = _reversal(s)
+    a = np.abs(t)
+    return np.where(big, nM + a * nP + a * a * nQ, a * a * nM + a * nP + nQ)
+
+
+def _residual(MX, PX, QX, s):
+    """(s²M + sP + Q)X, or (M + tP + t²Q)X with t = 1/s where |s| > 1, per column."""
+    cM, cP, cQ = _coefficients(s)
+    return MX * cM + PX * cP + QX * cQ
+
+
+def _derivative(MX, PX, s):
+    """(2sM + P)X, or (2M + tP)X with t = 1/s where |s| > 1 (the scaling of _residual / |s|)."""
+    cM, cP = _coefficients(s, derivative=True)
+    return MX * cM + PX * cP
+
+
+def _ratio(num, den):
+    """num/den with 0/0 = 0 and x/0 = ∞ (a pair with zero residual has η = 0); a quotient
+    beyond the double range is ∞ as well (a condition number that large bounds nothing)."""
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        return np.where(den > 0, num / np.where(den > 0, den, 1.0), np.where(num == 0, 0.0, np.inf))
 
 
 def backward_errors(ops, s, X, norms):
@@ -69,33 +176,56 @@ def backward_errors(ops, s, X, norms):
     A pair with zero residual has η = 0 even where the weights vanish (s = 0 with Q = 0).
     """
     M, P, Q = ops
-    MX, PX = M @ X, P @ X
-    R = MX * s  # Horner: (M X s + P X) s + Q X
-    R = R + PX
-    R = R * s
-    R = R + Q @ X
-    rn = colnorm(R)
-    denom = _weights(s, norms) * colnorm(X)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        eta = np.where(denom > 0, rn / denom, np.where(rn == 0, 0.0, np.inf))
+    MX, PX, QX = M @ X, P @ X, Q @ X
+    rn = colnorm(_residual(MX, PX, QX, s))
+    xn = colnorm(X)
+    eta = np.where(xn > 0, _ratio(rn, _weights(s, norms) * xn), np.inf)  # x = 0: no eigenvector
     return eta, MX, PX
 
 
 def conditions(s, X, Yc, MX, PX, norms):
     """κ per pair, with ``Yc`` the conjugated left vectors (yᴴ = Ycᵀ) and MX, PX the products."""
+    s = np.asarray(s)
     num = _weights(s, norms) * colnorm(X) * colnorm(Yc)
-    den = np.abs(np.einsum("ij,ij->j", Yc, MX * (2 * s) + PX))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        kappa = num / den
-    return np.where(den > 0, kappa, np.inf)
+    den = np.abs(np.einsum("ij,ij->j", Yc, _derivative(MX, PX, s)))
+    return _unreverse(_ratio(num, den), s, den)
+
+
+def componentwise(ops, s, X, Yc, *, abs_ops=None):
+    """(η_c, κ_c) per pair: componentwise backward errors and condition numbers (module doc).
+
+    ops : (M, P, Q), dense or sparse; abs_ops : their entrywise absolute values if already formed.
+    Yc : conjugated left vectors (yᴴ = Ycᵀ), or None for y = x̄ (symmetric M, P, Q).
+    """
+    M, P, Q = ops
+    aM, aP, aQ = abs_ops if abs_ops is not None else tuple(abs(A) for A in ops)
+    s = np.asarray(s)
+    t, big = _reversal(s)
+    a = np.abs(t)
+    MX, PX, QX = M @ X, P @ X, Q @ X
+    R = np.abs(_residual(MX, PX, QX, s))
+    AX = np.abs(X)
+    D = np.where(big, aM @ AX + (aP @ AX) * a + (aQ @ AX) * (a * a),
+                 (aM @ AX) * (a * a) + (aP @ AX) * a + aQ @ AX)
+    eta_c = np.max(_ratio(R, D), axis=0, initial=0.0)
+    Yc = X if Yc is None else Yc
+    num = np.einsum("ij,ij->j", np.abs(Yc), D)
+    den = np.abs(np.einsum("ij,ij->j", Yc, _derivative(MX, PX, s)))
+    kappa_c = _unreverse(_ratio(num, den), s, den)
+    kappa_c = np.where((den == 0) & (num == 0), 0.0, kappa_c)  # 0/0: s fixed by the zero pattern
+    return eta_c, kappa_c
 
 
 def better_half(ops, s, X1, X2, norms):
     """Of the two halves of companion eigenvectors, the one with the smaller η per column.
 
     Returns (X, η, M X, P X, number of columns taken from the second half), X with unit columns.
+    Both halves are brought to one dtype first (a real half and a complex one of a real problem
+    with real eigenvalues), so no imaginary part is cast away.
     """
-    X1, X2 = np.ascontiguousarray(unit_columns(X1)), np.ascontiguousarray(unit_columns(X2))
+    dtype = np.result_type(X1, X2)
+    X1 = np.ascontiguousarray(unit_columns(X1), dtype=dtype)
+    X2 = np.ascontiguousarray(unit_columns(X2), dtype=dtype)
     e1, MX1, PX1 = backward_errors(ops, s, X1, norms)
     e2, MX2, PX2 = backward_errors(ops, s, X2, norms)
     take2 = e2 < e1
@@ -105,26 +235,34 @@ def better_half(ops, s, X1, X2, norms):
 
 
 def undamped_roots(w, alpha, beta):
-    """Both roots of s² + (α + βω²)s + ω² = 0 per undamped mode ω² = w, [s₊; s₋] (stable form)."""
-    c = alpha + beta * w
-    disc = c * c - 4.0 * w
+    """Both roots of s² + (α + βω²)s + ω² = 0 per undamped mode ω² = w, [s₊; s₋] (stable form).
+
+    Solved as u² + (c/r)u + w/r² = 0 with s = r u, r = max(|c|, √|w|), so that no c² or
+    c·c − 4w overflows whatever the magnitudes."""
+    w = np.asarray(w, float)
+    with np.errstate(over="ignore", invalid="ignore"):
+        c = alpha + beta * w
+    r = np.maximum(np.abs(c), np.sqrt(np.abs(w)))
+    r = np.where((r > 0) & np.isfinite(r), r, 1.0)
+    cu, wu = c / r, (w / r) / r
+    disc = cu * cu - 4.0 * wu
     s1 = np.empty(w.size, complex)
     s2 = np.empty(w.size, complex)
     osc = disc < 0
-    s1[osc] = -c[osc] / 2 + 0.5j * np.sqrt(-disc[osc])
+    s1[osc] = r[osc] * (-cu[osc] / 2 + 0.5j * np.sqrt(-disc[osc]))
     s2[osc] = np.conj(s1[osc])
     re = ~osc
     root = np.sqrt(disc[re])
-    cr = c[re]
+    cr = cu[re]
     big = -(cr + np.copysign(root, cr)) / 2  # the root of larger magnitude, no cancellation
-    small = np.divide(w[re], big, out=np.zeros_like(big), where=big != 0)
-    s1[re], s2[re] = big, small
+    small = np.divide(wu[re], big, out=np.zeros_like(big), where=big != 0)
+    s1[re], s2[re] = r[re] * big, r[re] * small
     return np.concatenate([s1, s2])
 
 
 def undamped_pairs(M, P, Q, w, V, alpha, beta, norms):
-    """s₊, s₋ of each undamped mode (ω², v) with s² + (α + βω²)s + ω² = 0; η and κ in real
-    arithmetic on the n real vectors (M, P, Q symmetric: y = x, κ = w(s)‖v‖²/|2s vᵀMv + vᵀPv|).
+    """s₊, s₋ of each undamped mode (ω², v) with s² + (α + βω²)s + ω² = 0; η and κ on the n real
+    vectors (M, P, Q symmetric: y = x, κ = w(s)‖v‖²/|2s vᵀMv + vᵀPv|).
 
     Returns (s, X, η, κ) with s = [s₊, s₋] and X = [V, V] (real, unit columns).
     """
@@ -135,17 +273,15 @@ def undamped_pairs(M, P, Q, w, V, alpha, beta, norms):
     k = w.size
     rn = np.empty(2 * k)
     for half in (slice(0, k), slice(k, 2 * k)):  # s₊ then s₋, both with the vectors V
-        sh = s[half]
-        s2 = sh * sh
-        Rr = MV * s2.real + PV * sh.real + QV
-        Ri = MV * s2.imag + PV * sh.imag
+        cM, cP, cQ = _coefficients(s[half])  # real arithmetic: no complex n × k temporaries
+        Rr = MV * cM.real + PV * cP.real + QV * cQ.real
+        Ri = MV * cM.imag + PV * cP.imag + QV * cQ.imag
         rn[half] = np.sqrt(np.einsum("ij,ij->j", Rr, Rr) + np.einsum("ij,ij->j", Ri, Ri))
         del Rr, Ri
-    weight = _weights(s, norms)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        eta = np.where(weight > 0, rn / weight, np.where(rn == 0, 0.0, np.inf))
-        den = np.abs(2 * s * np.concatenate([a, a]) + np.concatenate([b, b]))
-        kappa = np.where(den > 0, weight / den, np.inf)
+    eta = _ratio(rn, _weights(s, norms))
+    dM, dP = _coefficients(s, derivative=True)
+    den = np.abs(np.concatenate([a, a]) * dM + np.concatenate([b, b]) * dP)
+    kappa = _unreverse(_ratio(_weights(s, norms), den), s, den)
     return s, np.concatenate([V, V], axis=1), eta, kappa
 
 
@@ -156,9 +292,12 @@ def proportional_real_error(s, kappa, eta, norms, alpha, beta, fit_residual):
     |Δ Re s| ≤ |β| |s| κη + κ |s| ‖P − αM − βQ‖ / w(s) + ε |α + βω²|, w(s) the η weight.
     Real (overdamped) roots get no bound here (κη applies).
     """
-    weight = _weights(s, norms)
+    a = np.abs(s)
+    _, big = _reversal(s)
+    weight = _weights(s, norms)  # w(s), or w(s)/|s|² where |s| > 1
     ke = kappa * np.maximum(eta, EPS)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        fit = np.where(weight > 0, kappa * np.abs(s) * fit_residual / weight, np.inf)
-    err = np.abs(beta) * np.abs(s) * ke + fit + EPS * 2 * np.abs(s.real)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        scale = np.where(big, 1.0 / a, a)  # κ|s|·fit/w(s) in either form
+        fit = np.where(weight > 0, kappa * scale * fit_residual / weight, np.inf)
+        err = np.abs(beta) * a * ke + fit + EPS * 2 * np.abs(s.real)
     return np.where(np.abs(s.imag) > 0, err, np.inf)

@@ -6,15 +6,34 @@ of (M s² + P s + Q) x = 0 with sparse M, P, Q, without ever forming a dense mat
 (recorded in the result as ``solver``):
 
 ``partial-eigh``          P = 0, M and Q symmetric: ARPACK Lanczos (``eigsh``) in shift-invert
-                          mode on Q v = ω² M v with one sparse LU of Q − σM, σ = target².
+                          mode on Q v = ω² M v with one sparse LU of Q − σM per shift.
 ``partial-proportional``  P = αM + βQ (Rayleigh damping, checked on random probe vectors): the
                           same undamped modes, then s² + (α + βω²) s + ω² = 0 per mode.
 ``partial-companion``     anything else: ARPACK Arnoldi (``eigs``) on the companion pencil
                           A − sB of size 2n, shift-invert operator (A − σB)⁻¹B applied through
-                          one sparse LU of the n×n matrix σ²M + σP + Q:
+                          one sparse LU of the n×n matrix σ²M + σP + Q per shift:
 
                               (A − σB) z = B v  ⇔  (σ²M + σP + Q) z₁ = −(M v₂ + (P + σM) v₁),
                                                     z₂ = v₁ + σ z₁,         s = σ + 1/μ.
+
+Which modes, and where the shifts go.  The modes are ranked by one measure throughout, ω_n = |s|
+(the undamped ω_n = √|ω²| on the symmetric paths, so that a divergence ω² < 0 ranks by its
+rate): ``n_modes`` nearest ``target``, or every mode with ω_lo ≤ ω_n ≤ ω_hi.  Shift-invert finds
+the eigenvalues nearest its shift, so the shifts are placed where the ranking looks: at σ = 0 for
+the lowest modes; on the circle |s| = ω_t at angles π/2, 0, π (then π/4, 3π/4 if those do not
+cover) for a target, so that a divergence at s = +ω_t is found as surely as a mode at iω_t; at
+±ω_t² for the symmetric paths.
+Every ARPACK run finds all eigenvalues within the distance r of its shift of the farthest one
+returned; the result is verified to *cover* the region the ranking selects from (the annulus
+| |s| − ω_t | ≤ d of the selected modes, or the band), else the count grows.  What was covered is
+returned in ``coverage`` (and said in the listing: a partial verdict is "of the modes computed").
+A repeated eigenvalue is never cut in half: the selection takes every member of equal ω_n, and
+``coverage["note"]`` says so.
+
+Shifts: a shift that makes σ²M + σP + Q exactly or nearly singular (an eigenvalue at the shift,
+e.g. the double zero of a free-free chain, a Jordan block) is moved left by 10⁻⁶, 10⁻⁴, 10⁻²
+of the frequency scale until the LU's condition (estimated by one solve) is below 1/(10⁴ ε), so
+that the other eigenvalues keep their accuracy.
 
 Constraints Φ_q = G (m × n) stay in the pencil as a bordered matrix instead of a null-space
 basis (the multipliers λ are extra unknowns; their infinite eigenvalues map to μ = 0 and are
@@ -22,6 +41,12 @@ never returned):
 
     M_b = ┌ M  0 ┐    P_b = ┌ P  0 ┐    Q_b = ┌ Q    c Gᵀ ┐     (c = ‖Q‖/‖G‖ balances the rows)
           └ 0  0 ┘          └ 0  0 ┘          └ c G   0   ┘
+
+Ritz vectors of a pencil with singular M_b carry components along its infinite eigenvectors;
+each is *purified* by one more application of the shift-invert operator (Ericsson 1986), which
+annihilates them.  With stiffness-proportional damping (β ≠ 0) the multiplier part of an
+undamped mode v = [x; λ] is not that of the damped one: from (s²M + sP + Q)x + cGᵀμ = 0 and
+P = αM + βQ, μ = (1 + βs)λ, so the multiplier rows are scaled per root.
 
 Every returned pair is verified by its backward error on the (bordered) problem; a pair whose η
 exceeds ``verify_tol`` or an ARPACK run that does not converge raises :class:`SolverError`.
@@ -35,19 +60,28 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..errors import SolverError
-from ..numerics import unit_columns
 from .base import QEPSolution, partial_solvers, register, requested_path
 from .measures import (
+    EPS,
+    backward_errors,
     better_half,
+    colnorm,
+    componentwise,
     conditions,
     fro,
     is_symmetric,
     proportional_real_error,
     rayleigh_fit,
-    undamped_pairs,
+    undamped_roots,
+    unit_columns,
 )
 
 __all__ = ["solve_partial", "sparse_structure"]
+
+SHIFT_OFFSETS = (0.0, 1e-6, 1e-4, 1e-2)  # relative moves of a shift that sits on an eigenvalue
+SHIFT_COND = 1.0 / (1e4 * EPS)
+TARGET_ANGLES = ((0.5, 0.0, 1.0), (0.25, 0.75))  # × π: shifts on |s| = ω_t, the second set
+# only when the first does not cover the annulus the selection looks at
 
 
 def _csr(A, n=None):
@@ -55,7 +89,10 @@ def _csr(A, n=None):
         return sp.csr_matrix((n, n))
     A = sp.csr_matrix(A) if not sp.issparse(A) else A.tocsr()
     if np.iscomplexobj(A.data):
-        raise SolverError("M, P and Q must be real matrices")
+        if np.any(A.data.imag):
+            raise SolverError("the partial paths take real M, P, Q; a complex problem (e.g. "
+                              "hysteretic damping) needs the dense path")
+        A = sp.csr_matrix((A.data.real, A.indices, A.indptr), shape=A.shape)
     return A.astype(float)
 
 
@@ -77,22 +114,39 @@ def sparse_structure(M, P, Q, *, sym_tol=1e-13, rayleigh_tol=1e-12, probes=3, se
 
 
 class _ShiftLU:
-    """LU of σ²M + σP + Q (σ real or complex), retried at nearby shifts if exactly singular."""
+    """LU of σ²M + σP + Q (``quadratic``) or Q − σM, at σ or, when that is (nearly) singular,
+    at σ moved left by ``SHIFT_OFFSETS`` × ``scale`` (module docstring)."""
 
     def __init__(self, M, P, Q, sigma, scale, quadratic=True):
-        last = None
-        for k in range(4):
-            sig = sigma if k == 0 else sigma - (10.0 ** (k - 10)) * scale
+        best, last = None, None
+        b = np.random.default_rng(7).standard_normal(M.shape[0])
+        for off in SHIFT_OFFSETS:
+            sig = sigma - off * scale
             A = (sig * sig * M + sig * P + Q) if quadratic else (Q - sig * M)
             try:
-                self.lu = spla.splu(A.tocsc())
-                self.sigma = sig
-                return
+                lu = spla.splu(A.tocsc())
             except RuntimeError as exc:  # exactly singular: σ is an eigenvalue
                 last = exc
-        raise SolverError(f"shift-invert: σ²M + σP + Q is singular near σ = {sigma:.6g} ({last})")
+                continue
+            with np.errstate(over="ignore", invalid="ignore"):
+                x = lu.solve(b.astype(lu.U.dtype))  # one solve: ‖A⁻¹‖ from below
+                cond = fro(A) * float(np.linalg.norm(x)) / float(np.linalg.norm(b))
+            cond = cond if np.isfinite(cond) else np.inf
+            if best is None or cond < best[2]:
+                best = (lu, sig, cond)
+            if cond <= SHIFT_COND:
+                break
+        if best is None:
+            raise SolverError(f"shift-invert: σ²M + σP + Q is singular at σ = {sigma:.6g} and "
+                              f"every nearby shift tried ({last}): a coordinate without mass, "
+                              f"damping or stiffness?")
+        self.lu, self.sigma, self.cond = best
 
     def solve(self, b, trans="N"):
+        b = np.asarray(b)
+        if np.iscomplexobj(b) and not np.iscomplexobj(self.lu.U.data):  # real factors
+            return self.lu.solve(np.ascontiguousarray(b.real), trans=trans) \
+                + 1j * self.lu.solve(np.ascontiguousarray(b.imag), trans=trans)
         return self.lu.solve(b, trans=trans)
 
 
@@ -119,44 +173,109 @@ def _arpack(fn, what, **kw):
         raise SolverError(f"{what}: ARPACK failed: {exc}") from None
 
 
-def _undamped_partial(Mb, Qb, k, sigma, scale, ncv, maxiter, tol):
-    """k eigenpairs (ω², v) of Q v = ω² M v nearest σ (Lanczos, shift-invert mode)."""
+def _undamped_partial(Mb, Qb, k, sigma, scale, ncv, maxiter, tol, purify):
+    """k eigenpairs (ω², v) of Q v = ω² M v nearest σ (Lanczos, shift-invert mode), purified
+    when M is singular (bordered), and the shift actually used."""
     nb = Mb.shape[0]
     lu = _ShiftLU(Mb, None, Qb, sigma, scale, quadratic=False)
     OPinv = spla.LinearOperator((nb, nb), matvec=lambda x: lu.solve(np.asarray(x).ravel()), dtype=float)
     w, V = _arpack(spla.eigsh, "partial-eigh", A=Qb, k=k, M=Mb, sigma=lu.sigma, which="LM",
                    OPinv=OPinv, ncv=ncv, maxiter=maxiter, tol=tol)
-    order = np.argsort(w)
-    return w[order], V[:, order], lu.sigma
+    if purify:  # v ← (Q − σM)⁻¹ M v: the component along M's null space (multipliers) is removed
+        V = lu.solve(np.asarray(Mb @ V))
+        mv = np.sqrt(np.abs(np.einsum("ij,ij->j", V, Mb @ V)))
+        V = V / np.where(mv > 0, mv, 1.0)
+    return w, V, lu.sigma
 
 
-def _companion_partial(Mb, Pb, Qb, k, sigma, scale, ncv, maxiter, tol):
-    """k eigenpairs of the companion pencil nearest σ in the s-plane (Arnoldi, shift-invert)."""
+def _companion_partial(Mb, Pb, Qb, k, sigma, scale, ncv, maxiter, tol, purify):
+    """k eigenpairs of the companion pencil nearest σ in the s-plane (Arnoldi, shift-invert):
+    (s, first halves, second halves / s, coverage (σ, ν_min, real_part)).
+
+    A complex σ on real matrices runs real Arnoldi on the real part of the shift-invert operator,
+    Re (A − σB)⁻¹B, whose eigenvalues ν = ½[1/(s − σ) + 1/(s − σ̄)] are largest for s near σ
+    or σ̄ (Parlett & Saad 1987; complex Arnoldi is two orders slower here); s is recovered from
+    each Ritz vector by one application of the complex operator.  Every eigenvalue not returned
+    has |ν| ≤ ν_min, which is what the coverage test uses."""
     nb = Mb.shape[0]
     lu = _ShiftLU(Mb, Pb, Qb, sigma, scale)
     sig = lu.sigma
     PsM = (Pb + sig * Mb).tocsr()
-    dtype = complex if np.iscomplex(sig) else float
+    real_part = bool(np.iscomplex(sig))
 
     def op(v):
-        v = np.asarray(v).ravel()
+        v = np.asarray(v)
         v1, v2 = v[:nb], v[nb:]
-        z1 = -lu.solve(np.asarray(Mb @ v2 + PsM @ v1, dtype=dtype))
+        b = np.asarray(Mb @ v2 + PsM @ v1)
+        z1 = -lu.solve(b.astype(np.result_type(b, complex if real_part else float)))
         return np.concatenate([z1, v1 + sig * z1])
 
-    OP = spla.LinearOperator((2 * nb, 2 * nb), matvec=op, dtype=dtype)
-    mu, Z = _arpack(spla.eigs, "partial-companion", A=OP, k=k, which="LM", ncv=ncv,
+    if real_part:
+        OP = spla.LinearOperator((2 * nb, 2 * nb), matvec=lambda v: op(v).real, dtype=float)
+    else:
+        OP = spla.LinearOperator((2 * nb, 2 * nb), matvec=op, dtype=float)
+    nu, Z = _arpack(spla.eigs, "partial-companion", A=OP, k=k, which="LM", ncv=ncv,
                     maxiter=maxiter, tol=tol)
-    ok = mu != 0
-    mu, Z = mu[ok], Z[:, ok]
+    ok = nu != 0
+    nu, Z = nu[ok], Z[:, ok]
+    nu_min = float(np.min(np.abs(nu))) if nu.size else np.inf
+    if real_part or purify:  # (A − σB)⁻¹B once more: s from the Ritz vector, and purified
+        W = np.column_stack([op(Z[:, j]) for j in range(Z.shape[1])]) if Z.shape[1] else Z
+        with np.errstate(divide="ignore", invalid="ignore"):
+            mu = np.einsum("ij,ij->j", Z.conj(), W) / np.einsum("ij,ij->j", Z.conj(), Z)
+        Z = W
+    else:
+        mu = nu
     s = sig + 1.0 / mu
-    return s, Z[:nb], Z[nb:] / np.where(s != 0, s, 1.0), sig
+    return s, Z[:nb], Z[nb:] / np.where(s != 0, s, 1.0), (complex(sig), nu_min, real_part)
 
 
+def _nu(points, sigma, real_part):
+    """|ν| of the shift-invert operator at the points (see :func:`_companion_partial`)."""
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        if real_part:
+            nu = np.abs(0.5 * (1 / (points - sigma) + 1 / (points - np.conj(sigma))))
+        else:
+            nu = np.abs(1 / (points - sigma))
+    return np.where(np.isfinite(nu), nu, np.inf)  # at the shift itself: found for sure
 
 
+def _dedupe(values, X, rtol, floor):
+    """Indices of the eigenpairs to keep when several shifts found the same one: a pair is
+    dropped when its value equals kept ones (|Δ| ≤ rtol·max(|s|, floor)) and its vector lies in
+    their span (an independent vector of a repeated eigenvalue is kept)."""
+    keep = []
+    for i in range(values.size):
+        if keep:
+            kv = values[keep]
+            dup = np.flatnonzero(np.abs(kv - values[i]) <= rtol * max(abs(values[i]), floor))
+        else:
+            dup = np.zeros(0, int)
+        if dup.size:
+            B = np.linalg.qr(X[:, np.asarray(keep)[dup]])[0]
+            v = X[:, i] / max(np.linalg.norm(X[:, i]), np.finfo(float).tiny)
+            if np.linalg.norm(v - B @ (B.conj().T @ v)) <= 1e-6:
+                continue
+        keep.append(i)
+    return np.array(keep, int)
 
 
+def _covered(points, runs, margin=1e-9):
+    """Every point (complex) where some run would have found an eigenvalue (|ν| > ν_min)?"""
+    if not runs:
+        return False
+    hit = np.zeros(points.size, bool)
+    for sigma, nu_min, real_part in runs:
+        hit |= _nu(points, sigma, real_part) > nu_min * (1 + margin)
+    return bool(np.all(hit))
+
+
+def _annulus_points(lo, hi, n_angle=73, n_radius=5):
+    """Sample points of {lo ≤ |s| ≤ hi, Im s ≥ 0} (boundary and interior)."""
+    th = np.linspace(0.0, np.pi, n_angle)
+    rad = np.linspace(max(lo, 0.0), hi, n_radius)
+    pts = (rad[:, None] * np.exp(1j * th[None, :])).ravel()
+    return pts if lo > 0 else np.concatenate([pts, [0.0]])
 
 
 def solve_partial(M, P, Q, *, n_modes: int | None = None, target: float | None = None,
@@ -166,16 +285,21 @@ def solve_partial(M, P, Q, *, n_modes: int | None = None, target: float | None =
                   max_modes: int = 2000) -> QEPSolution:
     """The requested modes of (M s² + P s + Q) x = 0 (M, P, Q sparse or dense, never densified).
 
-    n_modes : number of modes (a complex pair counts once) nearest ``target``; default 20.
-    target : angular frequency ω (rad/s) the modes are sought around; default 0 (lowest modes).
+    n_modes : number of modes (a complex pair counts once) nearest ``target``; default 20.  A
+        repeated eigenvalue at the edge is taken whole (``coverage["note"]`` says so).
+    target : angular frequency ω (rad/s) the modes are sought around, ranked by | |s| − ω |;
+        default 0 (lowest modes).
     band : (ω_lo, ω_hi): every mode with ω_lo ≤ ω_n ≤ ω_hi (the count grows until all are found).
     G : constraint Jacobian Φ_q (m × n); M, P, Q are then in full coordinates (bordered pencil).
     solver : ``auto`` or a partial path of :data:`mbseig.eigen.base.SOLVERS`.
     verify_tol : largest backward error accepted for a returned pair (else SolverError).
     arpack_tol, ncv, maxiter : ARPACK's own options (0 = machine precision).
-    left : on the companion path with non-symmetric matrices, compute left eigenvectors (a second
-        ARPACK run on the transposed problem) for the condition numbers; otherwise κ is estimated
-        with the right vector (exact for symmetric M, P, Q).
+    left : on the companion path with non-symmetric matrices, compute left eigenvectors (inverse
+        iteration on the transposed problem at each eigenvalue) for the condition numbers;
+        otherwise κ is estimated with the right vector (exact for symmetric M, P, Q).
+
+    The result's ``coverage`` = {"measure", "omega_n": (lo, hi), "dof", "shifts", "note"}: every
+    eigenvalue whose measure (|s|, or the undamped ω_n) lies in [lo, hi] was found.
     """
     n = M.shape[0]
     M, Q = _csr(M), _csr(Q)
@@ -191,6 +315,8 @@ def solve_partial(M, P, Q, *, n_modes: int | None = None, target: float | None =
             raise SolverError(f"band must be (ω_lo, ω_hi) with 0 ≤ ω_lo ≤ ω_hi, got {band!r}")
     if n_modes is not None and int(n_modes) < 1:
         raise SolverError(f"n_modes must be a positive integer, got {n_modes!r}")
+    if target is not None and not (np.isfinite(target) and target >= 0):
+        raise SolverError(f"target must be a finite angular frequency ≥ 0, got {target!r}")
     name, reason, extras = sparse_structure(M, P, Q, sym_tol=sym_tol, rayleigh_tol=rayleigh_tol)
     name, reason, extras = requested_path(solver, name, reason, extras, partial_solvers(),
                                           "partial solver")
@@ -205,103 +331,242 @@ def solve_partial(M, P, Q, *, n_modes: int | None = None, target: float | None =
         Mb, Pb, Qb = M, P, Q
     nb = Mb.shape[0]
     norms = (fro(Mb), fro(Pb), fro(Qb))
-    scale = norms[2] if norms[2] > 0 else 1.0
-    w_scale = np.sqrt(norms[2] / norms[0]) if norms[0] > 0 else 1.0
+    w_scale = np.sqrt(norms[2] / norms[0]) if norms[0] > 0 and norms[2] > 0 else 1.0
     omega_t = 0.0 if target is None else float(target)
-    if band is not None:
-        omega_t = 0.5 * (lo + hi) if name != "partial-companion" else 0.0
     want = 20 if n_modes is None else int(n_modes)
     symmetric_path = name in ("partial-eigh", "partial-proportional")
-    limit = nb - 2 if symmetric_path else 2 * nb - 2
-    while True:
-        k = want if symmetric_path else 2 * want + 1
-        if k > limit:
-            raise SolverError(f"{want} modes asked of a problem with {nb} unknowns: use the dense path")
-        if symmetric_path:
-            w, V, sig = _undamped_partial(Mb, Qb, k, omega_t**2, scale / max(norms[0], 1e-300), ncv,
-                                          maxiter, arpack_tol)
-            found = np.sqrt(np.abs(w))
-            radius = np.max(np.abs(w - sig))
-            done_band = band is None or radius >= max(sig - lo**2, hi**2 - sig) or k >= limit
-        else:
-            sig = 1j * omega_t if omega_t else 0.0
-            s, X1, X2, sig = _companion_partial(Mb, Pb, Qb, k, sig, w_scale, ncv, maxiter, arpack_tol)
-            done_band = band is None or np.max(np.abs(s)) > hi
-        if done_band:
-            break
-        if want >= max_modes:
-            raise SolverError(f"band {band!r} holds more than max_modes = {max_modes} modes")
-        want = min(2 * want, max_modes)
+    dof = n - m  # finite eigenvalues: 2·dof (the multipliers' are infinite)
+    run = dict(Mb=Mb, Pb=Pb, Qb=Qb, ncv=ncv, maxiter=maxiter, tol=arpack_tol, purify=m > 0,
+               w_scale=w_scale, dof=dof, limit=(dof - 1 if symmetric_path else 2 * dof - 2))
     if symmetric_path:
-        if band is not None:
-            inside = (found >= lo) & (found <= hi)
-            w, V = w[inside], V[:, inside]
-        s, X, eta, kappa = undamped_pairs(Mb, Pb, Qb, w, V, extras.get("alpha", 0.0),
-                                          extras.get("beta", 0.0), norms)
-        n_second, Yc = 0, X
+        found = _symmetric_search(run, want, omega_t, band, max_modes)
     else:
+        found = _companion_search(run, want, omega_t, band, max_modes)
+    if symmetric_path:
+        w, V = found["w"], found["V"]
+        alpha, beta = extras.get("alpha", 0.0), extras.get("beta", 0.0)
+        s = undamped_roots(w, alpha, beta)
+        V = V / colnorm(V)
+        X = np.concatenate([V, V], axis=1)
+        if m and beta != 0.0:  # multipliers of the damped mode: μ = (1 + βs) λ (module doc)
+            X = X.astype(complex)
+            X[n:, :] *= (1.0 + beta * s)[None, :]
+            X = unit_columns(X)
+        eta, MX, PX = backward_errors((Mb, Pb, Qb), s, X, norms)
+        Yc = X
+        kappa = conditions(s, X, Yc, MX, PX, norms)
+        n_second = 0
+    else:
+        s, X1, X2 = found["s"], found["X1"], found["X2"]
         X, eta, _, _, n_second = better_half((Mb, Pb, Qb), s, X1, X2, norms)
-        del X1, X2
-        s, X, eta = _select(s, X, eta, want if band is None else None, omega_t, band)
         symmetric_all = all(is_symmetric(A, sym_tol) for A in (Mb, Pb, Qb))
-        Yc = X if symmetric_all or not left else \
-            _left_vectors(Mb, Pb, Qb, s, k, sig, ncv, maxiter, arpack_tol, w_scale).conj()
+        Yc = X if symmetric_all or not left else _left_vectors(Mb, Pb, Qb, s)
         kappa = conditions(s, X, Yc, Mb @ X, Pb @ X, norms)
-    bad = eta > verify_tol
+    bad = ~(eta <= verify_tol)
     if np.any(bad):
         worst = ", ".join(f"{z.real:.6g}{z.imag:+.6g}j (η={e:.1e})" for z, e in zip(s[bad][:5], eta[bad][:5]))
         raise SolverError(f"{name}: {int(bad.sum())} returned pairs fail the backward-error check "
                           f"η ≤ {verify_tol:g}: {worst}")
+    eta_c, kappa_c = componentwise((Mb, Pb, Qb), s, X, Yc)
     Xq = unit_columns(X[:n]) if m else X
     real_error = None
     if name == "partial-proportional":
         a, b = extras["alpha"], extras["beta"]
         fit = fro((P - a * M - b * Q).tocsr())
         real_error = proportional_real_error(s, kappa, eta, norms, a, b, fit)
-    return QEPSolution(s, Xq, eta, kappa, name, reason, 0, norms,
-                       {**extras, "shift": complex(sig) if np.iscomplex(sig) else float(np.real(sig)),
-                        "n_requested": want, "arpack_k": k, "n_constraint_rows": m,
-                        "verify_tol": verify_tol, "second_half_vectors": n_second},
-                       real_error, left_vectors=(unit_columns(Yc[:n]) if m else Yc), partial=True)
+    coverage = {**found["coverage"], "dof": n - m}
+    details = {**extras, "shifts": found["shifts"], "n_requested": want, "arpack_k": found["k"],
+               "n_constraint_rows": m, "verify_tol": verify_tol, "second_half_vectors": n_second,
+               "shift_offsets_tried": list(SHIFT_OFFSETS)}
+    return QEPSolution(s, Xq, eta, kappa, name, reason, 0, norms, details, real_error,
+                       left_vectors=(unit_columns(Yc[:n]) if m else Yc), partial=True,
+                       n_dof=n - m, coverage=coverage, problem=(eta_c, kappa_c))
 
 
+# ---------------------------------------------------------------------------------------------
+# the searches: shifts, coverage, selection
+# ---------------------------------------------------------------------------------------------
+def _cluster_tol(scale):
+    return 1e-8 * scale
 
 
-def _select(s, X, eta, count, omega_t, band):
-    """Keep whole modes (a complex pair with both members) nearest ω_t, or those in the band."""
-    tol = 1e-9 * np.maximum(np.abs(s), 1e-300)
-    upper = s.imag >= -tol
-    s_u = s[upper]
-    key = np.abs(np.abs(s_u) - omega_t)
+def _slots(s, X, tie):
+    """Slot label per eigenvalue: members of a defective cluster (equal within ``tie``, parallel
+    vectors: the two halves of a rigid-body double zero, a Jordan block) share one mode slot."""
+    slot = np.arange(s.size)
+    for i in range(s.size):
+        for j in range(i):
+            if slot[j] == j and abs(s[i] - s[j]) <= tie:
+                a, b = X[:, i], X[:, j]
+                cos = abs(np.vdot(a, b)) / max(np.linalg.norm(a) * np.linalg.norm(b), 1e-300)
+                if cos >= 1 - 1e-6:
+                    slot[i] = j
+                    break
+    return slot
+
+
+def _pick(measure, count, omega_t, band, scale):
+    """Indices of the modes to keep: inside the band, or the ``count`` nearest ω_t in the
+    measure, extended by every mode of the same measure as the last (a repeated eigenvalue);
+    returns (indices, distance d of the last kept, extension note)."""
     if band is not None:
-        keep_u = (np.abs(s_u) >= band[0]) & (np.abs(s_u) <= band[1])
+        keep = np.flatnonzero((measure >= band[0]) & (measure <= band[1]))
+        return keep, None, ""
+    key = np.abs(measure - omega_t)
+    order = np.argsort(key, kind="stable")
+    if order.size == 0:
+        return order, 0.0, ""
+    head = order[:count]
+    d = float(key[head[-1]]) if head.size else 0.0
+    tie = _cluster_tol(max(float(measure[head[-1]]) if head.size else 0.0, scale))
+    extra = order[count:][key[order[count:]] <= d + tie]
+    note = ""
+    if extra.size:
+        note = (f"n_modes = {count} extended to {count + extra.size}: the mode at ω_n = "
+                f"{float(measure[head[-1]]):.6g} rad/s is repeated (its {1 + extra.size} members "
+                f"are listed together)")
+    return np.concatenate([head, extra]), d + tie, note
+
+
+def _symmetric_search(run, want, omega_t, band, max_modes):
+    """Undamped modes (ω², v) for the symmetric paths, ranked by ω_n = √|ω²|."""
+    Mb, Qb = run["Mb"], run["Qb"]
+    scale = run["w_scale"]
+    if band is not None:
+        mid = 0.5 * (band[0] ** 2 + band[1] ** 2)
+        sigmas = [mid, -mid] if band[0] > 0 else [0.0]
     else:
-        keep_u = np.zeros(s_u.size, bool)
-        keep_u[np.argsort(key, kind="stable")[:count]] = True
-    chosen = np.flatnonzero(upper)[keep_u]
-    out_s, out_X, out_e = [], [], []
-    for i in chosen:
-        out_s.append(s[i])
-        out_X.append(X[:, i])
-        out_e.append(eta[i])
-        if abs(s[i].imag) > tol[i]:  # add the conjugate partner (exact for real matrices)
-            out_s.append(np.conj(s[i]))
-            out_X.append(np.conj(X[:, i]))
-            out_e.append(eta[i])
-    if not out_s:
-        return np.zeros(0, complex), np.zeros((X.shape[0], 0), complex), np.zeros(0)
-    return np.array(out_s), np.column_stack(out_X), np.array(out_e)
+        sigmas = [omega_t**2, -omega_t**2] if omega_t > 0 else [0.0]
+    k = want + 2
+    while True:
+        k = min(k, run["limit"])
+        if k < 1 or (want > run["limit"]):
+            raise SolverError(f"{want} modes asked of a problem with {run['dof']} degrees of "
+                              f"freedom: use the dense path")
+        ws, Vs, covered = [], [], []
+        for sg in sigmas:
+            w, V, used = _undamped_partial(Mb, Qb, k, sg, scale**2, run["ncv"], run["maxiter"],
+                                           run["tol"], run["purify"])
+            ws.append(w)
+            Vs.append(V)
+            covered.append((used, float(np.max(np.abs(w - used)))))
+        w, V = np.concatenate(ws), np.column_stack(Vs)
+        if len(sigmas) > 1:
+            keep = _dedupe(w, V, 1e-10, scale * scale)
+            w, V = w[keep], V[:, keep]
+        omega = np.sqrt(np.abs(w))
+        idx, d, note = _pick(omega, want, omega_t, band, scale)
+        lo, hi = (band if band is not None else (max(omega_t - d, 0.0), omega_t + d))
+        # the selection is right when both w-intervals [lo², hi²] and [−hi², −lo²] are covered
+        need = [(lo * lo, hi * hi), (-hi * hi, -lo * lo)]
+        ok = all(any(c - r * 0.999 <= a and b <= c + r * 0.999 for c, r in covered) for a, b in need)
+        if ok or k >= run["limit"]:
+            break
+        if k >= max_modes:
+            raise SolverError(f"the requested modes need more than max_modes = {max_modes} "
+                              f"eigenpairs per shift")
+        k = min(2 * k, max_modes)
+    order = idx[np.argsort(w[idx], kind="stable")]
+    return {"w": w[order], "V": V[:, order], "k": k, "shifts": [c for c, _ in covered],
+            "coverage": {"measure": "undamped ω_n", "omega_n": (lo, hi), "note": note,
+                         "verified": ok}}
 
 
-def _left_vectors(Mb, Pb, Qb, s, k, sig, ncv, maxiter, tol, scale):
-    """Left eigenvectors: right eigenvectors of the transposed problem, matched by eigenvalue."""
-    st, Y1, Y2, _ = _companion_partial(Mb.T.tocsr(), Pb.T.tocsr(), Qb.T.tocsr(), k, sig, scale, ncv,
-                                       maxiter, tol)
-    Y = np.empty((Mb.shape[0], s.size), complex)
+def _companion_search(run, want, omega_t, band, max_modes):
+    """Eigenvalues of the general (companion) path ranked by |s|."""
+    Mb, Pb, Qb = run["Mb"], run["Pb"], run["Qb"]
+    scale = run["w_scale"]
+    def on_circle(angles):
+        out = []
+        for a in angles:
+            z = omega_t * np.exp(1j * np.pi * a)
+            out.append(complex(z.real, z.imag) if abs(z.imag) > 1e-12 * omega_t else float(z.real))
+        return out
+
+    circle = band is None and omega_t > 0
+    sigmas = on_circle(TARGET_ANGLES[0]) if circle else [0.0]
+    extra = list(TARGET_ANGLES[1:]) if circle else []
+    k = 2 * want + 1
+    runs = {}
+    while True:
+        if k > run["limit"]:
+            raise SolverError(f"{want} modes asked of a problem with {run['dof']} degrees of "
+                              f"freedom: use the dense path")
+        for sg in sigmas:
+            if (sg, k) not in runs:
+                runs[(sg, k)] = _companion_partial(Mb, Pb, Qb, k, sg, scale, run["ncv"],
+                                                   run["maxiter"], run["tol"], run["purify"])
+        parts = [runs[(sg, k)] for sg in sigmas]
+        discs = [p[3] for p in parts]
+        s = np.concatenate([p[0] for p in parts])
+        X1 = np.concatenate([p[1] for p in parts], axis=1)
+        X2 = np.concatenate([p[2] for p in parts], axis=1)
+        if len(sigmas) > 1:
+            keep = _dedupe(s, X1, 1e-9, scale)
+            s, X1, X2 = s[keep], X1[:, keep], X2[:, keep]
+        tol = 1e-9 * np.maximum(np.abs(s), 1e-300)
+        upper = np.flatnonzero(s.imag >= -tol)
+        slot = _slots(s[upper], X1[:, upper], _cluster_tol(scale))
+        first = np.flatnonzero(slot == np.arange(slot.size))  # one candidate per slot
+        idx, d, note = _pick(np.abs(s[upper[first]]), want, omega_t, band, scale)
+        idx = np.flatnonzero(np.isin(slot, first[idx]))  # every member of the slots picked
+        lo, hi = (band if band is not None else (max(omega_t - d, 0.0), omega_t + d))
+        ok = _covered(_annulus_points(lo, hi), discs)
+        if ok:
+            break
+        if extra:  # more shifts on the circle before more eigenvalues per shift
+            sigmas = sigmas + on_circle(extra.pop(0))
+            continue
+        if k >= run["limit"] or want >= max_modes:
+            if band is not None:
+                raise SolverError(f"band {band!r} holds more than max_modes = {max_modes} modes")
+            break
+        k = min(2 * k, run["limit"])
+    chosen = upper[idx]
+    s_out, x1, x2 = [], [], []
+    for i in chosen:  # each kept mode with its conjugate partner (exact for real matrices)
+        s_out.append(s[i])
+        x1.append(X1[:, i])
+        x2.append(X2[:, i])
+        if abs(s[i].imag) > tol[i]:
+            s_out.append(np.conj(s[i]))
+            x1.append(np.conj(X1[:, i]))
+            x2.append(np.conj(X2[:, i]))
+    nb = Mb.shape[0]
+    empty = np.zeros((nb, 0), complex)
+    return {"s": np.array(s_out, complex), "X1": np.column_stack(x1) if x1 else empty,
+            "X2": np.column_stack(x2) if x2 else empty, "k": k,
+            "shifts": [c if c.imag else float(c.real) for c, _, _ in discs],
+            "coverage": {"measure": "|s|", "omega_n": (lo, hi), "note": note, "verified": ok}}
+
+
+def _left_vectors(Mb, Pb, Qb, s, steps=3):
+    """Conjugated left eigenvectors ȳ, (s²Mᵀ + sPᵀ + Qᵀ) ȳ = 0, by inverse iteration at each
+    eigenvalue (one sparse LU each; a conjugate partner takes the conjugate)."""
+    nb = Mb.shape[0]
+    Y = np.empty((nb, s.size), complex)
+    Mt, Pt, Qt = Mb.T.tocsc(), Pb.T.tocsc(), Qb.T.tocsc()
+    rng = np.random.default_rng(11)
     for j, z in enumerate(s):
-        i = int(np.argmin(np.abs(st - z)))
-        Y[:, j] = Y1[:, i]
-    return Y.conj()  # yᴴ(s²M + sP + Q) = 0 ⇔ (s²Mᵀ + sPᵀ + Qᵀ) ȳ = 0
+        partner = [i for i in range(j) if s[i] == np.conj(z)]
+        if partner:
+            Y[:, j] = np.conj(Y[:, partner[0]])
+            continue
+        lu = None
+        for rel in (1e-13, 1e-11, 1e-9):  # exactly singular at the eigenvalue: step off it
+            zz = z * (1 + rel) + rel
+            try:
+                lu = spla.splu((zz * zz * Mt + zz * Pt + Qt).tocsc())
+                break
+            except RuntimeError:
+                continue
+        if lu is None:
+            raise SolverError(f"left eigenvector of s = {z:.6g}: every factorization near it is singular")
+        y = rng.standard_normal(nb) + 1j * rng.standard_normal(nb)
+        for _ in range(steps):
+            y = lu.solve(y / np.linalg.norm(y))
+        Y[:, j] = y / np.linalg.norm(y)
+    return Y
 
 
 for _name, _needs in (("partial-eigh", "P = 0, M and Q symmetric"),
