@@ -18,8 +18,8 @@ import numpy as np
 
 from .errors import CaseError
 
-__all__ = ["root_locus", "modes_vs_parameter", "stability_map", "pole_map", "mechanism_modes",
-           "plot_check", "speed_accuracy", "save"]
+__all__ = ["root_locus", "modes_vs_parameter", "stability_map", "bifurcation_diagram",
+           "stability_chart", "pole_map", "mechanism_modes", "plot_check", "speed_accuracy", "save"]
 
 DPI = 100
 _STYLE = {"svg.hashsalt": "mbseig", "font.size": 9}
@@ -133,9 +133,103 @@ def stability_map(res):
         ax.contour(x, y, A.T, levels=[0.0], colors="k", linewidths=1)
     for b in res.boundaries:
         ax.plot(b["value"], b["fixed"][res.axes[1][0]], "ko", ms=4)
+    for c in getattr(res, "curves", []) or []:
+        pts = [p for p in c["points"] if p["value"] is not None]
+        ax.plot([p["value"] for p in pts], [p["p2"] for p in pts], "-", color="tab:green", lw=1.5)
     ax.set_xlabel(res.axes[0][0])
     ax.set_ylabel(res.axes[1][0])
-    ax.set_title("stability map: black line α = 0, dots = boundaries located by root finding")
+    ax.set_title("stability map: black line α = 0, dots = boundaries located by root finding"
+                 + (", green = followed boundary" if getattr(res, "curves", None) else ""))
+    fig.tight_layout()
+    return fig
+
+
+_STAB_STYLE = {"stable": ("tab:blue", "-"), "critical": ("tab:orange", "-"),
+               "unstable": ("tab:red", "--")}
+
+
+@_styled
+def bifurcation_diagram(res):
+    """The followed branches: the swept parameter against the diagram variable (a named angle or
+    a coordinate), solid where stable (blue) or critical (orange), dashed red where unstable;
+    folds (triangles), branch points (squares) and jumps (dotted) marked."""
+    fig = _figure(figsize=(7, 5))
+    ax = fig.subplots()
+    var = res.diagram.get("variable", "")
+    seen = set()
+    for l, branch in enumerate(res.branches):
+        pts = [b for b in branch if b.get("value") is not None]
+        for a, b in zip(pts, pts[1:]):
+            if a["segment"] != b["segment"]:
+                ax.plot([a["p"], b["p"]], [a["value"], b["value"]], ":", color="0.6", lw=0.8)
+                continue
+            st = (b.get("verdict") or b.get("static") or "stable")
+            st = st if st in _STAB_STYLE else "critical"
+            color, ls = _STAB_STYLE[st]
+            label = None if st in seen else st
+            seen.add(st)
+            ax.plot([a["p"], b["p"]], [a["value"], b["value"]], ls, color=color, lw=1.4,
+                    label=label)
+        for b in pts:
+            if b["kind"] == "fold":
+                ax.plot(b["p"], b["value"], "k^", ms=7, label=None if "fold" in seen else "fold")
+                seen.add("fold")
+            elif b["kind"] == "branch point":
+                ax.plot(b["p"], b["value"], "ks", ms=6,
+                        label=None if "bp" in seen else "branch point")
+                seen.add("bp")
+    rng = res.diagram.get("range")
+    if rng is not None:  # the range of motion of a named angle
+        lo, hi = ax.get_ylim()
+        for r in rng:
+            if lo - 0.1 * (hi - lo) <= r <= hi + 0.1 * (hi - lo):
+                ax.axhline(r, color="0.4", lw=0.8, ls="-.",
+                           label=None if "rom" in seen else "range of motion")
+                seen.add("rom")
+    for b in res.boundaries:
+        ax.axvline(b["value"], color="tab:red", lw=0.6, ls=":",
+                   label=None if "boundary" in seen else "stability boundary")
+        seen.add("boundary")
+    ax.set_xlabel(res.axis)
+    ax.set_ylabel(f"{var} [{res.diagram.get('unit', '')}]")
+    title = f"bifurcation diagram of {Path(res.case).stem}" + (f" ({res.config})" if res.config else "")
+    ax.set_title(title + ": dashed = unstable, dotted = jump")
+    ax.grid(True, lw=0.3)
+    if seen:
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    return fig
+
+
+@_styled
+def stability_chart(res):
+    """Stability chart from the followed boundary curves: the first axis' critical value against
+    the second parameter (one line per curve, its tolerance band as a band), the side where the
+    first grid point was stable shaded."""
+    fig = _figure(figsize=(7, 5))
+    ax = fig.subplots()
+    cmap = _cmap("tab10")
+    along = res.curves[0]["along"] if res.curves else ""
+    for i, c in enumerate(res.curves):
+        pts = sorted((p for p in c["points"] if p["value"] is not None), key=lambda p: p["p2"])
+        if not pts:
+            continue
+        x = np.array([p["p2"] for p in pts])
+        y = np.array([p["value"] for p in pts])
+        ax.plot(x, y, "o-", color=cmap(i % 10), ms=3, lw=1.5,
+                label=f"{c['kind']} boundary ({c['stability']} of stability)")
+        if c["stability"] == "loss":  # the sweep started stable: shade from its start value
+            ax.fill_between(x, np.full_like(y, float(res.values[0])), y, color=cmap(i % 10),
+                            alpha=0.08)
+    ax.set_xlabel(along)
+    ax.set_ylabel(f"critical {res.axis}")
+    xs = [p["p2"] for c in res.curves for p in c["points"]]
+    if xs and min(xs) >= 0 and max(xs) > 0 and max(xs) / max(min(x for x in xs if x > 0), 1e-300) > 100:
+        ax.set_xscale("symlog", linthresh=min(x for x in xs if x > 0))
+    ax.set_title("stability chart from the followed boundaries (shaded: stable side)")
+    ax.grid(True, lw=0.3)
+    if res.curves:
+        ax.legend(fontsize=7)
     fig.tight_layout()
     return fig
 

@@ -1,10 +1,13 @@
-"""The finger exoskeleton case (cases/hand_device.toml, specification hand_device.md).
+"""The finger exoskeleton case (cases/hand_device.toml, specification hand_device.md, clarified).
 
 Reference values: the constraint count of the specification (10 coordinates, 7 constraints,
-3 DOF; one more constraint in C4), the definition of inverse statics (MCP at equilibrium equals
-the commanded angle), Newton's first law on the whole mechanism (independent of the pin-reaction
-formula), the scaling rules of the specification, and central differences for the driver's
-derivatives.
+3 DOF in every configuration: C4 keeps the series spring), the definition of inverse statics
+(MCP at equilibrium equals the commanded angle on the unloaded device), the held position
+command of C4 (its free length is C1's), Newton's first law on the whole mechanism (independent
+of the pin-reaction formula), the scaling rules of the specification, central differences for
+the driver's derivatives, and for C4's flutter loads independent roots: the spectral abscissa of
+the first-order state matrix (numpy eigvals) and the discriminant of the characteristic cubic of
+M⁻¹Q (undamped).
 """
 
 import math
@@ -23,7 +26,7 @@ CASE = CASES / "hand_device.toml"
 
 
 @pytest.mark.parametrize("config, n_constraints, dof", [("C1", 7, 3), ("C2", 7, 3), ("C3", 7, 3),
-                                                         ("C4", 8, 2)])
+                                                         ("C4", 7, 3)])
 def test_coordinates_constraints_dof(config, n_constraints, dof):
     a = analyze(CASE, config=config)
     assert a.model.n == 10
@@ -34,10 +37,11 @@ def test_coordinates_constraints_dof(config, n_constraints, dof):
 
 @pytest.mark.parametrize("config, params, target", [("C1", {}, 45.0), ("C3", {}, 30.0),
                                                      ("C1", {"mcp_target": 70.0}, 70.0),
-                                                     ("C4", {"f": 1.0}, 45.0)])
+                                                     ("C4", {"f": 0.0}, 45.0)])
 def test_mcp_equals_commanded_angle(config, params, target):
-    """Inverse statics: the actuator free length (or locked length) puts the MCP at mcp_target
-    (tolerance 1e-9 deg: the secant stops at |driver effort| ≤ 1e-12 of the released effort)."""
+    """Inverse statics: the actuator free length puts the MCP at mcp_target on the unloaded
+    device (tolerance 1e-9 deg: the secant stops at |driver effort| ≤ 1e-12 of the released
+    effort)."""
     model = mbseig.load_case(CASE, config=config, **params)
     eq = mbseig.equilibrium(model)
     mcp = next(p for p in posture(model, eq.q) if p["name"] == "MCP")
@@ -45,6 +49,81 @@ def test_mcp_equals_commanded_angle(config, params, target):
     drivers = eq.model.drivers  # inverse statics runs in the equilibrium stage, not at loading
     assert drivers and abs(drivers[0]["residual_effort"] if "residual_effort" in
                            drivers[0] else 0.0) <= 1e-12 * abs(drivers[0]["effort"])
+
+
+def test_C4_holds_the_position_command():
+    """C4 (hand_device.md, clarified): the actuator's free length stays at C1's inverse-statics
+    value (bitwise: the command is resolved on the device without the follower load) for every
+    f, the series spring stays in the load path (no distance joint: 3 DOF), and the posture
+    moves with the load (MCP more than 1° from 45° at f = 1 N)."""
+    eq1 = mbseig.equilibrium(mbseig.load_case(CASE, config="C1"))
+    l0 = eq1.model.drivers[0]["sets"][0]["free_length"]
+    for f in (0.0, 1.0, 2.0):
+        eq = mbseig.equilibrium(mbseig.load_case(CASE, config="C4", f=f))
+        rec = eq.model.drivers[0]
+        assert rec["sets"][0]["free_length"] == l0 and rec["unloaded"] == ["forces[4] 'tendon load'"]
+        mcp = next(p for p in posture(eq.model, eq.q) if p["name"] == "MCP")["angle_deg"]
+        assert (abs(mcp - 45.0) > 1.0) == (f >= 1.0)
+    assert not any("lock" in c.name for c in eq.model.constraints)
+
+
+def test_C4_modes_up_to_the_range_of_motion_limit(capsys):
+    """`mbseig modes` gives C4's equilibrium and modes at f = 2.4 N (the old model said
+    "constraints are inconsistent" from 1.7 N on): exit 0, 3 modes, flutter (unstable), and the
+    PIP flagged outside its range of motion (−0.6° < 0°)."""
+    from mbseig.cli import main
+
+    assert main(["modes", str(CASE), "--config", "C4", "--param", "f=2.4", "--json"]) == 0
+    import json
+
+    out = json.loads(capsys.readouterr().out)
+    assert out["dof"] == 3 and len(out["modes"]) >= 3 and out["verdict"] == "unstable"
+    eq = mbseig.equilibrium(mbseig.load_case(CASE, config="C4", f=2.4))
+    assert rom_flags(eq.model, eq.q) == ["PIP"]
+
+
+def _abscissa(f, scale):
+    """max Re of the first-order state matrix at C4 (numpy eigvals: no QEP solver, tracking or
+    boundary locator of mbseig involved)."""
+    m = mbseig.load_case(CASE, config="C4", f=f, damping_scale=scale)
+    lin = mbseig.linearize(m, mbseig.equilibrium(m))
+    return float(np.max(np.linalg.eigvals(lin.state_matrix()).real))
+
+
+def _undamped_discriminant(f):
+    """Discriminant of the characteristic cubic of M⁻¹Q (s² = −μ): two real μ collide (flutter
+    of the undamped C4) where it changes sign."""
+    m = mbseig.load_case(CASE, config="C4", f=f, damping_scale=0.0)
+    lin = mbseig.linearize(m, mbseig.equilibrium(m))
+    a, b, c, d = np.poly(np.linalg.solve(lin.M, lin.Q)).real
+    return 18 * a * b * c * d - 4 * b**3 * d + b * b * c * c - 4 * a * c**3 - 27 * a * a * d * d
+
+
+def test_C4_sweep_every_point_and_the_flutter_loads():
+    """`mbseig sweep` over f = 0 … 2.5 N on C4 (damping scales 1 and 0): no failed point (the
+    old model lost 9 of 26), PIP flagged outside its range only past 2.35 N, and the flutter
+    boundaries at the independent roots: the state-matrix abscissa (damped, 1e-8) and the cubic
+    discriminant (undamped, 1e-8)."""
+    from scipy.optimize import brentq
+
+    from mbseig.studies.sweep import run_sweep
+
+    values = np.linspace(0.0, 2.5, 6)
+    res = run_sweep(CASE, [("f", values), ("damping_scale", np.array([1.0, 0.0]))],
+                    config="C4", jobs=1, curves=False)
+    for line in res.points:
+        assert all(pt["error"] is None for pt in line)
+        for f, pt in zip(values, line):
+            assert pt["out_of_range"] == (["PIP"] if f > 2.35 else [])
+    damped = [b for b in res.boundaries if b["fixed"]["damping_scale"] == 1.0]
+    undamped = [b for b in res.boundaries if b["fixed"]["damping_scale"] == 0.0]
+    assert len(damped) == 1 and len(undamped) == 1
+    f_damped = brentq(lambda f: _abscissa(f, 1.0), 1.5, 2.0, xtol=1e-13)
+    f_undamped = brentq(_undamped_discriminant, 1.5, 1.75, xtol=1e-13)
+    assert damped[0]["value"] == pytest.approx(f_damped, rel=1e-8)
+    assert undamped[0]["value"] == pytest.approx(f_undamped, rel=1e-8)
+    assert damped[0]["kind"] == undamped[0]["kind"] == "flutter"
+    assert damped[0]["stability"] == undamped[0]["stability"] == "loss"
 
 
 def test_global_force_balance():
@@ -163,7 +242,7 @@ def test_angle_driver_derivatives_central_differences():
 
 
 def test_driver_naming_unknown_element_is_a_case_error(tmp_path):
-    text = CASE.read_text().replace('sets = ["actuator", "actuator lock"]', 'sets = ["nope"]')
+    text = CASE.read_text().replace('sets = ["actuator"]', 'sets = ["nope"]')
     p = tmp_path / "bad.toml"
     p.write_text(text)
     with pytest.raises(CaseError, match="sets unknown element 'nope'"):

@@ -143,24 +143,43 @@ def test_mac_matrix_invariant_to_phase():
     np.testing.assert_allclose(np.diag(mac_matrix(a, a * np.exp(0.7j))), 1.0, rtol=1e-14)
 
 
-def test_undamped_flutter_onset_of_the_device():
-    """C4 without damping: flutter starts where the two eigenvalues μ of M⁻¹Q (s² = −μ) collide,
-    i.e. where the 2×2 discriminant (a − d)²/4 + b c vanishes (independent root, xtol 1e-12).
-    The sweep's boundary (tracked by MAC, Brent on δ + tol) must agree to 1e-7."""
-    from conftest import CASES
+CONTINUED = """
+schema_version = 1
+title = "pendulum under a horizontal load (a branch followed by continuation)"
+dimension = 2
+gravity = [0.0, -9.81]
+[parameters]
+F = 0.0
+[[points]]
+name = "O"
+position = [0.0, 0.0]
+fixed = true
+[[points]]
+name = "P"
+position = [0.0, -1.0]
+[[masses]]
+point = "P"
+mass = 1.0
+[[joints]]
+type = "distance"
+points = ["O", "P"]
+length = 1.0
+[[forces]]
+type = "force"
+point = "P"
+vector = ["F", 0.0]
+[expected]
+source = "tan θ = F/(m g)"
+"""
 
-    import mbseig
 
-    case = CASES / "hand_device.toml"
+def test_continuation_identical_in_process_and_on_processes(tmp_path):
+    """Lines followed by continuation are pure functions too: one line per F-sweep and two lines
+    (a second axis) give bit-identical JSON serially and on two processes."""
+    case = _case(tmp_path, CONTINUED, "pushed.toml")
+    axes = [("F", np.linspace(0.0, 10.0, 3))]
+    serial = json.dumps(run_sweep(case, axes, jobs=1).to_json())
+    procs = json.dumps(run_sweep(case, axes, jobs=2).to_json())
+    assert serial == procs
+    assert all(p["statics"] == "continuation" for p in json.loads(serial)["lines"][0]["points"])
 
-    def disc(f):
-        m = mbseig.load_case(case, config="C4", f=f, damping_scale=0.0)
-        lin = mbseig.linearize(m, mbseig.equilibrium(m))
-        A = np.linalg.solve(lin.M, lin.Q)
-        return (A[0, 0] - A[1, 1]) ** 2 / 4 + A[0, 1] * A[1, 0]
-
-    f_ref = brentq(disc, 1.5, 2.0, xtol=1e-12)
-    res = run_sweep(case, [("f", np.linspace(1.5, 2.0, 3))], config="C4",
-                    fixed={"damping_scale": "0"}, jobs=1)
-    assert len(res.boundaries) == 1 and res.boundaries[0]["kind"] == "flutter"
-    assert res.boundaries[0]["value"] == pytest.approx(f_ref, abs=1e-7)

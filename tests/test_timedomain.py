@@ -333,4 +333,4 @@ def test_cli_three_dof_device_reactions_and_actuator(capsys):
     out = capsys.readouterr().out
     assert "check: passed (3 simulated, 0 rigid-body probed, 0 skipped)" in out
     assert "joints[1] 'guide'" in out and "bodies[3] 'rod' (rigid length)" in out
-    assert "actuator joints[3] 'MCP command': effort" in out
+    assert "actuator joints[2] 'MCP command': effort" in out

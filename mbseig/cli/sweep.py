@@ -1,4 +1,5 @@
-"""``mbseig sweep CASE --param NAME=START:STOP:COUNT ...``: tracked modes and stability boundaries."""
+"""``mbseig sweep CASE --param NAME=START:STOP:COUNT ...``: branches followed by continuation,
+tracked modes, stability boundaries, folds, two-parameter boundary curves."""
 
 from __future__ import annotations
 
@@ -12,9 +13,11 @@ from .common import add_case_arguments, print_json
 
 def register(sub):
     p = sub.add_parser(
-        "sweep", help="modes over a parameter grid, tracked by MAC, with stability boundaries",
+        "sweep", help="modes over a parameter grid by continuation, tracked by MAC, with "
+                      "stability boundaries, folds and boundary curves",
         description="Sweep parameters: --param NAME=START:STOP:COUNT (repeatable; the first is the "
-                    "tracking axis, two make a stability map); --param NAME=VALUE fixes a parameter.")
+                    "continuation and tracking axis, a second gives a stability map and the "
+                    "boundaries followed across it); --param NAME=VALUE fixes a parameter.")
     add_case_arguments(p)
     p.add_argument("--out", default=None, metavar="DIR",
                    help="output directory (default: sweep-CASE[-CONFIG])")
@@ -24,6 +27,14 @@ def register(sub):
                    help="run the points on a Dask distributed scheduler (pip install 'mbseig[dask]')")
     p.add_argument("--xtol-rel", type=float, default=1e-10, metavar="X",
                    help="boundary tolerance relative to the first axis' span (default 1e-10)")
+    p.add_argument("--no-continuation", dest="continuation", action="store_false",
+                   help="solve every point on its own from the case's positions (no branch "
+                        "following, no folds)")
+    p.add_argument("--no-curves", dest="curves", action="store_false",
+                   help="with two swept parameters, do not follow the boundaries across the second")
+    p.add_argument("--diagram", default=None, metavar="NAME",
+                   help="coordinate or named angle of the bifurcation diagram (default: the one "
+                        "that varies most along the branch)")
     prog = p.add_mutually_exclusive_group()
     prog.add_argument("--progress", dest="progress", action="store_true", default=None,
                       help="always show the progress bar on stderr")
@@ -42,20 +53,67 @@ def run(args) -> int:
     show = args.progress if args.progress is not None else sys.stderr.isatty()
     res = run_sweep(args.case, ranges, config=args.config, fixed=fixed, jobs=args.jobs,
                     scheduler=args.scheduler, progress=progress_bar() if show else None,
-                    xtol_rel=args.xtol_rel)
+                    xtol_rel=args.xtol_rel, continuation=args.continuation, curves=args.curves,
+                    diagram=args.diagram)
     stem = Path(args.case).stem + (f"-{args.config}" if args.config else "")
-    paths = write_outputs(res, args.out or f"sweep-{stem}")
+    out_dir = args.out or f"sweep-{stem}"
+    paths = write_outputs(res, out_dir)
+    camp = _campbell(args, ranges, fixed, out_dir, paths)
     if args.json:
-        print_json(res.to_json())
+        print_json({**res.to_json(), **camp})
         return 0
     n_pts = sum(len(line) for line in res.points)
     failed = sum(1 for line in res.points for pt in line if pt.get("error"))
-    print(f"sweep {stem}: {n_pts} points ({failed} failed) on {res.runner}, "
-          f"{len(res.boundaries)} stability boundaries (xtol {res.tolerances['xtol']:.3g})")
+    cold = sum(1 for line in res.points for pt in line if pt.get("statics") == "cold")
+    how = "by continuation" if args.continuation else "each on its own"
+    print(f"sweep {stem}: {n_pts} points {how} ({failed} failed"
+          + (f", {cold} solved on their own" if args.continuation and cold else "")
+          + f") on {res.runner}, {len(res.boundaries)} stability boundaries "
+          f"(xtol {res.tolerances['xtol']:.3g})")
     for b in res.boundaries:
         where = ", ".join(f"{k} = {v:g}" for k, v in b["fixed"].items())
+        event = "" if b.get("event") == "crossing" else f" at a {b['event']}, branch {b['branch']}"
+        band = b.get("band")
+        band_txt = (f"; critical band [{band[0]:.10g}, {band[1]:.10g}]"
+                    if band and band[0] != band[1] else "")
         print(f"  {b['parameter']} = {b['value']:.10g}{' at ' + where if where else ''}: "
-              f"{b['kind']} ({b['stability']} of stability), s = {b['eigenvalue'][0]:.4g} "
-              f"{b['eigenvalue'][1]:+.6g}i, track {b['track']}")
+              f"{b['kind']} ({b['stability']} of stability){event}, s = {b['eigenvalue'][0]:.4g} "
+              f"{b['eigenvalue'][1]:+.6g}i{band_txt}")
+    for f in res.folds:
+        if f["type"] == "fold" and not f.get("dof"):
+            print(f"  {f['parameter']} = {f['value']:.10g}: fold without degrees of freedom "
+                  f"(a dead point), branch {f['branch']}")
+    for c in res.curves:
+        ok = [p for p in c["points"] if p["value"] is not None]
+        print(f"  boundary followed across {c['along']}: {len(ok)} of {len(c['points'])} points "
+              f"({c['kind']}, {c['stability']} of stability)")
+    for c in camp.get("critical_speeds", []):
+        print(f"  critical speed {c['value']:.10g} (Omega = {c['speed']:.10g} rad/s): track "
+              f"{c['mode']}, {c['whirl']} whirl")
     print("wrote " + ", ".join(str(p) for p in paths))
     return 0
+
+
+def _campbell(args, ranges, fixed, out_dir, paths) -> dict:
+    """A sweep of one parameter that sets a rotor's speed also gives the Campbell diagram
+    (mbseig.studies.campbell): campbell.json, campbell.png and, in the sweep's JSON,
+    ``campbell`` and ``critical_speeds``."""
+    import json
+
+    try:
+        from .. import plots_spatial
+        from ..studies.campbell import campbell, speed_parameter
+    except ImportError:  # the spatial layer is not part of this installation
+        return {}
+    name, values = ranges[0]
+    if len(ranges) != 1 or not speed_parameter(args.case, name, values, config=args.config,
+                                               fixed=fixed):
+        return {}
+    res = campbell(args.case, name, values, config=args.config, fixed=fixed, jobs=args.jobs,
+                   xtol_rel=args.xtol_rel)
+    out = res.to_json()
+    path = Path(out_dir) / "campbell.json"
+    path.write_text(json.dumps(out, indent=1, allow_nan=False) + "\n")
+    paths.append(path)
+    paths.append(plots_spatial.save(plots_spatial.campbell_diagram(res), Path(out_dir) / "campbell.png"))
+    return {"campbell": out, "critical_speeds": out["critical_speeds"]}

@@ -77,6 +77,7 @@ def _config_blocks(case, config, out_dir, *, run_check, stem):
            if linear_case else reactions(model, eq))
     if not linear_case:
         blocks.append(("h3", "Equilibrium"))
+        blocks.append(("p", _statics_text(eq)))
     if rep["posture"]:
         blocks.append(("table", ["joint", "flexion [deg]", "range [deg]", "margin [deg]", "in range"],
                        [[p["name"], _fmt(p["angle_deg"], 6),
@@ -92,9 +93,12 @@ def _config_blocks(case, config, out_dir, *, run_check, stem):
                                    f"{s['length'] * 1e3:.6g} mm, tension {s['tension']:.6g} N"
                                    if "free_length" in s else f"locked at {s['length'] * 1e3:.6g} mm")
             for s in d["sets"])
+        unloaded = d.get("unloaded") or []
+        held = (f" The command is set on the device without {', '.join(unloaded)} and held as "
+                f"that load changes (a position command)." if unloaded else "")
         blocks.append(("p", f"Inverse statics ({d['driver']}): commanded angle "
                             f"{math.degrees(d['angle_target']):.6g} deg needs an effort of "
-                            f"{d['effort']:.6g} {d['effort_unit']}; {sets}."))
+                            f"{d['effort']:.6g} {d['effort_unit']}; {sets}.{held}"))
     if rep["actuator"]:
         blocks.append(("table", ["actuator element", "kind", "length [mm]", "tension [N]"],
                        [[r["element"], r["kind"], _fmt(r["length"] * 1e3, 6), _fmt(r["tension"], 6)]
@@ -128,7 +132,8 @@ def _config_blocks(case, config, out_dir, *, run_check, stem):
                         f"δ − tol = {min_margin:.4g} (tol per mode: max(10 κ η, 1e-12 |s|))."))
     labels = [f"mode {k + 1}: {md.freq_hz[k]:.4g} Hz, ζ = {md.zeta[k]:.3g}" for k in range(len(md))]
     if not linear_case:
-        img = plots.save(plots.mechanism_modes(
+        draw = _spatial_draw() if model.dimension == 3 else plots.mechanism_modes
+        img = plots.save(draw(
             model, eq.q, md.shapes, labels,
             title=f"{tag}: equilibrium (black) and mode shapes (±, red/blue)"),
             out_dir / f"{stem}_{tag}_shapes.png")
@@ -148,6 +153,39 @@ def _config_blocks(case, config, out_dir, *, run_check, stem):
 
 
 _SHOWN_PARAMS: set = set()
+
+
+def _spatial_draw():
+    """The three-view drawing of spatial models (mbseig.plots_spatial), imported when needed."""
+    from .. import plots_spatial
+
+    return plots_spatial.spatial_modes
+
+
+def _statics_text(eq):
+    """One paragraph on how the equilibrium was found and whether it is statically stable."""
+    tol = eq.tolerances
+    path = eq.path or {}
+    start = ("the commanded posture of the inverse statics" if getattr(eq.model, "drivers", ())
+             else "the case's positions")
+    how = {"newton": f"Newton from {start}"}.get(eq.method, eq.method)
+    if path.get("load_steps"):
+        how += f" ({path['load_steps']} load steps; the direct Newton failed: {path.get('direct')})"
+    st = eq.static or {}
+    verdict = st.get("verdict")
+    stab = {"stable": "statically stable (the reduced tangent stiffness is positive definite)",
+            "unstable": f"statically UNSTABLE ({st.get('index')} direction(s) of negative stiffness)",
+            "neutral": "statically neutral (a zero stiffness)",
+            "undetermined": ("statics cannot decide (non-symmetric stiffness with an even number "
+                             "of negative real eigenvalues): see the modes"),
+            "not examined": "not examined (above the dense limit)"}.get(verdict, "–")
+    text = (f"Statics: {how}, {eq.iterations} Newton iterations; converged when "
+            f"{tol.get('criterion', '')} (tol = {tol.get('tol', 0):g}, xtol = "
+            f"{tol.get('xtol', 0):g}); final Newton correction {eq.correction:.2g} of the model's "
+            f"size. The equilibrium is {stab}.")
+    for note in eq.notes:
+        text += f" {note[0].upper() + note[1:]}."
+    return text
 
 
 def _describe(case, config):
@@ -192,55 +230,105 @@ def _study_blocks(case, study, out_dir, stem, jobs):
     lo, hi = study["range"]
     values = np.linspace(float(lo), float(hi), int(study["count"]))
     axes = [(name, values)]
-    for lname, lvals in study.get("lines", {}).items():
+    lines = study.get("lines", {})
+    for lname, lvals in lines.items():
         axes.append((lname, np.asarray(lvals, dtype=float)))
-    res = run_sweep(case, axes, config=config, jobs=jobs, xtol_rel=float(study.get("xtol_rel", 1e-10)))
+    curve_values = _curve_values(axes[1][1]) if len(axes) == 2 else None
+    res = run_sweep(case, axes, config=config, jobs=jobs,
+                    xtol_rel=float(study.get("xtol_rel", 1e-10)), curve_values=curve_values)
     sdir = out_dir / f"{stem}_{config}_{name}"
     paths = write_outputs(res, sdir)
     xtol = res.tolerances["xtol"]
+    direction = 1.0 if values[-1] >= values[0] else -1.0
     rows, crit = [], []
     for l, line in enumerate(res.lines):
-        bs = [b for b in res.boundaries if b["line"] == l]
-        first_loss = next((b for b in bs if b["stability"] == "loss"), None)
+        bs = sorted((b for b in res.boundaries if b["line"] == l and b["stability"] == "loss"),
+                    key=lambda b: (b["value"] - values[0]) * direction)
+        first = bs[0] if bs else None
         rom = _rom_exit(case, config, line, name, values, res.points[l], xtol)
+        failed = sum(1 for pt in res.points[l] if pt.get("error"))
         label = ", ".join(f"{k} = {v:g}" for k, v in line.items()) or "–"
+        freq = "–" if first is None else f"{abs(first['eigenvalue'][1]) / (2 * math.pi):.5g}"
+        band = ("–" if first is None or first["band"][0] == first["band"][1] else
+                f"{first['band'][0]:.10g} … {first['band'][1]:.10g}")
         rows.append([label,
-                     "stable over the range" if first_loss is None else f"{first_loss['value']:.8g}",
-                     "–" if first_loss is None else first_loss["kind"],
-                     "–" if first_loss is None else f"{first_loss['eigenvalue'][1] / (2 * math.pi):.5g}",
-                     "inside over the range" if rom is None else f"{rom['value']:.8g} ({rom['joint']})"])
-        crit.append({"line": line, "critical": None if first_loss is None else first_loss["value"],
-                     "kind": None if first_loss is None else first_loss["kind"], "rom": rom})
+                     "stable over the range" if first is None else f"{first['value']:.10g}",
+                     "–" if first is None else first["kind"] + (
+                         "" if first.get("event") == "crossing" else f" ({first['event']})"),
+                     freq, band,
+                     "inside over the range" if rom is None else f"{rom['value']:.8g} ({rom['joint']})",
+                     str(failed)])
+        crit.append({"line": line, "critical": None if first is None else first["value"],
+                     "kind": None if first is None else first["kind"], "rom": rom,
+                     "failed": failed})
+    n_fold = sum(1 for f in res.folds if f["type"] == "fold")
     blocks.append(("p", f"{name} from {values[0]:g} to {values[-1]:g} ({len(values)} points per line) on "
-                        f"{config}; modes tracked by MAC; boundaries by Brent's method on δ + tol to "
-                        f"xtol = {xtol:.3g}; range-of-motion exit by Brent's method on the smallest "
-                        f"joint margin to the same xtol."))
+                        f"{config}, each line followed by continuation from its first equilibrium "
+                        f"(tangent predictor, pseudo-arclength through folds; {n_fold} fold(s) "
+                        f"found); modes tracked by MAC; each boundary located where Re s = 0 of "
+                        f"the crossing mode (or where the two eigenvalues of an undamped pair "
+                        f"collide) by Brent's method to xtol = {xtol:.3g}, with the band where "
+                        f"the mode is critical within its tolerance beside it; range-of-motion exit "
+                        f"by Brent's method on the smallest joint margin to the same xtol."))
     blocks.append(("table", ["line", f"critical {name}", "instability", "frequency at onset [Hz]",
-                             f"{name} where the posture leaves the range of motion"], rows))
+                             "critical band", f"{name} where the posture leaves the range of motion",
+                             "failed points"], rows))
+    curve_sum = []
+    for c in res.curves:
+        pts = [p for p in c["points"] if p["value"] is not None]
+        curve_sum.append({"along": c["along"], "points": [(p["p2"], p["value"]) for p in pts]})
+        blocks.append(("p", f"The {c['kind']} boundary of the first line, followed across "
+                            f"{c['along']} (two-parameter continuation: each point located again "
+                            f"from the secant prediction of the last two; "
+                            f"{len(pts)} of {len(c['points'])} points found):"))
+        blocks.append(("table", [c["along"], f"critical {name}", "test function"],
+                       [[f"{p['p2']:.6g}", f"{p['value']:.10g}", p.get("test") or "–"] for p in pts]))
     for p in paths:
         if p.suffix == ".png":
             blocks.append(("img", p, f"{title}: {p.stem.replace('_', ' ')}"))
-    return blocks, {"title": title, "parameter": name, "config": config, "critical": crit}
+    return blocks, {"title": title, "parameter": name, "config": config, "critical": crit,
+                    "curves": curve_sum}
+
+
+def _curve_values(line_values):
+    """The second axis' values at which a boundary is followed: the lines' values with two
+    more between each pair (geometric between positive values a decade or more apart, and down
+    to 0 through 1/10 and 1/100 of the smallest positive one), from the first line outwards."""
+    vals = [float(v) for v in line_values]
+    out = [vals[0]]
+    for a, b in zip(vals, vals[1:]):
+        if a > 0 and b > 0 and max(a, b) / min(a, b) >= 10:
+            mids = list(np.geomspace(a, b, 4)[1:-1])
+        elif b == 0 and a > 0:
+            mids = [a / 10, a / 100]
+        else:
+            mids = list(np.linspace(a, b, 4)[1:-1])
+        out += [float(m) for m in mids] + [b]
+    return out
 
 
 def _rom_exit(case, config, line, name, values, points, xtol):
-    """First parameter value where a joint leaves its range of motion (None if never)."""
+    """First parameter value where a joint leaves its range of motion (None if never); each
+    equilibrium of the search is started from the bracket's own (same branch)."""
     from scipy.optimize import brentq
 
-    def margin(p):
-        model = case.build(config, **{**line, name: p})
-        eq = equilibrium(model)
-        rows = [r for r in posture(model, eq.q) if r["margin_deg"] is not None]
-        worst = min(rows, key=lambda r: r["margin_deg"]) if rows else None
-        return (math.inf, None) if worst is None else (worst["margin_deg"], worst["name"])
+    from ..studies.boundaries import Evaluator
 
     for k in range(len(values) - 1):
-        if points[k].get("error") or points[k + 1].get("error"):
+        a, b = points[k], points[k + 1]
+        if a.get("error") or b.get("error") or a.get("segment") != b.get("segment"):
             continue
-        if not points[k]["out_of_range"] and points[k + 1]["out_of_range"]:
-            root = brentq(lambda p: margin(p)[0], values[k], values[k + 1], xtol=xtol)
-            joint = points[k + 1]["out_of_range"][0]
-            return {"value": float(root), "joint": joint}
+        if not a["out_of_range"] and b["out_of_range"]:
+            ev = Evaluator(case, config, line, name, [(values[k], a["q"]), (values[k + 1], b["q"])])
+
+            def margin(p):
+                pt = ev(p)
+                model = ev.make(p)
+                rows = [r for r in posture(model, pt["q"]) if r["margin_deg"] is not None]
+                return min(r["margin_deg"] for r in rows) if rows else math.inf
+
+            root = brentq(margin, values[k], values[k + 1], xtol=xtol)
+            return {"value": float(root), "joint": b["out_of_range"][0]}
     if points and not points[0].get("error") and points[0]["out_of_range"]:
         return {"value": float(values[0]), "joint": points[0]["out_of_range"][0]}
     return None
@@ -341,25 +429,30 @@ def _findings(study_sums):
         if len(lines) < 2:
             continue
         by = sorted(lines, key=lambda c: -c["line"]["damping_scale"])
-        full, rest = by[0], by[1:]
-        text = [f"{st['parameter']}* = {c['critical']:.5g} at damping scale "
+        text = [f"{st['parameter']}* = {c['critical']:.6g} at damping scale "
                 f"{c['line']['damping_scale']:g}" for c in by]
+        msg = "Critical load against the damping scale: " + "; ".join(text) + ". "
         zero = next((c for c in by if c["line"]["damping_scale"] == 0), None)
-        small = [c for c in rest if c["line"]["damping_scale"] > 0]
-        lowered = all(c["critical"] < full["critical"] for c in small)
-        msg = ("Critical load against joint damping: " + "; ".join(text) + ". ")
-        if lowered and small:
-            msg += ("Reducing the damping lowers the critical load, and as the damping tends to zero "
-                    "the critical load does not return to the undamped value")
-            if zero is not None:
-                lim = min(c["critical"] for c in small)
-                msg += (f" ({lim:.5g} for the smallest damping vs {zero['critical']:.5g} with none)"
-                        if abs(lim - zero["critical"]) > 1e-6 * zero["critical"] else "")
-            msg += (": the destabilizing effect of small damping on a follower-loaded (circulatory) "
-                    "system. A design that relies on the joints' damping for its margin loses it "
-                    "when the damping is small.")
-        else:
-            msg += "Smaller damping does not lower the critical load over these scales."
+        curve = next((c for c in st.get("curves", []) if c["along"] == "damping_scale"), None)
+        small = [c for c in by if c["line"]["damping_scale"] > 0]
+        if curve and curve["points"]:
+            pos = [p for p in curve["points"] if p[0] > 0]
+            if pos:
+                s_min, f_min = min(pos)
+                msg += (f"Followed continuously in the damping scale, the critical load is "
+                        f"{f_min:.6g} at the smallest scale {s_min:g}. ")
+                small = small + [{"critical": f_min, "line": {"damping_scale": s_min}}]
+        if zero is not None:
+            msg += f"The undamped flutter load (damping scale 0) is {zero['critical']:.6g}. "
+            lim = min(small, key=lambda c: c["line"]["damping_scale"])["critical"] if small else None
+            if lim is not None and lim < zero["critical"] * (1 - 1e-6):
+                msg += (f"As the damping tends to zero the critical load tends to about {lim:.5g}, "
+                        f"below the undamped value: the destabilizing effect of small damping on "
+                        f"a follower-loaded (circulatory) system. A design that relies on the "
+                        f"dampers for its margin loses it when they are small.")
+            elif lim is not None:
+                msg += ("As the damping tends to zero the critical load does not fall below the "
+                        "undamped value here.")
         out.append(("p", msg))
     return out
 

@@ -15,6 +15,13 @@ commands.  The driver is then used only in a pre-solve and is not part of the fi
 3. A commanded ``distance`` joint (an actuator locked at its length): its length is the distance
    between its points at q*.
 
+A command is a *position command*: it is resolved on the device without its follower loads
+(force elements with a ``magnitude``, e.g. a tendon load at the fingertip), and the final model
+applies them to the actuator as set.  So the setting is the one the unloaded device needs, and
+it is held as the load changes: the series-elastic spring of an actuator stays in the load path
+and the posture moves with the load (hand_device.md, C4).  Gravity is part of the device and is
+kept.  The record names the loads left out (``unloaded``).
+
 The final model has no driver, the commanded elements set, and q* as its initial guess, so its
 equilibrium is the commanded posture (to the stopping tolerance).  The record (one dict per
 driver) names the driver, the target angle, the effort, the free length or locked length and the
@@ -30,7 +37,7 @@ import numpy as np
 from ..errors import EquilibriumError
 from ..model.driver import check_command
 
-__all__ = ["resolve_commands"]
+__all__ = ["resolve_commands", "reuse_commands", "command_settings"]
 
 
 def resolve_commands(model, equilibrium, *, tol=1e-12, max_iter=30):
@@ -46,6 +53,8 @@ def resolve_commands(model, equilibrium, *, tol=1e-12, max_iter=30):
                                    q_init=model.q_init if q_init is None else q_init, commands=())
 
     forces, constraints = list(model.forces), list(model.constraints)
+    followers = {k for k, f in enumerate(forces)
+                 if isinstance(getattr(f, "magnitude", None), (int, float))}
     q_guess, records = None, []
     for driver, targets in drivers:
         springs, locks = check_command(driver, targets, forces, constraints)
@@ -63,18 +72,24 @@ def resolve_commands(model, equilibrium, *, tol=1e-12, max_iter=30):
             return eq, float(eq.lam[row])
 
         spring_k = springs[0][1] if springs else None
-        released = [f for k, f in enumerate(forces) if k != spring_k]
+        released = [f for k, f in enumerate(forces) if k != spring_k and k not in followers]
         eq, lam0 = solve(released, q_guess)
         rec = {"driver": driver.name, "angle_target": driver.angle_target,
                "effort": -lam0, "effort_unit": "N m (torque in the driver's sense)",
-               "iterations": 0, "tol": tol, "sets": []}
+               "iterations": 0, "tol": tol, "sets": [],
+               "unloaded": [forces[k].name for k in sorted(followers)]}
+
+        def with_spring(l0):
+            """The pre-solve forces with the commanded spring at free length l0."""
+            return [dataclasses.replace(f, free_length=l0) if k == spring_k else f
+                    for k, f in enumerate(forces) if k not in followers]
+
         if spring_k is not None:
             spring = forces[spring_k]
             l_star = float(np.linalg.norm(spring.diff(eq.q)))
             a_l0, a_lam = l_star, lam0  # zero tension at q*: λ_d is the released effort
             b_l0 = l_star * (1.0 - 1e-3)
-            eq_b, b_lam = solve(forces[:spring_k] + [dataclasses.replace(spring, free_length=b_l0)]
-                                + forces[spring_k + 1:], eq.q)
+            eq_b, b_lam = solve(with_spring(b_l0), eq.q)
             it, scale = 1, max(abs(lam0), np.finfo(float).tiny)
             while abs(b_lam) > tol * scale:
                 if it >= max_iter or b_lam == a_lam:
@@ -84,8 +99,7 @@ def resolve_commands(model, equilibrium, *, tol=1e-12, max_iter=30):
                 new = b_l0 - b_lam * (b_l0 - a_l0) / (b_lam - a_lam)
                 a_l0, a_lam = b_l0, b_lam
                 b_l0 = new
-                trial = dataclasses.replace(spring, free_length=b_l0)
-                eq_b, b_lam = solve(forces[:spring_k] + [trial] + forces[spring_k + 1:], eq_b.q)
+                eq_b, b_lam = solve(with_spring(b_l0), eq_b.q)
                 it += 1
             forces[spring_k] = dataclasses.replace(spring, free_length=b_l0)
             length = float(np.linalg.norm(spring.diff(eq_b.q)))
@@ -102,3 +116,29 @@ def resolve_commands(model, equilibrium, *, tol=1e-12, max_iter=30):
         q_guess = eq.q
         records.append(rec)
     return dataclasses.replace(make_model(forces, constraints, q_guess), drivers=tuple(records))
+
+
+def reuse_commands(model, resolved):
+    """``model`` (with pending commands) set as ``resolved`` was: the commanded springs' free
+    lengths and distance joints' lengths copied element by element, the drivers' records and
+    the commanded posture taken over.  For a family of models that differ only in parameters
+    the commands do not depend on (a sweep that found the settings equal at two values);
+    None when the two models do not have the same elements."""
+    if (len(model.forces) != len(resolved.forces) or len(model.constraints) != len(resolved.constraints)
+            or [f.name for f in model.forces] != [f.name for f in resolved.forces]
+            or [c.name for c in model.constraints] != [c.name for c in resolved.constraints]):
+        return None
+    forces, constraints = list(model.forces), list(model.constraints)
+    for _, targets in model.commands:
+        for kind, k, _ in targets:
+            if kind == "force":
+                forces[k] = dataclasses.replace(forces[k], free_length=resolved.forces[k].free_length)
+            else:
+                constraints[k] = dataclasses.replace(constraints[k], length=resolved.constraints[k].length)
+    return dataclasses.replace(model, forces=tuple(forces), constraints=tuple(constraints),
+                               q_init=resolved.q_init, commands=(), drivers=resolved.drivers)
+
+
+def command_settings(model) -> tuple:
+    """The values a resolved model's commands set (free lengths and lengths), in order."""
+    return tuple(s.get("free_length", s.get("length")) for d in model.drivers for s in d["sets"])

@@ -4,14 +4,38 @@ Solve, at q̇ = 0,
 
     g(q₀, 0) − Φ_q(q₀)ᵀ λ₀ = 0,        Φ(q₀) = 0
 
-by Newton's method on the augmented system from the case's initial positions:
+from the case's positions:
 
-    ┌ K + H(λ)   Φ_qᵀ ┐ ┌ Δq ┐   ┌ g − Φ_qᵀ λ ┐
-    └   Φ_q       0   ┘ └ Δλ ┘ = └    −Φ      ┘        K = −∂g/∂q,  H(λ) = Σ λ_k ∇²Φ_k
+1. Position solve: q is moved onto Φ = 0 first (:mod:`~mbseig.statics.position`); a
+   least-squares minimum with Φ ≠ 0 there is the only proof that the constraints cannot be
+   satisfied.
+2. Newton on the augmented system, kept on the constraint manifold:
 
-with a backtracking line search on the scaled residual.  The step is the minimum-norm
-least-squares solution (SVD), so redundant constraints and rigid-body freedoms do not stop it;
-λ₀ is finally recomputed as the minimum-norm solution of Φ_qᵀ λ = g and the redundancy reported.
+       ┌ K + H(λ)   Φ_qᵀ ┐ ┌ Δq ┐   ┌ g − Φ_qᵀ λ ┐
+       └   Φ_q       0   ┘ └ Δλ ┘ = └    −Φ      ┘        K = −∂g/∂q,  H(λ) = Σ λ_k ∇²Φ_k
+
+   with λ always the least-squares multipliers of the current q (Φ_qᵀλ ≈ g), the step bounded
+   by a trust radius in the model's length and angle scales
+   (:class:`~mbseig.statics.linalg.StepScales`), each trial projected back onto Φ = 0 and
+   accepted by Deuflhard's restricted monotonicity test on the *simplified Newton correction*
+   (the correction the same matrix gives at the trial point): a test in displacements, not in
+   forces, so that a stiff member strained by a linearized rotation does not reject a good step.
+   Where the tangent stiffness has no restoring force along an unbalanced load (a pendulum
+   started horizontal: λ = 0, K = 0), the step also moves along that force by the trust radius.
+3. When that fails: continuation in the loads from the unloaded state
+   (:mod:`~mbseig.statics.loads`); both are put together by
+   :func:`mbseig.statics.solve.solve_statics`.
+
+Convergence criterion (recorded in ``Equilibrium.tolerances["criterion"]``): every constraint
+satisfied to ``tol`` of its own scale, the Newton correction of q below ``xtol`` in the model's
+length and angle scales, and the generalized force that the tangent stiffness cannot balance
+below ``tol`` × force_scale; when rounding stops the correction from decreasing, a correction
+below ``floor_tol`` is accepted and recorded.  A correction is scale-aware where a force
+residual is not: a stiff member's rounding noise, divided by its stiffness, is small.
+
+λ₀ is finally the least-squares solution of Φ_qᵀλ = g (minimum norm), the redundancy is counted
+and named, and the equilibrium's static stability, self-stress and a stable alternative are
+examined (:mod:`~mbseig.statics.stiffness`, :func:`mbseig.statics.equilibrium`).
 """
 
 from __future__ import annotations
@@ -19,25 +43,32 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg as sla
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
-from ..errors import EquilibriumError, MbseigError
-from ..model.linear_case import LinearCase
-from ..numerics import constraint_rank
+from ..errors import EquilibriumError
+from .failures import NoStaticEquilibrium, NotConverged
+from .linalg import DENSE_LIMIT, NewtonMatrix, StepScales, augmented, multipliers
+from .position import STATIONARY, constraint_residual, position_solve
 
-__all__ = ["Equilibrium", "solve_statics", "solved"]
+__all__ = ["Equilibrium", "solved", "Settings", "newton", "Stall", "Memo", "finish",
+           "settings_for", "diagnose", "CRITERION"]
 
-NONMONOTONE_MEMORY = 5  # merits the line search compares against (1: monotone)
-DENSE_LIMIT = 4000  # augmented size up to which the Newton step is a dense SVD least-squares solve
+CRITERION = ("max_k |Φ_k|/scale_k ≤ tol; Newton correction max(|Δq_i|/ℓ_i, |Δd_b|/L_b) ≤ xtol "
+             "(ℓ: length scale for point coordinates, 1 rad for angles; d_b: rigid lengths); "
+             "force outside the range of the tangent stiffness ≤ tol·force_scale; λ the "
+             "least-squares multipliers of q (a correction ≤ floor_tol is accepted where rounding "
+             "stops it from decreasing)")
 
 
 @dataclass(frozen=True, eq=False)
 class Equilibrium:
     """q₀, λ₀ with their residuals, the rank of Φ_q(q₀) and the tolerances used.
 
-    ``residual`` is the larger of ‖g − Φ_qᵀλ‖∞ / force_scale and max_k |Φ_k| / scale_k.
+    ``residual`` is the larger of ‖g − Φ_qᵀλ‖∞ / force_scale and max_k |Φ_k| / scale_k;
+    ``correction`` the last Newton correction in the model's scales (the convergence test).
+    ``static``: the static stability record (:func:`mbseig.statics.stiffness.static_stability`);
+    ``self_stress``: self-stress states of redundant constraints that change the stiffness;
+    ``stable_alternative``: a statically stable equilibrium offered when this one is unstable;
+    ``path``: how it was reached (direct Newton or load continuation, iterations).
     """
 
     q: np.ndarray
@@ -53,6 +84,12 @@ class Equilibrium:
     tolerances: dict = field(default_factory=dict)
     method: str = "newton"
     model: object = None  # the model this is the equilibrium of (commands resolved), see solved()
+    correction: float = 0.0
+    static: dict = field(default_factory=dict)
+    self_stress: tuple = ()
+    stable_alternative: object = None
+    path: dict = field(default_factory=dict)
+    notes: tuple = ()
 
 
 def solved(model, eq):
@@ -62,146 +99,336 @@ def solved(model, eq):
     return eq.model if getattr(eq, "model", None) is not None else model
 
 
-def solve_statics(model, *, tol: float = 1e-12, max_iter: int = 50, rank_tol: float = 1e-10,
-                  q_init=None) -> Equilibrium:
-    """Find the static equilibrium of ``model`` as it is (see the module docstring).
+# ---------------------------------------------------------------------------------------------
+@dataclass
+class Settings:
+    """Tolerances and limits of one static solve (all recorded in the result)."""
 
-    tol : relative residual at which Newton stops (forces scaled by ``force_scale``, each
-        constraint by its own scale, e.g. L² for a rigid length).
-    rank_tol : relative singular-value threshold for the rank of Φ_q (redundancy count).
-    Errors name the case file and the constraint or coordinate that could not be balanced.
-    """
+    tol: float = 1e-12
+    xtol: float = 1e-12
+    floor_tol: float = 1e-8
+    max_iter: int = 50
+    rank_tol: float = 1e-10
+    radius: float = 0.25  # initial trust radius (model lengths / radians)
+    radius_max: float = 1.0
+    force_scale: float = 1.0
+    scales: StepScales = None
+
+    def record(self) -> dict:
+        return {"tol": self.tol, "xtol": self.xtol, "floor_tol": self.floor_tol,
+                "max_iter": self.max_iter, "rank_tol": self.rank_tol,
+                "trust_radius": self.radius, "trust_radius_max": self.radius_max,
+                "force_scale": self.force_scale, "length_scale": self.scales.length,
+                "criterion": CRITERION, "monotonicity": MONOTONICITY,
+                "full_step_max": FULL_STEP_MAX, "free_steps": FREE_STEPS,
+                "corrector_iter": CORRECTOR_ITER, "corrector_tol": CORRECTOR_TOL,
+                "stationary": STATIONARY}
+
+
+class Stall(Exception):
+    """Newton stopped without convergence; carries the last iterate for the diagnosis."""
+
+    def __init__(self, reason, *, q=None, lam=None, free_dir=None, free=0.0, correction=np.inf,
+                 iterations=0, cond=np.nan):
+        super().__init__(reason)
+        self.reason, self.q, self.lam = reason, q, lam
+        self.free_dir, self.free, self.correction = free_dir, free, correction
+        self.iterations, self.cond = iterations, cond
+
+
+@dataclass
+class Solution:
+    q: np.ndarray
+    lam: np.ndarray
+    iterations: int
+    correction: float
+    free: float
+    position_iterations: int
+    rounding: bool = False
+    cond: float = np.nan
+
+
+def _lam(model, q, s):
+    return multipliers(model.phi_q(q), model.generalized_force(q), s.rank_tol, check=False)[0]
+
+
+def _rhs(model, q, lam, s):
+    with np.errstate(all="ignore"):
+        r1 = model.generalized_force(q) - model.phi_q(q).T @ lam
+        phi = model.phi(q)
+    return np.concatenate([r1, -phi])
+
+
+def _measure(NM, rhs, n, s):
+    """(Newton correction x, its size in the model's scales, unbalanced free force / F, e_q)."""
+    x, e = NM.solve(rhs)
+    eq_ = e[:n]
+    return x, s.scales.size(x[:n]), float(np.max(np.abs(eq_), initial=0.0)) / s.force_scale, eq_
+
+
+def _second_order(model, q, lam, step, NM, rhs0, n, s):
+    """The curvature correction of a step (module docstring): σ = J⁺ ½ (R(q+s) + R(q−s) − 2R(q))
+    with λ held, so that a rotation does not strain stiff members or leave the constraints.
+    Dropped (zero) when it is not finite or larger than half the step."""
+    with np.errstate(all="ignore"):
+        try:
+            c = 0.5 * (_rhs(model, q + step, lam, s) + _rhs(model, q - step, lam, s) - 2.0 * rhs0)
+            sigma = NM.solve(c)[0][:n]
+        except (EquilibriumError, ArithmeticError, ValueError):
+            return np.zeros(n)
+    if not np.all(np.isfinite(sigma)) or s.scales.size(sigma) > 0.5 * s.scales.size(step):
+        return np.zeros(n)
+    return sigma
+
+
+def _trial(model, q, lam, step, NM, rhs0, n, s):
+    """q + step + curvature correction, projected onto Φ = 0; (q_t, λ_t, x_t, e_t) or None."""
+    qt, _ = position_solve(model, q + step + _second_order(model, q, lam, step, NM, rhs0, n, s),
+                           s.scales, tol=s.tol, max_iter=12, radius=max(s.radius, 0.5), prove=False)
+    if qt is None:
+        return None
     try:
-        return _equilibrium(model, tol=tol, max_iter=max_iter, rank_tol=rank_tol, q_init=q_init)
-    except MbseigError as exc:
-        raise exc.located(file=getattr(model, "source", None)) from None
+        with np.errstate(all="ignore"):
+            lt = _lam(model, qt, s)
+            xt, et = NM.solve(_rhs(model, qt, lt, s))
+    except (EquilibriumError, ArithmeticError, ValueError):
+        return None
+    if not (np.all(np.isfinite(xt)) and np.all(np.isfinite(et))):
+        return None
+    return qt, lt, xt, et
 
 
-def _equilibrium(model, *, tol, max_iter, rank_tol, q_init):
-    if isinstance(model, LinearCase):
-        return Equilibrium(q=np.zeros(model.n), lam=np.zeros(0), residual=0.0, force_residual=0.0,
-                           constraint_residual=0.0, iterations=0, rank=0, n_redundant=0,
-                           tolerances={"tol": tol, "rank_tol": rank_tol}, method="linear case",
-                           model=model)
-    n, m = model.n, model.n_constraints
-    q = np.array(model.q_init if q_init is None else q_init, dtype=float)
+MONOTONICITY = 0.75  # a full Newton step is taken when θ = ‖Δx̄‖/‖Δx‖ is below it
+FULL_STEP_MAX = 10.0  # a full Newton step longer than this (model sizes) is not even tried
+FREE_STEPS = 5  # free steps without the unbalanced force dropping by 1 % show a free motion
+CORRECTOR_ITER = 8  # Newton iterations of the corrector of a homotopy step
+CORRECTOR_TOL = 1e-3  # the corrector has converged when its correction is below this × the step
+
+
+def _homotopy_step(model, q, lam, NM, R, x, motion, h, s):
+    """One predictor–corrector step of length h (model's scales) on the Newton homotopy
+    F(y, τ) = R(y) − (1 − τ) R_k = 0 from y_k = (q, λ) at τ = 0, pseudo-arclength in q
+    (module docstring).  Returns (q, λ) on Φ = 0 with λ least-squares, or None."""
+    import scipy.sparse as sp
+
+    n, N = model.n, R.size
+    if motion is not None:  # J singular, R_k outside its range: leave along the free motion
+        yd, td = motion.copy(), 0.0
+    else:  # the tangent (J⁻¹R_k, 1): the Newton direction
+        yd, td = x.copy(), 1.0
+    nq = s.scales.size(yd[:n])
+    if not nq or not np.isfinite(nq):
+        return None
+    yd, td = yd / nq, td / nq
+    y = np.concatenate([q, lam]) + h * yd
+    y[:n] += _second_order(model, q, lam, h * yd[:n], NM, R, n, s)
+    tau = h * td
+    qp = y[:n].copy()
+    c = np.concatenate([yd[:n] / s.scales.ell**2, np.zeros(N - n)])
+    border = sp.csr_matrix(c[None, :])
+    col = sp.csr_matrix(-R[:, None])
+    for _ in range(CORRECTOR_ITER):
+        qy, ly = y[:n], y[n:]
+        try:
+            with np.errstate(all="ignore"):
+                F = _rhs(model, qy, ly, s) - (1.0 - tau) * R
+                A, _ = augmented(model, qy, ly)
+                B = sp.bmat([[A, col], [border, None]], format="csr")
+                dz = NewtonMatrix(B, weights=s.scales.weights(N + 1)).solve(np.concatenate([F, [-(c[:n] @ (qy - qp))]]))[0]
+        except (EquilibriumError, ArithmeticError, ValueError):
+            return None
+        if not np.all(np.isfinite(dz)):
+            return None
+        y = y + dz[:N]
+        tau += dz[N]
+        step = s.scales.size(dz[:n])
+        if step > h:
+            return None
+        if step <= max(CORRECTOR_TOL * h, s.xtol):
+            break
+    else:
+        return None
+    qn, _ = position_solve(model, y[:n], s.scales, tol=s.tol, max_iter=8, prove=False)
+    if qn is None:
+        return None
+    try:
+        with np.errstate(all="ignore"):
+            ln = _lam(model, qn, s)
+    except (EquilibriumError, ArithmeticError, ValueError):
+        return None
+    return (qn, ln) if np.all(np.isfinite(ln)) else None
+
+
+def newton(model, q, s: Settings, *, max_iter=None, prove=True) -> Solution:
+    """Newton from q (module docstring, step 2).  Raises :class:`Stall` or, from the position
+    solve, :class:`~mbseig.statics.failures.ConstraintsUnsatisfiable` (when ``prove``).
+
+    A full Newton step inside the trust radius is taken when it passes the restricted
+    monotonicity test θ = ‖Δx̄‖/‖Δx‖ < 3/4 on the simplified correction.  Otherwise (a step
+    longer than the trust radius, a rejected full step, or a force the Newton matrix cannot
+    balance) a *homotopy step* of the trust radius: predictor along the Newton direction, or
+    along the free motion the unbalanced force pushes, corrected by Newton on the Newton
+    homotopy R(y) = (1 − τ) R_k with a pseudo-arclength condition (:func:`_homotopy_step`).
+    The corrector lets stiff members relax while the soft motion advances, so a rotation does
+    not strain them.  A step whose corrector fails is halved."""
+    max_iter = s.max_iter if max_iter is None else max_iter
+    n = model.n
+    q0 = np.array(q, dtype=float)
+    q, pit = position_solve(model, q0, s.scales, tol=s.tol, radius=max(s.radius, 0.5), prove=prove)
+    if q is None:
+        raise Stall("the position solve did not reach Φ = 0", q=q0, iterations=0)
     cscale = model.constraint_scales()
+    lam = _lam(model, q, s)
+    radius = s.radius
+    it = 0
+    free_streak, free_last = 0, np.inf
+    while True:
+        A, _ = augmented(model, q, lam)
+        try:
+            NM = NewtonMatrix(A, weights=s.scales.weights(A.shape[0]))
+        except EquilibriumError as exc:
+            raise Stall(exc.message, q=q, lam=lam, iterations=it) from None
+        rhs = _rhs(model, q, lam, s)
+        x, corr, free, e_q = _measure(NM, rhs, n, s)
+        cr = constraint_residual(model, q, cscale)[1]
+        if not np.isfinite(corr):
+            raise Stall("the Newton correction is not finite", q=q, lam=lam, iterations=it)
+        if cr <= s.tol and corr <= s.xtol and free <= s.tol:
+            return Solution(q, lam, it, corr, free, pit, cond=NM.cond)
+        stall = dict(q=q, lam=lam, free_dir=e_q if free > s.tol else None, free=free,
+                     correction=corr, iterations=it, cond=NM.cond)
+        if it >= max_iter:
+            raise Stall(f"no convergence in {max_iter} Newton iterations", **stall)
+        it += 1
+        motion = None
+        if free > s.tol:  # a force outside the range: the free motion it pushes along, if any
+            motion = NM.motion(np.concatenate([e_q, np.zeros(rhs.size - n)]))
+            if not s.scales.size(motion[:n]):
+                motion = None
+        free_step = motion is not None
+        if free_step:  # moving freely without the unbalanced force dropping: a free motion
+            free_streak = free_streak + 1 if free > 0.99 * free_last else 0
+            free_last = free
+            if free_streak >= FREE_STEPS:
+                raise Stall(f"free motion: {FREE_STEPS} steps along the unbalanced force did "
+                            f"not reduce it", **stall)
+        if not free_step and corr <= FULL_STEP_MAX:  # the full step, when it passes the test
+            tr = _trial(model, q, lam, x[:n], NM, rhs, n, s)
+            if tr is not None and s.scales.size(tr[2][:n]) < MONOTONICITY * corr:
+                if s.scales.size(tr[2][:n]) < 0.25 * corr:
+                    radius = min(2.0 * radius, s.radius_max)
+                q, lam = tr[0], tr[1]
+                continue
+            if corr <= s.floor_tol and cr <= s.tol:
+                # rounding: the correction no longer decreases; accepted below floor_tol
+                return Solution(q, lam, it - 1, corr, free, pit, rounding=True, cond=NM.cond)
+        h = radius if free_step else min(radius, corr)
+        h0 = h
+        while True:
+            res = _homotopy_step(model, q, lam, NM, rhs, x, motion, h, s)
+            if res is not None:
+                break
+            h *= 0.5
+            if h < 1e-13:
+                raise Stall("the trust region shrank to nothing (no homotopy step converges)",
+                            **stall)
+        radius = min(2.0 * radius, s.radius_max) if h == h0 else max(h, 1e-6)
+        q, lam = res
+
+
+# ---------------------------------------------------------------------------------------------
+def force_scale(model, q, rank_tol):
+    """Typical generalized force at q: loads, or stiffness times the model's size."""
+    import scipy.sparse as sp
+
+    with np.errstate(all="ignore"):
+        g = model.generalized_force(q)
+        K, _ = model.force_jacobians(q)
+        Phi_q = model.phi_q(q)
+        lam = multipliers(Phi_q, g, rank_tol, check=False)[0]
+        knorm = sp.linalg.norm(K, np.inf) if K.nnz else 0.0
+        f = max(float(np.max(np.abs(g), initial=0.0)), knorm * model.length_scale,
+                float(np.max(np.abs(Phi_q.T @ lam), initial=0.0)))
+    return f if np.isfinite(f) and f > 0 else 1.0
+
+
+def settings_for(model, q, *, tol, xtol, floor_tol, max_iter, rank_tol):
+    s = Settings(tol=tol, xtol=tol if xtol is None else xtol, floor_tol=floor_tol,
+                 max_iter=max_iter, rank_tol=rank_tol)
+    s.scales = StepScales(model)
+    s.force_scale = force_scale(model, q, rank_tol)
+    return s
+
+
+class Memo:
+    """The model seen through a small cache of its assembled quantities at the last few q (the
+    statics asks for Φ, Φ_q, g, K and H at one q several times; assembling them is what costs
+    on large models).  Every other attribute is the model's own."""
+
+    SIZE = 6
+
+    def __init__(self, model):
+        self._model = model
+        self._cache: dict = {}
+
+    def __getattr__(self, name):
+        return getattr(self._model, name)
+
+    def _get(self, key, compute):
+        hit = self._cache.get(key)
+        if hit is None:
+            hit = compute()
+            if len(self._cache) >= self.SIZE:
+                self._cache.pop(next(iter(self._cache)))
+            self._cache[key] = hit
+        return hit
+
+    def phi(self, q):
+        return self._get(("phi", q.tobytes()), lambda: self._model.phi(q))
+
+    def phi_q(self, q):
+        return self._get(("phi_q", q.tobytes()), lambda: self._model.phi_q(q))
+
+    def generalized_force(self, q, qd=None):
+        if qd is not None:
+            return self._model.generalized_force(q, qd)
+        return self._get(("g", q.tobytes()), lambda: self._model.generalized_force(q))
+
+    def force_jacobians(self, q, qd=None):
+        if qd is not None:
+            return self._model.force_jacobians(q, qd)
+        return self._get(("K", q.tobytes()), lambda: self._model.force_jacobians(q))
+
+    def constraint_hessian(self, q, lam):
+        return self._get(("H", q.tobytes(), np.asarray(lam).tobytes()),
+                         lambda: self._model.constraint_hessian(q, lam))
+
+
+def finish(model, q, s, *, iterations, correction, method, path, lam=None):
+    """The Equilibrium record at a converged q: least-squares λ, rank, residuals, reactions."""
+    n, m = model.n, model.n_constraints
     Phi_q = model.phi_q(q)
     g = model.generalized_force(q)
-    large = n + m > DENSE_LIMIT
-    lam = _multipliers(Phi_q, g, rank_tol, large, check=False)[0]
-    K, _ = model.force_jacobians(q)
-    force_scale = _force_scale(model, g, K, Phi_q, lam)
-
-    def residuals(q, lam):
-        Phi_q = model.phi_q(q)
-        r1 = model.generalized_force(q) - Phi_q.T @ lam
-        r2 = model.phi(q)
-        fr = float(np.max(np.abs(r1), initial=0.0)) / force_scale
-        cr = float(np.max(np.abs(r2) / cscale, initial=0.0))
-        return r1, r2, fr, cr, Phi_q
-
-    r1, r2, fr, cr, Phi_q = residuals(q, lam)
-    it = 0
-    recent = []  # merits of the last NONMONOTONE_MEMORY iterates
-    while max(fr, cr) > tol:
-        if it >= max_iter:
-            raise _failure(model, q, r1, r2, fr, cr, max_iter)
-        it += 1
-        K, _ = model.force_jacobians(q)
-        H = model.constraint_hessian(q, lam)
-        A = sp.bmat([[K + H, Phi_q.T], [Phi_q, None]], format="csr") if m else (K + H).tocsr()
-        rhs = np.concatenate([r1, -r2])
-        step = _solve(A, rhs)
-        dq, dl = step[:n], step[n:]
-        # non-monotone line search (Grippo, Lampariello & Lucidi 1986): a step is accepted when
-        # it improves on the worst of the last few merits, so that a stiff elastic member
-        # (a beam's EA stretched by a step's linearized rotation) does not stall Newton
-        recent = (recent + [max(fr, cr)])[-NONMONOTONE_MEMORY:]
-        merit = max(recent)
-        alpha = 1.0
-        for _ in range(40):
-            qt, lt = q + alpha * dq, lam + alpha * dl
-            try:
-                r1t, r2t, frt, crt, Phi_qt = residuals(qt, lt)
-            except EquilibriumError:
-                frt = crt = np.inf
-            if max(frt, crt) < merit or alpha < 1e-9:
-                break
-            alpha *= 0.5
-        if not np.isfinite(max(frt, crt)):
-            raise _failure(model, q, r1, r2, fr, cr, it)
-        if max(frt, crt) >= merit and alpha < 1e-9:
-            raise _failure(model, q, r1, r2, fr, cr, it)
-        q, lam, r1, r2, fr, cr, Phi_q = qt, lt, r1t, r2t, frt, crt, Phi_qt
-
-    g = model.generalized_force(q)
-    lam, rank, rank_method = _multipliers(Phi_q, g, rank_tol, large, check=True)
-    r1, r2, fr, cr, Phi_q = residuals(q, lam)
-    redundant = _redundant_rows(model, Phi_q, rank) if not large else []
+    lam_ls, rank, rank_method = multipliers(Phi_q, g, s.rank_tol, check=True)
+    lam = lam_ls if lam is None else lam
+    r1 = g - Phi_q.T @ lam
+    fr = float(np.max(np.abs(r1), initial=0.0)) / s.force_scale
+    cr = constraint_residual(model, q, model.constraint_scales())[1]
+    redundant = _redundant_rows(model, Phi_q, rank) if n + m <= DENSE_LIMIT else []
     reactions, k = [], 0
     for c in model.constraints:
         reactions.append((c.name, lam[k:k + c.n_eq].copy()))
         k += c.n_eq
     return Equilibrium(
         q=q, lam=lam, residual=max(fr, cr), force_residual=fr, constraint_residual=cr,
-        iterations=it, rank=rank, n_redundant=m - rank, redundant=tuple(redundant),
-        reactions=tuple(reactions),
-        tolerances={"tol": tol, "max_iter": max_iter, "rank_tol": rank_tol,
-                    "force_scale": force_scale, "rank_method": rank_method},
-        model=model,
-    )
-
-
-def _force_scale(model, g, K, Phi_q, lam):
-    """Typical generalized force: loads, or stiffness times the model's size."""
-    knorm = sp.linalg.norm(K, np.inf) if K.nnz else 0.0
-    s = max(float(np.max(np.abs(g), initial=0.0)), knorm * model.length_scale,
-            float(np.max(np.abs(Phi_q.T @ lam), initial=0.0)))
-    return s if s > 0 else 1.0
-
-
-def _multipliers(Phi_q, g, rank_tol, large, *, check):
-    """(λ, rank of Φ_q, how the rank was found) with λ the least-squares solution of Φ_qᵀλ = g.
-
-    Dense (size up to DENSE_LIMIT): SVD, so λ is the minimum-norm solution and the rank is
-    revealed by the singular values.  Large models: the normal equations Φ_q Φ_qᵀ λ = Φ_q g by
-    sparse LU; that needs independent constraints, so a pivot below rank_tol² of the largest
-    (the square, since Φ_qΦ_qᵀ squares the singular values) raises instead of guessing.
-    """
-    m = Phi_q.shape[0]
-    if m == 0:
-        return np.zeros(0), 0, "none"
-    if not large:
-        lam = sla.lstsq(Phi_q.toarray().T, g, lapack_driver="gelsd")[0]
-        rank = constraint_rank(Phi_q, rank_tol)[0] if check else m
-        return lam, rank, "SVD of Φ_q"
-    A = (Phi_q @ Phi_q.T).tocsc()
-    try:
-        lu = spla.splu(A)
-    except RuntimeError:
-        lu = None
-    pivots = np.abs(lu.U.diagonal()) if lu is not None else np.zeros(1)
-    if lu is None or pivots.min() <= rank_tol**2 * pivots.max():
-        raise EquilibriumError(
-            f"redundant constraints in a model of {Phi_q.shape[1]} coordinates and {m} constraints: "
-            f"above the dense limit of {DENSE_LIMIT} the constraints must be independent",
-            element="equilibrium")
-    return lu.solve(Phi_q @ g), m, "sparse LU of Φ_q Φ_qᵀ (independent constraints verified by its pivots)"
-
-
-def _solve(A, rhs):
-    if A.shape[0] <= DENSE_LIMIT:
-        return sla.lstsq(A.toarray(), rhs, lapack_driver="gelsd")[0]
-    try:
-        return spla.splu(A.tocsc()).solve(rhs)
-    except RuntimeError:
-        raise EquilibriumError(
-            f"singular Newton matrix of size {A.shape[0]} (redundant constraints or free motion in "
-            f"a model above the dense limit of {DENSE_LIMIT})", element="equilibrium") from None
+        iterations=int(iterations), rank=rank, n_redundant=m - rank, redundant=tuple(redundant),
+        reactions=tuple(reactions), tolerances={**s.record(), "rank_method": rank_method},
+        method=method, model=model, correction=float(correction), path=dict(path))
 
 
 def _redundant_rows(model, Phi_q, rank):
+    import scipy.linalg as sla
+
     m = Phi_q.shape[0]
     if rank >= m:
         return []
@@ -210,16 +437,39 @@ def _redundant_rows(model, Phi_q, rank):
     return sorted({names[i] for i in piv[rank:]})
 
 
-def _failure(model, q, r1, r2, fr, cr, iterations):
-    if cr >= fr and r2.size:
-        k = int(np.argmax(np.abs(r2) / model.constraint_scales()))
-        name = model.constraint_row_names()[k]
-        return EquilibriumError(
-            f"no equilibrium after {iterations} Newton iterations: constraint cannot be satisfied "
-            f"(relative residual {cr:.3g}); constraints are inconsistent", element=name)
-    k = int(np.argmax(np.abs(r1)))
-    coord = model.coordinate_names[k]
-    return EquilibriumError(
-        f"no equilibrium after {iterations} Newton iterations: unbalanced generalized force "
-        f"{r1[k]:.4g} on coordinate {coord} (relative residual {fr:.3g}); is the model free to "
-        f"move under its loads?", element="equilibrium")
+# ---------------------------------------------------------------------------------------------
+def _dominant(vec, names, scales, count=3):
+    rel = np.abs(vec) / scales.ell
+    top = np.argsort(-rel, kind="stable")[:count]
+    mx = rel[top[0]] if top.size else 0.0
+    return [names[i] for i in top if rel[i] >= 0.2 * mx and rel[i] > 0]
+
+
+def diagnose(model, q0, first: Stall, second, s: Settings):
+    """The true failure message from the failed attempts (docs/design.md, "Equilibrium")."""
+    names = model.coordinate_names
+    last = first
+    if last.free_dir is not None and last.free > np.sqrt(s.tol):
+        along = ", ".join(_dominant(last.free_dir, names, s.scales))
+        force = float(np.linalg.norm(last.free_dir))
+        return NoStaticEquilibrium(
+            f"no static equilibrium: free motion along {along} (no restoring force; an "
+            f"unbalanced generalized force of {force:.4g} acts along it at the last iterate, "
+            f"after {last.iterations} Newton iterations)", element="equilibrium")
+    q = last.q if last.q is not None else q0
+    moved = s.scales.largest(q - q0, names)
+    unit = lambda nm: "m" if nm.rpartition(".")[2] in ("x", "y", "z") else "rad"
+    moved_txt = ", ".join(f"{nm} ({dq:+.3g} {unit(nm)})" for nm, dq in moved) or "none"
+    hint = ("hint: start nearer the expected equilibrium (positions of the case, or q_init)")
+    if second is not None:
+        t = getattr(second, "load_factor", None)
+        if t is not None and t > 0:
+            hint += (f"; the load continuation from the unloaded state stopped at {t:.4g} of the "
+                     f"loads (a limit point: beyond it the equilibrium is on another branch, or "
+                     f"none exists)")
+        else:
+            hint += f"; the load continuation from the unloaded state failed too ({second.reason})"
+    return NotConverged(
+        f"did not converge from the given positions ({first.reason}; Newton correction "
+        f"{first.correction:.3g} of the model's size): the coordinates that moved most: "
+        f"{moved_txt}; {hint}", element="equilibrium")

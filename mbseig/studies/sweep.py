@@ -1,12 +1,17 @@
-"""Parameter sweeps: modes at every point, mode tracking by MAC, stability boundaries.
+"""Parameter sweeps: continuation along each line, modes at every point, mode tracking by MAC,
+stability boundaries where Re s = 0, folds, branch points and two-parameter boundary curves.
 
-For parameter values p on a grid (the Cartesian product of the ``axes``; tracking and boundaries
-run along the first axis, one line per combination of the others), every point is an independent
-pure computation (:func:`evaluate_point`: load → equilibrium → linearize → all 2n eigenpairs), so
-it runs the same in-process, on local processes or on a Dask cluster.
+For parameter values p on a grid (the Cartesian product of the ``axes``), the first axis varies
+along a *line* and the others are fixed per line.  Each line is one pure computation
+(:func:`mbseig.studies.continuation.sweep_line`): it follows one equilibrium branch through the
+grid by continuation (tangent predictor from the previous equilibrium, pseudo-arclength through
+folds, switches at branch points to the stable branch, a fresh solve past a fold that does not
+turn forward again), and gives all 2n eigenpairs at every grid point.  Lines run in-process, on
+local processes or on a Dask cluster with the same results.  ``continuation=False`` solves every
+point on its own from the case's positions instead (:func:`evaluate_point`).
 
-Tracking.  Consecutive points are matched by the modal assurance criterion of the mode shapes in
-full coordinates (q = N x, independent of the null-space basis):
+Tracking.  Consecutive points of a line are matched by the modal assurance criterion of the mode
+shapes in full coordinates (q = N x, independent of the null-space basis):
 
     MAC(a, b) = |aᴴ b|² / ((aᴴ a)(bᴴ b))
 
@@ -16,14 +21,21 @@ would jump across the real axis costs ``CONJUGATE_PENALTY``; a tiny eigenvalue-d
 assignment on cost = 1 − MAC + penalties (scipy.optimize.linear_sum_assignment).  Sort order is
 never used.
 
-Boundaries.  A tracked eigenvalue is unstable where h = δ + tol < 0, with δ = −Re s and tol the
-per-eigenvalue stability tolerance of :func:`mbseig.modal.tolerances`, the same that decides
-``mbseig modes``.  Where h changes sign between two grid points, the crossing is located by Brent's method on
-h(p) (each evaluation re-solves the model and picks the eigenvalue matching the track by MAC; where
-several match within ``AMBIGUOUS_MAC``, as the partners of a collision do, the least stable one) to
-``xtol = xtol_rel · |stop − start|``; conjugate duplicates are merged.  For a damped crossing the
-root is δ = −tol, within tol/|dδ/dp| of δ = 0; for an undamped flutter onset (δ ≡ 0 before the
-collision) it is the collision itself to O(tol²).
+Boundaries.  A tracked eigenvalue is unstable where h = δ + tol < 0 (δ = −Re s, tol of
+:func:`mbseig.modal.tolerances`, the same that decides ``mbseig modes``).  Where h changes sign
+between two grid points of one branch segment, the boundary is located where Re s = 0 of the
+crossing mode (:mod:`mbseig.studies.boundaries`: Re s for a transversal crossing, the pair's
+squared distance for a collision on the imaginary axis) by Brent's method to
+``xtol = xtol_rel · |stop − start|``, with the tolerance band (where the mode is critical)
+reported beside it; conjugate duplicates are merged.  A fold of the branch with degrees of
+freedom is a divergence boundary (a real eigenvalue through zero, the branch turning back),
+located on the branch itself; so is a branch point.  Folds of a branch without degrees of
+freedom (a driven mechanism's dead point) are listed in ``folds`` only.
+
+Two-parameter curves.  With two swept parameters, each boundary of the first line where
+stability is lost is followed across the second parameter's range
+(:func:`mbseig.studies.boundaries.follow_boundary`): the curve p₁*(p₂) in ``curves``, from which
+the stability chart is drawn.
 """
 
 from __future__ import annotations
@@ -38,22 +50,17 @@ from pathlib import Path
 import numpy as np
 
 from .. import plots
-from ..eigen import solve_qep
 from ..errors import CaseError, MbseigError
-from ..linear import linearize
-from ..modal import stability, tolerances, worst
 from ..numerics import jsonable
-from ..statics import equilibrium, solved
-from ..statics.reactions import rom_flags
+from ..statics import equilibrium
+from .boundaries import (AMBIGUOUS_MAC, BEND, CONJUGATE_PENALTY, DISTANCE_WEIGHT, MAX_INSERT,
+                         Evaluator, follow_boundary, locate, mac_matrix, match_cost)
+from .continuation import modal_point, sweep_line
 from .point import as_spec
 from .runners import Runner, progress_bar
 
 __all__ = ["parse_range", "SweepResult", "run_sweep", "evaluate_point", "mac_matrix",
            "track_line", "write_outputs", "progress_bar"]
-
-CONJUGATE_PENALTY = 2.0
-DISTANCE_WEIGHT = 1e-3
-AMBIGUOUS_MAC = 0.05
 
 
 def parse_range(text: str):
@@ -76,47 +83,26 @@ def parse_range(text: str):
 
 
 # ---------------------------------------------------------------------------------------------
-def evaluate_point(case, config, params, *, safety=10.0, stability_rtol=1e-12):
-    """All eigenpairs at one parameter point (a pure function, picklable for workers).
+def evaluate_point(case, config, params, *, safety=10.0, stability_rtol=1e-12, q_init=None):
+    """All eigenpairs at one parameter point, solved on its own (a pure, picklable function).
 
     case : a :class:`~mbseig.casefile.CaseSpec` (a model factory: the case is not read again).
-    Returns a dict: eigenvalues (2n, complex), shapes (n_full × 2n, unit columns), tol (per
-    eigenvalue: the δ tolerance of :func:`mbseig.modal.tolerances`), verdict (as ``mbseig
-    modes`` gives it), out_of_range (joints outside their range of motion, from the case's
-    [report] table), error (None or a one-line message).
+    Returns the point dict of :func:`mbseig.studies.continuation.modal_point` (eigenvalues,
+    unit shapes in full coordinates, per-eigenvalue tolerances, verdict, joints outside their
+    range of motion, q), or {"params", "error"} with a one-line message.
     """
     try:
         model = case.build(config, **params)
-        eq = equilibrium(model)
-        lin = linearize(model, eq)
-        sol = solve_qep(lin.M, lin.P, lin.Q)
+        eq = equilibrium(model, q_init=q_init, offer_stable=False, self_stress="report")
+        pt = modal_point(eq.model, eq, params, safety=safety, stability_rtol=stability_rtol)
+        pt["statics"] = "cold"
+        return pt
     except MbseigError as exc:
         return {"params": dict(params), "error": exc.one_line()}
-    s = sol.eigenvalues
-    _, _, tol, rigid = tolerances(sol, safety=safety, stability_rtol=stability_rtol)
-    X = lin.N @ sol.vectors
-    X = X / np.maximum(np.linalg.norm(X, axis=0), np.finfo(float).tiny)
-    verdict = worst(stability(-s.real, tol, rigid))
-    model = solved(model, eq)
-    out_of_range = rom_flags(model, eq.q) if getattr(model, "report", {}).get("angles") else []
-    return {"params": dict(params), "error": None, "eigenvalues": s, "shapes": X, "tol": tol,
-            "verdict": verdict, "out_of_range": out_of_range, "solver": sol.solver}
-
-
-def mac_matrix(A, B):
-    """MAC between the columns of A and of B (complex), |aᴴb|²/((aᴴa)(bᴴb))."""
-    num = np.abs(A.conj().T @ B) ** 2
-    den = np.outer(np.sum(np.abs(A) ** 2, axis=0), np.sum(np.abs(B) ** 2, axis=0))
-    return num / np.maximum(den, np.finfo(float).tiny)
 
 
 def _match_cost(ref_s, ref_shapes, s, shapes, scale):
-    cost = 1.0 - mac_matrix(ref_shapes, shapes)
-    real_tol = 1e-8 * np.maximum(np.abs(ref_s)[:, None], np.abs(s)[None, :]) + 1e-300
-    crossing = ((ref_s.imag[:, None] * s.imag[None, :] < 0)
-                & (np.abs(ref_s.imag)[:, None] > real_tol) & (np.abs(s.imag)[None, :] > real_tol))
-    cost = cost + CONJUGATE_PENALTY * crossing
-    return cost + DISTANCE_WEIGHT * np.abs(ref_s[:, None] - s[None, :]) / scale
+    return match_cost(ref_s, ref_shapes, s, shapes, scale)
 
 
 def track_line(points):
@@ -128,7 +114,7 @@ def track_line(points):
     from scipy.optimize import linear_sum_assignment
 
     n_pts = len(points)
-    tracks_s, tracks_t = [], []  # per track: list of (k, s, tol)
+    tracks_s, tracks_t = [], []  # per track: dict k → value
     ref = []  # per track: (s, shape) at its last point
     for k, pt in enumerate(points):
         if pt.get("error"):
@@ -142,7 +128,8 @@ def track_line(points):
             continue
         ref_s = np.array([r[0] for r in ref])
         ref_X = np.column_stack([r[1] for r in ref])
-        scale = max(float(np.max(np.abs(ref_s), initial=0.0)), float(np.max(np.abs(s), initial=0.0)), 1e-300)
+        scale = max(float(np.max(np.abs(ref_s), initial=0.0)),
+                    float(np.max(np.abs(s), initial=0.0)), 1e-300)
         rows, cols = linear_sum_assignment(_match_cost(ref_s, ref_X, s, X, scale))
         matched = set()
         for r, c in zip(rows, cols):
@@ -165,7 +152,7 @@ def track_line(points):
 
 
 def _track_shapes(points, S):
-    """Shape of each track at each point (for boundary refinement), None where absent."""
+    """Shape of each track at each point (for boundary location), None where absent."""
     out = {}
     for k, pt in enumerate(points):
         if pt.get("error"):
@@ -178,55 +165,35 @@ def _track_shapes(points, S):
     return out
 
 
-def boundary_residual(case, config, params, axis, p, ref_s, ref_shape, *, safety=10.0,
-                      stability_rtol=1e-12):
-    """(h, s) at axis = p for the eigenvalue matching (ref_s, ref_shape): h = δ + tol."""
-    pt = evaluate_point(case, config, {**params, axis: p}, safety=safety,
-                        stability_rtol=stability_rtol)
-    if pt.get("error"):
-        raise MbseigError(f"boundary search at {axis} = {p!r}: {pt['error']}", element="sweep")
-    s, X, tol = pt["eigenvalues"], pt["shapes"], pt["tol"]
-    scale = max(abs(ref_s), float(np.max(np.abs(s))), 1e-300)
-    cost = _match_cost(np.array([ref_s]), ref_shape[:, None], s, X, scale)[0]
-    # near a collision (flutter onset) the two partners have nearly equal shapes: among the
-    # eigenvalues matching within AMBIGUOUS_MAC, the least stable one decides
-    cand = np.flatnonzero(cost <= cost.min() + AMBIGUOUS_MAC)
-    h = -s[cand].real + tol[cand]
-    c = int(cand[np.argmin(h)])
-    return float(-s[c].real + tol[c]), complex(s[c])
+def locate_task(case, config, params, axis, lo, hi, anchors, ref_lo, ref_hi, xtol, stable_end,
+                *, safety=10.0, stability_rtol=1e-12):
+    """One boundary search (a pure function for the runners): :func:`boundaries.locate`."""
+    ev = Evaluator(case, config, params, axis, anchors, safety=safety,
+                   stability_rtol=stability_rtol)
+    try:
+        return locate(ev, lo, hi, ref_lo, ref_hi, xtol, stable_end)
+    except (MbseigError, ValueError) as exc:
+        msg = exc.one_line() if isinstance(exc, MbseigError) else str(exc)
+        return {"error": msg}
 
 
-def locate_boundary(case, config, params, axis, lo, hi, ref_s, ref_shape, xtol, h_lo=None,
-                    h_hi=None, *, safety=10.0, stability_rtol=1e-12):
-    """Brent's method on h(p) = δ + tol of the tracked eigenvalue in [lo, hi] (a pure function).
-
-    h_lo, h_hi : the tracked values at the bracket ends (from the grid), so that the bracket's
-    signs are those the tracker saw even where h is at the level of the tolerance.
-    """
-    from scipy.optimize import brentq
-
-    def h(p):
-        if p == lo and h_lo is not None:
-            return h_lo
-        if p == hi and h_hi is not None:
-            return h_hi
-        return boundary_residual(case, config, params, axis, p, ref_s, ref_shape, safety=safety,
-                                 stability_rtol=stability_rtol)[0]
-
-    root, info = brentq(h, lo, hi, xtol=xtol, full_output=True, disp=False)
-    _, s = boundary_residual(case, config, params, axis, root, ref_s, ref_shape, safety=safety,
-                             stability_rtol=stability_rtol)
-    return {"value": float(root), "eigenvalue": [float(s.real), float(s.imag)],
-            "converged": bool(info.converged), "function_calls": int(info.function_calls)}
+def curve_task(case, config, fixed, axis, axis2, values2, start, span, xtol, *, safety=10.0,
+               stability_rtol=1e-12):
+    """One two-parameter boundary curve (a pure function for the runners)."""
+    return follow_boundary(case, config, fixed, axis, axis2, values2, start, span=span,
+                           xtol=xtol, safety=safety, stability_rtol=stability_rtol)
 
 
 # ---------------------------------------------------------------------------------------------
 @dataclass(frozen=True, eq=False)
 class SweepResult:
-    """A sweep: grid, per-point results, tracked eigenvalues per line and stability boundaries.
+    """A sweep: grid, per-point results, tracked eigenvalues per line, stability boundaries, and
+    the followed branches (continuation), folds and two-parameter boundary curves.
 
     ``tracks[l]`` is (n_points × n_tracks) complex for line l (the first axis varying, the other
-    axes fixed at ``lines[l]``); ``boundaries`` lists every crossing of the imaginary axis.
+    axes fixed at ``lines[l]``); ``boundaries`` lists every loss or recovery of stability;
+    ``branches[l]`` the branch points of line l for the bifurcation diagram; ``folds`` every
+    fold located on a branch; ``curves`` the boundaries followed across the second axis.
     """
 
     case: str
@@ -240,6 +207,12 @@ class SweepResult:
     boundaries: list
     tolerances: dict = field(default_factory=dict)
     runner: str = "serial"
+    branches: list = field(default_factory=list)
+    events: list = field(default_factory=list)
+    folds: list = field(default_factory=list)
+    curves: list = field(default_factory=list)
+    records: list = field(default_factory=list)
+    diagram: dict = field(default_factory=dict)
 
     @property
     def axis(self):
@@ -254,7 +227,7 @@ class SweepResult:
         out = np.full((len(self.values), len(self.lines)), np.nan)
         for l, line in enumerate(self.points):
             for k, pt in enumerate(line):
-                if not pt.get("error"):
+                if not pt.get("error") and pt["eigenvalues"].size:
                     out[k, l] = float(np.max(pt["eigenvalues"].real))
         return out
 
@@ -274,62 +247,91 @@ class SweepResult:
         lines = []
         for l, fixed in enumerate(self.lines):
             S = self.tracks[l]
-            keep = self.listed_tracks(S)
-            tracks = []
-            for j in keep:
-                col = S[:, j]
-                tracks.append({
-                    "track": int(j),
-                    "eigenvalue": [[None, None] if np.isnan(v) else [float(v.real), float(v.imag)]
-                                   for v in col],
-                })
+            tracks = [{"track": int(j),
+                       "eigenvalue": [[None, None] if np.isnan(v) else [float(v.real), float(v.imag)]
+                                      for v in S[:, j]]}
+                      for j in self.listed_tracks(S)]
             pts = [{"params": {k: float(v) for k, v in pt["params"].items()},
                     "verdict": pt.get("verdict"), "error": pt.get("error"),
-                    "out_of_range": pt.get("out_of_range", [])} for pt in self.points[l]]
+                    "out_of_range": pt.get("out_of_range", []),
+                    "statics": pt.get("statics"), "static": pt.get("static"),
+                    "iterations": pt.get("iterations"), "segment": pt.get("segment")}
+                   for pt in self.points[l]]
+            branch = [{k: b[k] for k in ("p", "kind", "segment", "static", "verdict", "angles")}
+                      | {"value": b.get("value")} for b in (self.branches[l] if self.branches else [])]
             lines.append({"fixed": {k: float(v) for k, v in fixed.items()}, "points": pts,
-                          "tracks": tracks})
+                          "tracks": tracks, "branch": branch,
+                          "continuation": self.records[l] if self.records else None})
+        bounds = [{k: v for k, v in b.items() if k not in ("shape", "q")} for b in self.boundaries]
         return jsonable({
             "case": self.case, "config": self.config,
             "fixed": {k: v for k, v in self.fixed.items()},
             "axes": [{"name": n, "values": [float(x) for x in v]} for n, v in self.axes],
-            "lines": lines, "boundaries": self.boundaries, "tolerances": self.tolerances,
+            "lines": lines, "boundaries": bounds, "folds": self.folds, "curves": self.curves,
+            "diagram": self.diagram, "tolerances": self.tolerances,
         })
 
 
-def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None, progress=None,
-              xtol_rel=1e-10, safety=10.0, stability_rtol=1e-12) -> SweepResult:
-    """Sweep ``case`` over ``axes`` = [(name, values), ...] (see the module docstring).
-
-    case : a path (read and parsed once, here) or a :class:`~mbseig.casefile.CaseSpec`; the
-        points and boundary searches receive the parsed case, never the path.
-    jobs : local worker processes (default: CPU count; 1 runs in-process).
-    scheduler : a Dask scheduler address (or a ``distributed.Client``) to run the points on.
-    xtol_rel : boundary tolerance relative to the first axis' span.
-    """
-    spec = as_spec(case)
-    case_arg, case = spec.source, spec
-    fixed = dict(fixed or {})
+def _lines(axes, fixed):
     names = [n for n, _ in axes]
     if len(set(names)) != len(names):
         raise CaseError("a parameter is swept twice", element="--param")
     for n in names:
         if n in fixed:
             raise CaseError(f"parameter {n!r} is both swept and fixed", element="--param")
-    axis0, values0 = axes[0]
     others = axes[1:]
-    lines = [dict(zip([n for n, _ in others], combo))
-             for combo in itertools.product(*[v for _, v in others])] or [{}]
+    return [dict(zip([n for n, _ in others], combo))
+            for combo in itertools.product(*[v for _, v in others])] or [{}]
+
+
+def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None, progress=None,
+              xtol_rel=1e-10, safety=10.0, stability_rtol=1e-12, continuation=True,
+              curves=True, curve_values=None, diagram=None) -> SweepResult:
+    """Sweep ``case`` over ``axes`` = [(name, values), ...] (see the module docstring).
+
+    case : a path (read and parsed once, here) or a :class:`~mbseig.casefile.CaseSpec`; the
+        lines and boundary searches receive the parsed case, never the path.
+    jobs : local worker processes (default: CPU count; 1 runs in-process).
+    scheduler : a Dask scheduler address (or a ``distributed.Client``) to run on.
+    xtol_rel : boundary tolerance relative to the first axis' span.
+    continuation : follow the branch along each line (default); False solves each point alone.
+    curves : with two axes, follow each first-line boundary across the second axis (at
+        ``curve_values`` of it, default its grid values; more are inserted where it bends).
+    diagram : the coordinate or named angle of the bifurcation diagram (default: the named angle,
+        else the coordinate, that varies most along the branch).
+    """
+    spec = as_spec(case)
+    case_arg, case = spec.source, spec
+    fixed = dict(fixed or {})
+    lines = _lines(axes, fixed)
+    axis0, values0 = axes[0]
+    values0 = np.asarray(values0, dtype=float)
     opts = {"safety": safety, "stability_rtol": stability_rtol}
-    calls = [((case, config, {**fixed, **line, axis0: float(v)}), opts)
-             for line in lines for v in values0]
     # build one point first so that a bad case or parameter fails fast with its own message
-    spec.build(config, **calls[0][0][2])
+    spec.build(config, **{**fixed, **lines[0], axis0: float(values0[0])})
     span = abs(float(values0[-1] - values0[0]))
     xtol = xtol_rel * span
+    n0 = len(values0)
     with Runner(jobs=jobs, scheduler=scheduler, progress=progress) as runner:
-        flat = runner.map(evaluate_point, calls, "points")
-        n0 = len(values0)
-        points = [flat[l * n0:(l + 1) * n0] for l in range(len(lines))]
+        if continuation:
+            results = runner.map(sweep_line, [((case, config, {**fixed, **line}, axis0, values0),
+                                               opts) for line in lines], "lines")
+            points, branches, events, records = [], [], [], []
+            for line, r in zip(lines, results):
+                if r.get("points") is None:  # the first point failed: every point on its own
+                    r = {"points": [evaluate_point(case, config, {**fixed, **line, axis0: float(v)},
+                                                   **opts) for v in values0],
+                         "branch": [], "events": [], "record": {"continuation": r.get("error")}}
+                points.append(r["points"])
+                branches.append(r["branch"])
+                events.append(r["events"])
+                records.append(r["record"])
+        else:
+            calls = [((case, config, {**fixed, **line, axis0: float(v)}), opts)
+                     for line in lines for v in values0]
+            flat = runner.map(evaluate_point, calls, "points")
+            points = [flat[l * n0:(l + 1) * n0] for l in range(len(lines))]
+            branches, events, records = [[] for _ in lines], [[] for _ in lines], [{} for _ in lines]
         tracks, tols, searches = [], [], []
         for l, line in enumerate(lines):
             S, T, _ = track_line(points[l])
@@ -337,31 +339,80 @@ def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None,
             tols.append(T)
             shapes = _track_shapes(points[l], S)
             H = -S.real + T
+            event_ps = [e["p"] for e in events[l] if e.get("type") in ("fold", "branch point", "jump")]
             for j in range(S.shape[1]):
                 for k in range(n0 - 1):
                     a, b = H[k, j], H[k + 1, j]
                     if np.isnan(a) or np.isnan(b) or (a < 0) == (b < 0):
                         continue
-                    searches.append(((l, j, k), (case, config, {**fixed, **line}, axis0,
-                                                 float(values0[k]), float(values0[k + 1]),
-                                                 complex(S[k, j]), shapes[(k, j)], xtol,
-                                                 float(a), float(b)), opts))
-        found = runner.map(locate_boundary, [(a, kw) for _, a, kw in searches], "boundaries")
-    boundaries = []
-    for ((l, j, k), _, _), res in zip(searches, found):
-        S = tracks[l]
-        onset = "loss" if -S[k, j].real + tols[l][k, j] >= 0 else "recovery"
-        s = complex(*res["eigenvalue"])
-        boundaries.append({
-            "line": l, "fixed": {n: float(v) for n, v in lines[l].items()},
-            "parameter": axis0, "value": res["value"], "track": int(j),
-            "bracket": [float(values0[k]), float(values0[k + 1])],
-            "eigenvalue": res["eigenvalue"],
-            "kind": "divergence" if abs(s.imag) <= 1e-8 * max(abs(s), 1e-300) else "flutter",
-            "stability": onset, "converged": res["converged"],
-            "function_calls": res["function_calls"], "xtol": xtol,
-        })
-    boundaries = _merge_conjugates(boundaries, xtol)
+                    pa, pb = points[l][k], points[l][k + 1]
+                    if pa.get("segment") != pb.get("segment"):
+                        continue  # a jump or a switch between them: no crossing on one branch
+                    lo, hi = float(values0[k]), float(values0[k + 1])
+                    if any(min(lo, hi) <= p <= max(lo, hi) for p in event_ps):
+                        continue  # a fold or branch point: reported from the branch itself
+                    anchors = [(lo, pa["q"]), (hi, pb["q"])]
+                    refs = [(complex(S[k, j]), shapes[(k, j)]), (complex(S[k + 1, j]), shapes[(k + 1, j)])]
+                    stable_end = "lo" if a >= 0 else "hi"
+                    searches.append(((l, j, k), (case, config, {**fixed, **line}, axis0, lo, hi,
+                                                 anchors, refs[0], refs[1], xtol, stable_end), opts))
+        found = runner.map(locate_task, [(a, kw) for _, a, kw in searches], "boundaries")
+        boundaries = []
+        for ((l, j, k), _, _), res in zip(searches, found):
+            if res is None or "error" in res:
+                continue
+            S = tracks[l]
+            onset = "loss" if -S[k, j].real + tols[l][k, j] >= 0 else "recovery"
+            un = S[k + 1, j] if onset == "loss" else S[k, j]
+            real = abs(un.imag) <= max(tols[l][k + 1 if onset == "loss" else k, j], 1e-12 * abs(un))
+            boundaries.append({
+                "line": l, "fixed": {n: float(v) for n, v in lines[l].items()},
+                "parameter": axis0, "value": res["value"], "track": int(j),
+                "bracket": [float(values0[k]), float(values0[k + 1])],
+                "eigenvalue": res["eigenvalue"],
+                "kind": "divergence" if real else "flutter",
+                "stability": onset, "converged": res["converged"],
+                "function_calls": res["function_calls"], "xtol": xtol,
+                "event": "crossing", "method": res["method"], "test": res["test"],
+                "band": res["band"],
+                "tolerance": res["tolerance"], "shape": res["shape"], "q": res["q"],
+            })
+        boundaries = _merge_conjugates(boundaries, xtol)
+        folds = []
+        for l, evs in enumerate(events):
+            for e in evs:
+                if e.get("type") not in ("fold", "branch point") or e.get("located") is False:
+                    continue
+                rec = {"line": l, "fixed": {n: float(v) for n, v in lines[l].items()},
+                       "parameter": axis0, "value": float(e["p"]), "type": e["type"],
+                       "branch": ("turns " + e["turns"]) if e.get("turns") else
+                                 ("switched to the stable branch" if e.get("switched") else
+                                  "continues"),
+                       "before": e.get("before"), "after": e.get("after"), "dof": e.get("dof"),
+                       "angles": e.get("angles")}
+                folds.append(rec)
+                if not e.get("dof"):
+                    continue
+                before, after = e.get("before"), e.get("after")
+                if e["type"] == "fold" and before == after:
+                    continue
+                onset = "recovery" if before == "unstable" and after != "unstable" else "loss"
+                boundaries.append({
+                    "line": l, "fixed": rec["fixed"], "parameter": axis0, "value": rec["value"],
+                    "track": None, "bracket": None, "eigenvalue": [0.0, 0.0],
+                    "kind": "divergence", "stability": onset, "converged": True,
+                    "function_calls": 0, "xtol": xtol, "event": e["type"],
+                    "branch": rec["branch"],
+                    "method": ("fold of the branch: dp/ds = 0 by Brent's method on the arclength"
+                               if e["type"] == "fold" else
+                               "branch point: det of the bordered Jacobian changes sign (bisection)"),
+                    "band": [rec["value"], rec["value"]], "tolerance": 0.0})
+        boundaries.sort(key=lambda b: (b["line"], b["value"]))
+        curve_list = []
+        if curves and len(axes) == 2 and continuation:
+            curve_list = _curves(runner, case, config, fixed, axes, lines, boundaries, span, xtol,
+                                 opts, curve_values)
+    diag = _diagram(case, config, fixed, lines, axis0, values0, branches, diagram)
     return SweepResult(case=case_arg, config=config, fixed=fixed,
                        axes=[(n, np.asarray(v, dtype=float)) for n, v in axes], lines=lines,
                        points=points, tracks=tracks, tolerances_track=tols, boundaries=boundaries,
@@ -369,8 +420,32 @@ def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None,
                                    "stability_rtol": stability_rtol,
                                    "conjugate_penalty": CONJUGATE_PENALTY,
                                    "ambiguous_mac": AMBIGUOUS_MAC,
-                                   "distance_weight": DISTANCE_WEIGHT},
-                       runner=runner.kind)
+                                   "distance_weight": DISTANCE_WEIGHT,
+                                   "continuation": bool(continuation)},
+                       runner=runner.kind, branches=branches, events=events, folds=folds,
+                       curves=curve_list, records=records, diagram=diag)
+
+
+def _curves(runner, case, config, fixed, axes, lines, boundaries, span, xtol, opts, values2):
+    """Follow every crossing boundary of the first line across the second axis."""
+    axis0 = axes[0][0]
+    axis2 = axes[1][0]
+    first = float(axes[1][1][0])
+    values2 = [float(v) for v in (axes[1][1] if values2 is None else values2)]
+    values2 = [first] + [v for v in values2 if v != first]
+    starts = [b for b in boundaries if b["line"] == 0 and b.get("event") == "crossing"
+              and b.get("shape") is not None]
+    if not starts or len(values2) < 2:
+        return []
+    calls = [((case, config, {**fixed, **{k: v for k, v in lines[0].items() if k != axis2}},
+               axis0, axis2, values2, b, span, xtol), opts) for b in starts]
+    found = runner.map(curve_task, calls, "curves")
+    out = []
+    for b, pts in zip(starts, found):
+        out.append({"parameter": axis0, "along": axis2, "stability": b["stability"],
+                    "kind": b["kind"], "start": b["value"], "points": pts,
+                    "bend": BEND, "max_insert": MAX_INSERT, "xtol": xtol})
+    return out
 
 
 def _merge_conjugates(boundaries, xtol):
@@ -386,10 +461,52 @@ def _merge_conjugates(boundaries, xtol):
     return out
 
 
+def _diagram(case, config, fixed, lines, axis0, values0, branches, name):
+    """The variable of the bifurcation diagram, its value at every branch point (in place)."""
+    pts = [b for br in branches for b in br]
+    if not pts:
+        return {}
+    angles = sorted({a for b in pts for a in (b.get("angles") or {})})
+    model = case.build(config, **{**fixed, **lines[0], axis0: float(values0[0])})
+    names = list(model.coordinate_names)
+    if name is None:
+        best, spread = None, -1.0
+        for a in angles:
+            v = [b["angles"][a] for b in pts if a in (b.get("angles") or {})]
+            if v and max(v) - min(v) > spread:
+                best, spread = a, max(v) - min(v)
+        if best is None and pts[0].get("q") is not None:
+            q = np.array([b["q"] for b in pts if b.get("q") is not None])
+            best = names[int(np.argmax(np.ptp(q, axis=0)))]
+        name = best
+    if name is None:
+        return {}
+    extra = {}
+    if name in angles:
+        unit, get = "deg", (lambda b: (b.get("angles") or {}).get(name))
+        rng = next((a["range_deg"] for a in model.report.get("angles", []) if a["name"] == name),
+                   None)
+        if rng is not None:
+            extra["range"] = [float(rng[0]), float(rng[1])]
+    elif name in names:
+        i = names.index(name)
+        unit = "m" if name.rpartition(".")[2] in ("x", "y", "z") else "rad"
+        get = (lambda b: None if b.get("q") is None else b["q"][i])
+    else:
+        raise CaseError(f"--diagram {name!r} is neither a named angle ({', '.join(angles) or 'none'}) "
+                        f"nor a coordinate of the model", element="--diagram")
+    for br in branches:
+        for b in br:
+            b["value"] = get(b)
+    return {"variable": name, "unit": unit, **extra}
+
+
 # ---------------------------------------------------------------------------------------------
 def write_outputs(res: SweepResult, out_dir) -> list[Path]:
-    """sweep.json, tracks.csv, boundaries.csv, root_locus.png, modes_vs_parameter.png and, for
-    two swept parameters, stability_map.png.  Returns the written paths."""
+    """sweep.json, tracks.csv, boundaries.csv, root_locus.png, modes_vs_parameter.png,
+    bifurcation.png (and branch.csv) when branches were followed, and, for two swept
+    parameters, stability_map.png, with curves.csv and stability_chart.png when boundaries were
+    followed across the second.  Returns the written paths."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = []
@@ -417,14 +534,45 @@ def write_outputs(res: SweepResult, out_dir) -> list[Path]:
     p = out / "boundaries.csv"
     with p.open("w", newline="") as fh:
         w = csv.writer(fh, lineterminator="\n")
-        w.writerow(others + ["parameter", "value", "track", "re", "im", "kind", "stability", "xtol"])
+        w.writerow(others + ["parameter", "value", "track", "re", "im", "kind", "stability", "xtol",
+                             "event", "band_lo", "band_hi", "method"])
         for b in res.boundaries:
             w.writerow([repr(b["fixed"][n]) for n in others] + [
-                b["parameter"], repr(b["value"]), b["track"], repr(b["eigenvalue"][0]),
-                repr(b["eigenvalue"][1]), b["kind"], b["stability"], repr(b["xtol"])])
+                b["parameter"], repr(b["value"]), "" if b["track"] is None else b["track"],
+                repr(b["eigenvalue"][0]), repr(b["eigenvalue"][1]), b["kind"], b["stability"],
+                repr(b["xtol"]), b.get("event", ""), repr(b["band"][0]), repr(b["band"][1]),
+                b.get("method", "")])
     paths.append(p)
     paths.append(plots.save(plots.root_locus(res), out / "root_locus.png"))
     paths.append(plots.save(plots.modes_vs_parameter(res), out / "modes_vs_parameter.png"))
+    if res.diagram:
+        p = out / "branch.csv"
+        with p.open("w", newline="") as fh:
+            w = csv.writer(fh, lineterminator="\n")
+            w.writerow(others + [res.axis, res.diagram["variable"], "kind", "segment", "static",
+                                 "verdict"])
+            for l, line in enumerate(res.lines):
+                for b in res.branches[l]:
+                    w.writerow([repr(float(line[n])) for n in others] + [
+                        repr(float(b["p"])), "" if b.get("value") is None else repr(float(b["value"])),
+                        b["kind"], b["segment"], b.get("static") or "", b.get("verdict") or ""])
+        paths.append(p)
+        paths.append(plots.save(plots.bifurcation_diagram(res), out / "bifurcation.png"))
     if len(res.axes) == 2:
         paths.append(plots.save(plots.stability_map(res), out / "stability_map.png"))
+        if res.curves:
+            p = out / "curves.csv"
+            with p.open("w", newline="") as fh:
+                w = csv.writer(fh, lineterminator="\n")
+                w.writerow(["curve", res.curves[0]["along"], res.axis, "stability", "test",
+                            "band_lo", "band_hi"])
+                for i, c in enumerate(res.curves):
+                    for pt in c["points"]:
+                        band = pt.get("band") or [None, None]
+                        w.writerow([i, repr(pt["p2"]), "" if pt["value"] is None else repr(pt["value"]),
+                                    c["stability"], pt.get("test") or "",
+                                    "" if band[0] is None else repr(band[0]),
+                                    "" if band[1] is None else repr(band[1])])
+            paths.append(p)
+            paths.append(plots.save(plots.stability_chart(res), out / "stability_chart.png"))
     return paths

@@ -1,0 +1,237 @@
+"""Linear algebra of the statics: the Newton matrix, minimum-norm corrections, multipliers and
+the size of a step in the model's own scales (docs/design.md, "Equilibrium").
+
+Sizes.  A coordinate is measured in its own scale ℓ_i: the model's length scale L for point
+coordinates (names ending in ``.x``, ``.y``, ``.z``), 1 rad for angles and other coordinates.  A
+rigid length (a distance constraint between the ends of a body or a rod) is measured by the
+rotation it makes, |Δd|/L_body.  The size of a step is the largest of these
+(:class:`StepScales`); the trust region and the convergence test use it.
+
+Newton matrix.  The augmented matrix [[K + H, Φ_qᵀ], [Φ_q, 0]] is equilibrated (symmetric
+diagonal scaling by the square roots of its largest row entries, so that stiff and soft members
+and the constraint rows meet at one scale) and
+
+- up to ``SMALL`` unknowns decomposed by the SVD: minimum-norm solutions, and the part of the
+  right-hand side outside its range (the forces its stiffness cannot balance) is returned;
+- above, factorized by sparse LU; a singular factor falls back to the SVD up to
+  ``DENSE_LIMIT`` unknowns, and is an error beyond.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from ..errors import EquilibriumError
+from ..model.elements import DistanceConstraint
+from ..numerics import constraint_rank
+
+__all__ = ["SMALL", "DENSE_LIMIT", "StepScales", "NewtonMatrix", "multipliers",
+           "augmented", "blas_threads"]
+
+SMALL = 300  # augmented size up to which the Newton matrix is decomposed by the SVD
+DENSE_LIMIT = 4000  # size up to which a singular sparse factor falls back to the dense SVD
+RCOND = 1e-14  # singular values below RCOND·σ_max of the equilibrated matrix count as zero
+
+
+def blas_threads(n):
+    """A context capping BLAS at ``n`` threads while it is open (threadpoolctl, when installed;
+    nothing when n is None).  The statics factorizes many small and middle-sized dense matrices,
+    for which a second BLAS thread only adds synchronization, and on a busy machine far more:
+    a 200×200 solve measured 0.33 s with two OpenBLAS threads on a loaded 2-core machine."""
+    import contextlib
+
+    if n is None:
+        return contextlib.nullcontext()
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:
+        return contextlib.nullcontext()
+    return threadpool_limits(limits=n)
+
+
+def _is_length(name: str) -> bool:
+    """A point coordinate (``P.x``, ``beam.n3.y``): a length.  Angles (``beam.n3.theta``) and the
+    unit vectors of spatial bodies (``body.u.x``, ``.v.``, ``.w.``) are dimensionless."""
+    parts = name.split(".")
+    return parts[-1] in ("x", "y", "z") and not (len(parts) >= 3 and parts[-2] in ("u", "v", "w"))
+
+
+class StepScales:
+    """ℓ_i per coordinate and the rigid lengths' direction maps (module docstring)."""
+
+    def __init__(self, model):
+        L = float(getattr(model, "length_scale", 1.0) or 1.0)
+        names = model.coordinate_names
+        self.length = L
+        self.ell = np.array([L if _is_length(nm) else 1.0 for nm in names])
+        rows, cols, vals, inv_len = [], [], [], []
+        r = 0
+        for c in model.constraints:
+            if isinstance(c, DistanceConstraint) and c.length > 0 and c.idx.size:
+                C = c.diff.C
+                rr, cc = np.nonzero(C)
+                rows.append(rr + r)
+                cols.append(c.idx[cc])
+                vals.append(C[rr, cc])
+                inv_len += [1.0 / c.length] * C.shape[0]
+                r += C.shape[0]
+        self.dims = model.dimension if hasattr(model, "dimension") else 1
+        if r:
+            self.D = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                                   shape=(r, model.n))
+            self.inv_len = np.array(inv_len)
+        else:
+            self.D = None
+
+    def weights(self, n_total):
+        """The metric 1/ℓ² of the coordinates (0 for the multipliers) of an augmented vector."""
+        w = np.zeros(n_total)
+        w[:self.ell.size] = 1.0 / self.ell**2
+        return w
+
+    def size(self, dq) -> float:
+        """max(|Δq_i|/ℓ_i, |Δd_b|/L_b): the step in lengths of the model and radians."""
+        s = float(np.max(np.abs(dq) / self.ell, initial=0.0))
+        if self.D is not None:
+            dd = (self.D @ dq) * self.inv_len
+            k = self.dims
+            rot = np.sqrt(np.add.reduceat(dd * dd, np.arange(0, dd.size, k))) if k > 1 else np.abs(dd)
+            s = max(s, float(np.max(rot, initial=0.0)))
+        return s
+
+    def largest(self, dq, names, count=3):
+        """The ``count`` coordinates with the largest |Δq_i|/ℓ_i, as (name, Δq_i)."""
+        rel = np.abs(dq) / self.ell
+        order = np.argsort(-rel, kind="stable")[:count]
+        return [(names[i], float(dq[i])) for i in order if rel[i] > 0]
+
+
+def augmented(model, q, lam):
+    """[[K + H(λ), Φ_qᵀ], [Φ_q, 0]] (CSR) and Φ_q at q."""
+    K, _ = model.force_jacobians(q)
+    Phi_q = model.phi_q(q)
+    if model.n_constraints:
+        H = model.constraint_hessian(q, lam)
+        A = sp.bmat([[K + H, Phi_q.T], [Phi_q, None]], format="csr")
+    else:
+        A = K.tocsr()
+    return A, Phi_q
+
+
+def _equilibrate(A):
+    """d with d_i = 1/√max_j |A_ij| (1 for empty rows), for the scaling D A D."""
+    A = sp.csr_matrix(A)
+    mx = np.zeros(A.shape[0])
+    nz = np.diff(A.indptr) > 0
+    if A.nnz:
+        mx[nz] = np.maximum.reduceat(np.abs(A.data), A.indptr[:-1][nz])
+    mx[mx <= 0] = 1.0
+    return 1.0 / np.sqrt(mx)
+
+
+class NewtonMatrix:
+    """A factorized Newton matrix: ``solve(b)`` returns (x, e) with x the (minimum-norm)
+    solution of A x = b and e = b − A x (zero for an LU factor: A is then nonsingular)."""
+
+    def __init__(self, A, *, what="Newton matrix", weights=None):
+        self.weights = weights  # metric of the unknowns in which solutions are made least
+        self.A = sp.csr_matrix(A)
+        N = self.A.shape[0]
+        self.d = _equilibrate(self.A)
+        As = sp.diags(self.d) @ self.A @ sp.diags(self.d)
+        self.kind = "svd"
+        self.lu = None
+        if N > SMALL:
+            with np.errstate(all="ignore"):
+                try:
+                    self.lu = spla.splu(As.tocsc())
+                    self.kind = "lu"
+                except RuntimeError:
+                    self.lu = None
+            if self.lu is None and N > DENSE_LIMIT:
+                raise EquilibriumError(
+                    f"singular {what} of size {N} (redundant constraints or a free motion in a "
+                    f"model above the dense limit of {DENSE_LIMIT})", element="equilibrium")
+        if self.lu is None:
+            with np.errstate(all="ignore"):
+                U, s, Vt = sla.svd(As.toarray(), full_matrices=False, lapack_driver="gesdd")
+            keep = s > RCOND * (s[0] if s.size else 0.0)
+            self.U, self.s, self.Vt, self.keep = U[:, keep], s[keep], Vt[keep], keep
+            self.null = self.d[:, None] * Vt[~keep].T  # null A = D · null(DAD)
+            self.cond = float(s[0] / s[keep][-1]) if keep.any() else np.inf
+            self.rank = int(keep.sum())
+        else:
+            self.rank = N
+            piv = np.abs(self.lu.U.diagonal())
+            self.cond = float(piv.max() / max(piv.min(), np.finfo(float).tiny)) if piv.size else 1.0
+
+    def motion(self, b):
+        """The motion without restoring force along which the force b pushes: the projection
+        of b onto null A (zero when A is nonsingular, or factorized by LU)."""
+        if self.lu is not None or not self.null.shape[1]:
+            return np.zeros_like(b)
+        Z = self.null
+        return Z @ np.linalg.lstsq(Z, b, rcond=None)[0]
+
+    def solve(self, b):
+        bs = self.d * b
+        if self.lu is not None:
+            with np.errstate(all="ignore"):
+                y = self.lu.solve(bs)
+            if not np.all(np.isfinite(y)):
+                raise EquilibriumError("the Newton matrix is numerically singular (sparse LU)",
+                                       element="equilibrium")
+            x = self.d * y
+            return x, np.zeros_like(b)
+        c = self.U.T @ bs
+        y = self.Vt.T @ (c / self.s)
+        es = bs - self.U @ c  # the part of the (scaled) right-hand side outside the range
+        x = self.d * y
+        if self.weights is not None and self.null.shape[1]:
+            # the solution least in the given metric: no motion along null A in it
+            w = np.sqrt(self.weights)
+            Zw = self.null * w[:, None]
+            if np.any(Zw):
+                x = x - self.null @ np.linalg.lstsq(Zw, w * x, rcond=None)[0]
+        return x, es / self.d
+
+
+def multipliers(Phi_q, g, rank_tol, *, check):
+    """(λ, rank of Φ_q, how the rank was found) with λ the least-squares solution of Φ_qᵀλ = g.
+
+    Small models (up to ``SMALL`` unknowns), and any model up to ``DENSE_LIMIT`` whose
+    constraints are dependent: the SVD, so λ is the minimum-norm solution and the rank is
+    revealed by the singular values (``check``).  Otherwise the normal equations
+    Φ_q Φ_qᵀ λ = Φ_q g by sparse LU; that needs independent constraints, so a pivot below
+    rank_tol² of the largest (the square: Φ_qΦ_qᵀ squares the singular values) means dependent
+    constraints: the SVD up to ``DENSE_LIMIT``, an error beyond (instead of a guess).
+    """
+    m, n = Phi_q.shape
+    if m == 0:
+        return np.zeros(0), 0, "none"
+    if m + n > SMALL:
+        A = (Phi_q @ Phi_q.T).tocsc()
+        with np.errstate(all="ignore"):
+            try:
+                lu = spla.splu(A)
+            except RuntimeError:
+                lu = None
+        pivots = np.abs(lu.U.diagonal()) if lu is not None else np.zeros(1)
+        if lu is not None and pivots.min() > rank_tol**2 * pivots.max():
+            lam = lu.solve(Phi_q @ g)
+            if m + n > DENSE_LIMIT or not check:
+                return lam, m, ("sparse LU of Φ_q Φ_qᵀ (independent constraints verified by its "
+                                "pivots)")
+            return lam, constraint_rank(Phi_q, rank_tol)[0], "SVD of Φ_q"
+        if m + n > DENSE_LIMIT:
+            raise EquilibriumError(
+                f"redundant constraints in a model of {n} coordinates and {m} constraints: above "
+                f"the dense limit of {DENSE_LIMIT} the constraints must be independent",
+                element="equilibrium")
+    with np.errstate(all="ignore"):
+        lam = sla.lstsq(Phi_q.toarray().T, g, lapack_driver="gelsd")[0]
+    rank = constraint_rank(Phi_q, rank_tol)[0] if check else m
+    return lam, rank, "SVD of Φ_q"

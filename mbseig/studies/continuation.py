@@ -1,0 +1,217 @@
+"""Sweeps by continuation: each line of a sweep follows one equilibrium branch
+(docs/design.md, "Equilibrium": continuation in sweeps).
+
+:func:`sweep_line` is the pure function a runner sends to a worker for one line of a sweep (the
+first axis varying, the others fixed).  It
+
+1. solves the first point from the case's positions (:func:`mbseig.equilibrium`: position
+   solve, trust region, load continuation when needed);
+2. follows the branch through the grid (:func:`mbseig.statics.continuation.follow`): tangent
+   predictor from the previous equilibrium, pseudo-arclength through folds, branch points
+   located, a switch to the stable branch where the followed one loses static stability, a
+   fresh solve past a fold that does not turn forward again;
+3. at every grid point: the equilibrium record, the linear model and all 2n eigenpairs with
+   their stability tolerances (the same classification as ``mbseig modes``), the joints
+   outside their range of motion; a grid point the branch did not reach is solved on its own
+   (``statics = "cold"``);
+4. for the bifurcation diagram: every branch point with its named angles (``[report]``) or
+   coordinates and its stability (static, and modal for small models).
+
+The family p ↦ model(p) builds the case at each value; inverse-statics commands are resolved at
+each value, unless resolving them at two values gave bitwise-equal settings (the swept parameter
+does not enter them, as a follower load does not enter a held position command): then the
+settings are reused (``record["commands"]``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..eigen import solve_qep
+from ..errors import MbseigError
+from ..linear import linearize
+from ..modal import stability, tolerances, worst
+from ..model.linear_case import LinearCase
+from ..statics import equilibrium, examine, resolve
+from ..statics.continuation import CTOL, Family, follow
+from ..statics.inverse import command_settings, reuse_commands
+from ..statics.newton import finish, settings_for
+from ..statics.solve import solve_statics
+from ..statics.reactions import posture
+from ..statics.stiffness import static_stability
+
+__all__ = ["sweep_line", "family_maker", "modal_point", "DIAGRAM_MODES_MAX"]
+
+DIAGRAM_MODES_MAX = 60  # DOF up to which every branch point of the diagram gets its modal verdict
+
+
+def family_maker(spec, config, params, axis):
+    """(make, state): make(p) is the model at axis = p with its commands resolved."""
+    state = {"first": None, "reuse": None, "checked": False}
+
+    def make(p):
+        m = spec.build(config, **{**params, axis: float(p)})
+        if not getattr(m, "commands", ()):
+            return m
+        if state["reuse"] is not None:
+            r = reuse_commands(m, state["reuse"])
+            if r is not None:
+                return r
+        r = resolve(m)
+        if state["first"] is None:
+            state["first"] = (float(p), r)
+        elif not state["checked"] and float(p) != state["first"][0]:
+            state["checked"] = True
+            if command_settings(r) == command_settings(state["first"][1]):
+                state["reuse"] = r
+        return r
+
+    return make, state
+
+
+def modal_point(model, eq, params, *, safety, stability_rtol):
+    """The sweep's record of one point: all eigenpairs, their tolerances, the verdict."""
+    lin = linearize(model, eq)
+    if lin.M.shape[0] == 0:  # no degree of freedom (a driven mechanism): no modes
+        s, X, tol, verdict, solver = (np.zeros(0, complex), np.zeros((model.n, 0), complex),
+                                      np.zeros(0), "stable", "none (no degree of freedom)")
+    else:
+        sol = solve_qep(lin.M, lin.P, lin.Q)
+        s, solver = sol.eigenvalues, sol.solver
+        _, _, tol, rigid = tolerances(sol, safety=safety, stability_rtol=stability_rtol)
+        X = lin.N @ sol.vectors
+        X = X / np.maximum(np.linalg.norm(X, axis=0), np.finfo(float).tiny)
+        verdict = worst(stability(-s.real, tol, rigid))
+    out_of_range = ([p["name"] for p in posture(model, eq.q) if not p["in_range"]]
+                    if (getattr(model, "report", None) or {}).get("angles") else [])
+    return {"params": dict(params), "error": None, "eigenvalues": s, "shapes": X, "tol": tol,
+            "verdict": verdict, "out_of_range": out_of_range, "solver": solver,
+            "q": np.asarray(eq.q, float), "iterations": int(eq.iterations),
+            "static": (eq.static or {}).get("verdict")}
+
+
+def _angles(model, q):
+    return {p["name"]: p["angle_deg"] for p in posture(model, q)} if model.report.get("angles") else {}
+
+
+def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rtol=1e-12,
+               switch=True):
+    """One line of a sweep by continuation (module docstring); a pure, picklable function.
+
+    Returns {"points": [point dicts as :func:`mbseig.studies.sweep.evaluate_point`, with
+    ``statics`` = "continuation" | "cold"], "branch": [diagram points], "events": [folds,
+    branch points, switches, jumps], "record": {...}} or, when the first point fails,
+    {"error": message}.
+    """
+    values = np.asarray(values, dtype=float)
+    make, state = family_maker(case, config, params, axis)
+    opts = {"safety": safety, "stability_rtol": stability_rtol}
+
+    def point_params(p):
+        return {**params, axis: float(p)}
+
+    try:
+        model0 = make(values[0])
+        if isinstance(model0, LinearCase):  # matrices only: no equilibrium to follow
+            return {"error": "a linear case has no equilibrium branch", "points": None}
+        eq0 = equilibrium(model0, offer_stable=False, self_stress="report")
+    except MbseigError as exc:
+        return {"error": exc.one_line(), "points": None}
+    fam = Family(make, abs(float(values[-1] - values[0])) or 1.0, eq0.model, eq0.q)
+
+    def static_verdict(model, q, lam):
+        return static_stability(model, q, lam)["verdict"]
+
+    def restart(p, q_start):
+        return solve_statics(make(p), q_init=q_start).q
+
+    try:
+        branch = follow(fam, values, fam.start(eq0.q, values[0]), stability=static_verdict,
+                        restart=restart, switch=switch)
+    except MbseigError as exc:
+        branch = None
+        failure = exc.one_line()
+    points = []
+    for k, v in enumerate(values):
+        bp = branch.grid[k] if branch is not None else None
+        try:
+            model = fam.model(v)
+            if bp is not None:  # converged by the continuation's corrector: the record only
+                q = bp.y[:fam.n]
+                st = settings_for(model, q, tol=1e-12, xtol=None, floor_tol=1e-8, max_iter=50,
+                                  rank_tol=1e-10)
+                eq = finish(model, q, st, iterations=bp.iterations, correction=CTOL,
+                            method="continuation", path={"start": "branch", "kind": bp.kind,
+                                                         "segment": bp.segment})
+                how = "continuation"
+            else:
+                eq = equilibrium(model, offer_stable=False, self_stress="report")
+                how = "cold"
+            eq = examine(eq, offer_stable=False, self_stress="report")
+            pt = modal_point(eq.model, eq, point_params(v), **opts)
+            pt["statics"] = how
+            if bp is not None:
+                pt["segment"], pt["branch_kind"] = bp.segment, bp.kind
+                pt["corrector_iterations"] = bp.iterations
+        except MbseigError as exc:
+            pt = {"params": point_params(v), "error": exc.one_line()}
+        points.append(pt)
+    out = {"points": points, "branch": [], "events": [], "record": {}}
+    if branch is None:
+        out["record"] = {"continuation": f"failed: {failure}"}
+        return out
+    diagram = []
+    grid_verdict = {id(bp): points[k].get("verdict") for k, bp in enumerate(branch.grid)
+                    if bp is not None}
+    # between two grid points of one segment with the same verdict, the branch has it too;
+    # elsewhere (and at folds and branch points) the modes decide, for small models
+    order = [grid_verdict.get(id(bp)) for bp in branch.points]
+    for i, bp in enumerate(branch.points):
+        if order[i] is not None or bp.kind in ("fold", "branch point"):
+            continue
+        prev = next((order[j] for j in range(i - 1, -1, -1) if order[j] is not None
+                     and branch.points[j].segment == bp.segment), None)
+        nxt = next((order[j] for j in range(i + 1, len(order)) if order[j] is not None
+                    and branch.points[j].segment == bp.segment), None)
+        if prev is not None and prev == nxt and grid_verdict.get(id(bp)) is None:
+            grid_verdict[id(bp)] = prev
+    for bp in branch.points:
+        model = fam.model(bp.p)
+        q = bp.y[:fam.n]
+        lam = fam.lam_full(bp.y)
+        rec = {"p": bp.p, "kind": bp.kind, "segment": bp.segment,
+               "q": [float(x) for x in q] if fam.n <= 500 else None,
+               "angles": _angles(model, q), "pdot": bp.pdot}
+        try:
+            rec["static"] = static_verdict(model, q, lam)
+        except (MbseigError, ValueError, np.linalg.LinAlgError):
+            rec["static"] = None
+        rec["verdict"] = grid_verdict.get(id(bp))
+        if rec["verdict"] is None and fam.n - fam.rows.size <= DIAGRAM_MODES_MAX:
+            try:
+                eq = solve_statics(model, q_init=q, continuation=False)
+                rec["verdict"] = modal_point(model, eq, point_params(bp.p), **opts)["verdict"]
+            except MbseigError:
+                pass
+        diagram.append(rec)
+    events = []
+    for ev in branch.events:
+        e = {k: v for k, v in ev.items() if k != "point"}
+        if "point" in ev:
+            i = ev["point"]
+            before = next((diagram[j] for j in range(i - 1, -1, -1)
+                           if diagram[j]["segment"] == diagram[i]["segment"]
+                           and diagram[j]["kind"] not in ("fold", "branch point")), None)
+            after = next((diagram[j] for j in range(i + 1, len(diagram))
+                          if diagram[j]["segment"] == diagram[i]["segment"]
+                          and diagram[j]["kind"] not in ("fold", "branch point")), None)
+            e["before"] = None if before is None else (before["verdict"] or before["static"])
+            e["after"] = None if after is None else (after["verdict"] or after["static"])
+            e["dof"] = int(fam.n - fam.rows.size)
+            e["angles"] = diagram[i]["angles"]
+        events.append(e)
+    out.update(branch=diagram, events=events,
+               record={**branch.record, "commands": ("reused (the swept parameter does not "
+                                                     "enter them)" if state["reuse"] is not None
+                                                     else "resolved at every value")})
+    return out
