@@ -1,16 +1,423 @@
-"""Spatial (3-D) case files: the reader of ``dimension = 3`` cases.
+"""Spatial (3-D) case files: the reader of ``dimension = 3`` cases (the 3-D case format of the
+design notes; docs/spatial.md).
 
-Points, point masses, springs and joints on points are read as in every dimension by
-:class:`~mbseig.casefile.builder.Builder`; this subclass is where the spatial rigid bodies,
-joints and forces of the 3-D case format are read.
+Points, point masses, springs and the point joints (``distance``, ``fixed``, ``slider`` /
+``point_on_line`` on a point) are read as in every dimension by
+:class:`~mbseig.casefile.builder.Builder`; this subclass reads the spatial rigid bodies, joints and
+forces:
+
+- ``[[bodies]]`` (name, mass, com, inertia as [Ixx, Iyy, Izz] or 3×3 about the CoM in global
+  axes at the reference, optional ``points``): mbseig gives each body the natural coordinates
+  [r₀; u; v; w] (:mod:`mbseig.model.spatial_body`): r₀ its first carried point, else a basic point
+  at its CoM; u, v, w unit vectors along the global axes at the reference.  Further carried
+  points are attached to the body (3 linear equations each).
+- point references: a basic point name or ``{ body = "b", at = [x, y, z] }``;
+- ``[[joints]]``: spherical, revolute, universal, cylindrical, prismatic, weld, point_on_line,
+  point_on_plane (:mod:`mbseig.model.spatial_joints`), distance, fixed, angle_driver (about a
+  revolute);
+- ``[[forces]]``: spring / damper / spring_damper, force, torque, torsional, bushing, rotor
+  (:mod:`mbseig.model.spatial_forces`).
+
+How it plugs into the generic builder: the body coordinates are allocated before the points
+(so the point loop numbers its coordinates after them), the ``bodies`` table is hidden from the
+planar body loop, joints and forces go through the :meth:`_joint` / :meth:`_force` hooks, and
+the body masses, weights and rigid-body conditions are added to the built model (constraints
+appended, so the indices that inverse-statics commands hold stay valid).
 """
 
 from __future__ import annotations
 
-from .builder import Builder
+import dataclasses
 
-__all__ = ["SpatialBuilder"]
+import numpy as np
+
+from ..model.affine import Affine, combine
+from ..model.elements import LinearConstraint
+from ..model.spatial_body import (
+    FRAME_SIZE,
+    GROUND,
+    frame_gravity,
+    frame_of,
+    frame_point,
+    frame_vector,
+    inertia_problem,
+    spatial_mass_matrix,
+)
+from ..model.spatial_forces import (
+    BodyMoment,
+    PointFollowerForce,
+    QuadraticSpringDamper,
+    Rotor,
+    SpatialTorsional,
+    bushing_rows,
+)
+from ..model.spatial_joints import (
+    JOINT_ROWS,
+    QuadraticConstraint,
+    SpatialAngleDriver,
+    angle_rows,
+    joint_rows,
+    triad_constraint,
+)
+from ..numerics import scatter
+from .batch import LazyPoints
+from .builder import Builder
+from .fields import REQUIRED, Fields, expand, template
+
+__all__ = ["UNIT_TOL", "SpatialBuilder"]
+
+UNIT_TOL = 1e-9  # |‖axis‖ − 1| allowed, and the tolerance of perpendicular / coincident axes
+_FORCES = ("spring", "damper", "spring_damper", "force", "torque", "torsional", "bushing", "rotor")
+_JOINTS = (*JOINT_ROWS, "distance", "fixed", "slider", "angle_driver")
+_AXIS_KEY = {"revolute": "axis", "cylindrical": "axis", "prismatic": "axis",
+             "point_on_line": "axis", "point_on_plane": "normal"}
 
 
 class SpatialBuilder(Builder):
-    """Reader of ``dimension = 3`` cases."""
+    """Reader of ``dimension = 3`` cases (module docstring)."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.specs: list[dict] = []  # bodies as read, before their frames are bound
+        self.frames: dict[str, Affine] = {}
+        self.stations: dict[str, list] = {}  # body → [(label, Affine)] where elements act on it
+        self.spatial_joints: dict[str, tuple] = {}  # joint name → (kind, b1, b2, at, axis)
+        self._bound = False
+
+    # -- the build ---------------------------------------------------------------------------
+    def build(self):
+        for item, label, names in expand("bodies", self.data.get("bodies", []), self.params):
+            self._read_body(Fields(item, label, names))
+        data = self.data
+        self.data = {k: v for k, v in data.items() if k != "bodies"}
+        try:
+            model = super().build()
+        finally:
+            self.data = data
+        return self._finish(model)
+
+    def _read_body(self, f):
+        bname = f.text("name")
+        if bname in self.bodies or bname == "ground" or "." in bname:
+            raise f.error(f"body name {bname!r} is used already, is 'ground' or contains '.'")
+        mass = f.num("mass", positive=True)
+        com = f.vec("com", 3)
+        inertia = self._inertia(f)
+        pts = f.raw("points", [])
+        f.done()
+        if not isinstance(pts, list) or not all(isinstance(p, str) for p in pts):
+            raise f.error("points must be a list of basic point names")
+        problem = inertia_problem(inertia)
+        if problem:
+            raise f.error(problem)
+        pts = [template(p, f.names, f) for p in pts]
+        if len(set(pts)) != len(pts):
+            raise f.error("points lists a point twice")
+        origin = None
+        if not pts:  # a basic point at the centre of mass
+            origin = self._allocate(bname, com)
+        triad = self._allocate(bname, np.eye(3).ravel())
+        self.bodies[bname] = {"label": f.label, "mass": mass, "com": com, "inertia": inertia,
+                              "carried": pts, "spatial": True}
+        self.specs.append({"name": bname, "f": f, "origin": origin, "triad": triad})
+
+    def _allocate(self, bname, values):
+        k = len(self.q_init)
+        n = len(values)
+        axes = "xyz" if n == 3 else [f"{v}.{a}" for v in "uvw" for a in "xyz"]
+        self.coord_names += [f"{bname}.{a}" for a in axes]
+        self.q_init += [float(v) for v in values]
+        return np.arange(k, k + n, dtype=np.intp)
+
+    def _bind(self):
+        """Frames of the bodies once the points exist, and the length scale of the model (its
+        points, centres of mass and carried points)."""
+        if self._bound:
+            return
+        self._bound = True
+        where = [p for p in self.point_pos.values()]
+        for spec in self.specs:
+            b = self.bodies[spec["name"]]
+            if spec["origin"] is not None:
+                origin, x0 = Affine.select(spec["origin"]), b["com"]
+            else:
+                for p in b["carried"]:
+                    self.basic_point(spec["f"], p)
+                origin, x0 = self.affine_of(b["carried"][0]), self.point_pos[b["carried"][0]]
+            self.frames[spec["name"]] = frame_of(origin, spec["triad"])
+            b["origin"] = np.asarray(x0, float)
+            where += [b["com"], x0]
+        where = np.array(where)
+        extent = float(np.ptp(where, axis=0).max()) if len(where) > 1 else 0.0
+        self.length_scale = extent if extent > 0 else 1.0
+
+    def _finish(self, model):
+        self._bind()
+        constraints, blocks, g = list(model.constraints), [], model.g_const.copy()
+        gravity = self.gravity()
+        for spec in self.specs:
+            name, f = spec["name"], spec["f"]
+            b, frame = self.bodies[name], self.frames[name]
+            com = self.local(name, b["com"])
+            blocks.append(self._embed(frame, spatial_mass_matrix(b["mass"], com, b["inertia"])))
+            if gravity is not None:
+                np.add.at(g, frame.idx, frame.C.T @ frame_gravity(b["mass"], com, gravity))
+            constraints.append(triad_constraint(f"{f.label} (rigid body)", frame))
+            for p in b["carried"][1:]:
+                diff = self.affine_of(p) - frame_point(frame, self.local(name, self.point_pos[p]))
+                self.add_constraint(constraints, LinearConstraint(
+                    f"{f.label} (carries {p})", diff, np.eye(3), np.zeros(3), self.length_scale), f)
+            marks = {"com": frame_point(frame, com),
+                     **{lab: aff for lab, aff in self.stations.get(name, [])}}
+            b["markers"] = []
+            for k, aff in enumerate(marks.values()):
+                self.markers[f"{name}.{k}"] = aff
+                b["markers"].append(f"{name}.{k}")
+            b["points"] = (b["markers"][0], b["markers"][min(1, len(b["markers"]) - 1)])
+            b["frame"] = frame
+        forces = tuple(self._with_stations(x) if isinstance(x, Rotor) else x for x in model.forces)
+        mass = model.mass + scatter(model.n, model.n, blocks) if blocks else model.mass
+        return dataclasses.replace(
+            model, mass=mass.tocsr(), g_const=g, constraints=tuple(constraints), forces=forces,
+            points=LazyPoints(self.point_index, self.point_pos, self.markers),
+            length_scale=self.length_scale)
+
+    def _with_stations(self, rotor):
+        b = self.bodies[rotor.body]
+        com = ("centre of mass", frame_point(self.frames[rotor.body], self.local(rotor.body, b["com"])))
+        return dataclasses.replace(rotor, stations=(com, *self.stations.get(rotor.body, [])))
+
+    # -- references --------------------------------------------------------------------------
+    def frame(self, f, bname):
+        """The frame map of a body, or of the ground."""
+        self._bind()
+        if bname == "ground":
+            return GROUND
+        return self.frames[self.body(f, bname)]
+
+    def local(self, bname, x):
+        """Local coordinates of the reference-global point x in a body (or the ground)."""
+        return np.asarray(x, float) - (0.0 if bname == "ground" else self.bodies[bname]["origin"])
+
+    def _station(self, bname, label, aff):
+        if bname != "ground":
+            self.stations.setdefault(bname, []).append((label, aff))
+
+    def _carrier(self, pname):
+        """The body whose basic point (origin or carried point) ``pname`` is, or None."""
+        return next((b for b, r in self.bodies.items() if pname in r["carried"]), None)
+
+    def point_ref(self, f, key):
+        """A basic point name or ``{body = "b", at = [x, y, z]}`` (at: global position at the
+        reference); records the point as a station of its body (for whirl)."""
+        return self._point_and_body(f, key)[0]
+
+    def _point_and_body(self, f, key):
+        self._bind()
+        ref = f.raw(key)
+        if isinstance(ref, dict):
+            sub = Fields(ref, f"{f.label}.{key}", f.names)
+            bname = sub.text("body")
+            at = sub.vec("at", 3)
+            sub.done()
+            aff = frame_point(self.frame(f, bname), self.local(bname, at))
+            self._station(bname, f.label, aff)
+            return aff, None if bname == "ground" else bname
+        if isinstance(ref, str):
+            aff = super().point_ref(f, key)
+            body = self._carrier(template(ref, f.names, f))
+            if body is not None:
+                self._station(body, f.label, aff)
+            return aff, body
+        raise f.error(f"{key} must be a point name or a table {{body, at}}")
+
+    def _two_bodies(self, f):
+        bodies = f.raw("bodies")
+        if not isinstance(bodies, list) or len(bodies) != 2 or not all(isinstance(b, str) for b in bodies):
+            raise f.error('bodies must be [body1, body2]; use "ground" for the fixed frame')
+        b1, b2 = (template(b, f.names, f) for b in bodies)
+        for b in (b1, b2):
+            if b != "ground":
+                self.body(f, b)
+        if b1 == b2:
+            raise f.error("a joint needs two different bodies")
+        return b1, b2
+
+    def _unit(self, f, key, value=None):
+        a = f.vec(key, 3) if value is None else value
+        n = float(np.linalg.norm(a))
+        if n == 0:
+            raise f.error(f"{key} must not be zero")
+        if abs(n - 1.0) > UNIT_TOL:
+            raise f.error(f"{key} must be a unit vector, got |{key}| = {n:.12g}")
+        return a / n
+
+    def _matrix(self, f, key, size, default=None):
+        """``size`` numbers (a diagonal) or a size × size matrix."""
+        value = f.raw(key, default)
+        if value is None:
+            return np.zeros((size, size))
+        if isinstance(value, list) and len(value) == size and all(isinstance(r, list) for r in value):
+            rows = [Fields({"row": r}, f"{f.label}.{key}[{i}]", f.names).vec("row", size)
+                    for i, r in enumerate(value)]
+            return np.array(rows)
+        if not isinstance(value, list) or len(value) != size:
+            raise f.error(f"{key} must be {size} numbers or a {size}x{size} matrix, got {value!r}")
+        return np.diag(f.vec(key, size))
+
+    def _inertia(self, f):
+        return self._matrix(f, "inertia", 3, REQUIRED)
+
+    # -- joints ------------------------------------------------------------------------------
+    def _joint(self, f, constraints):
+        kind = f.raw("type", None)
+        if kind in JOINT_ROWS and (kind != "point_on_line" or f.has("bodies")):
+            self._spatial_joint(f, kind, constraints)
+        elif kind == "angle_driver":
+            self._angle_driver3(f, constraints)
+        elif kind in ("distance", "fixed", "slider", "point_on_line"):
+            self._bind()
+            super()._joint(f, constraints)
+        else:
+            raise f.error(f"unknown joint type {kind!r} ({', '.join(_JOINTS)})")
+
+    def _spatial_joint(self, f, kind, constraints):
+        f.text("type")
+        name = f.text("name", None)
+        b1, b2 = self._two_bodies(f)
+        at = f.vec("at", 3)
+        if kind == "universal":
+            axes = f.raw("axes")
+            if not isinstance(axes, list) or len(axes) != 2:
+                raise f.error("axes must be [axis in body1, axis in body2]")
+            axes = tuple(self._unit(f, f"axes[{k}]", Fields({"a": a}, f.label, f.names).vec("a", 3))
+                         for k, a in enumerate(axes))
+            if abs(axes[0] @ axes[1]) > UNIT_TOL:
+                raise f.error(f"the axes of a universal joint must be perpendicular, got "
+                              f"axes[0]·axes[1] = {axes[0] @ axes[1]:.6g}")
+        elif kind in _AXIS_KEY:
+            axes = (self._unit(f, _AXIS_KEY[kind]),)
+        else:
+            axes = ()
+        f.done()
+        frames = (self.frame(f, b1), self.frame(f, b2))
+        locals_ = (self.local(b1, at), self.local(b2, at))
+        rows = joint_rows(kind, frames, locals_, axes, self.length_scale)
+        on = (FRAME_SIZE, locals_[1], b2) if b2 != "ground" else (0, locals_[0], b1)
+        self._coincident_axes(f, kind, b1, b2, at, axes)
+        self.add_constraint(constraints, QuadraticConstraint(f.label, rows, 1.0, on), f)
+        for b, fr, loc in zip((b1, b2), frames, locals_):
+            self._station(b, f.label, frame_point(fr, loc))
+        if name is not None:
+            self.spatial_joints[name] = (kind, b1, b2, at, axes[0] if axes else None, f.label)
+
+    def _coincident_axes(self, f, kind, b1, b2, at, axes):
+        """Two revolute or cylindrical joints between the same bodies must share their axis."""
+        if kind not in ("revolute", "cylindrical"):
+            return
+        for okind, o1, o2, oat, oaxis, olabel in self.spatial_joints.values():
+            if okind in ("revolute", "cylindrical") and {o1, o2} == {b1, b2}:
+                apart = np.linalg.norm(np.cross(oat - at, axes[0])) / self.length_scale
+                if np.linalg.norm(np.cross(oaxis, axes[0])) > UNIT_TOL or apart > UNIT_TOL:
+                    raise f.error(f"its axis does not coincide with that of {olabel} between "
+                                  f"the same bodies (the pair would be locked)")
+
+    def _revolute(self, f):
+        """(frames, axis) of the revolute or cylindrical joint named by ``joint``."""
+        jname = f.text("joint")
+        j = self.spatial_joints.get(jname)
+        if j is None or j[0] not in ("revolute", "cylindrical"):
+            raise f.error(f"joint {jname!r} is not a revolute or cylindrical joint declared before")
+        return (self.frame(f, j[1]), self.frame(f, j[2])), j[4]
+
+    def _angle_driver3(self, f, constraints):
+        """A prescribed angle about a revolute axis; with ``sets`` an inverse-statics command."""
+        f.text("type")
+        f.text("name", None)
+        frames, axis = self._revolute(f)
+        rows = angle_rows(frames, axis)
+        driver = SpatialAngleDriver(f.label, rows.aff, f.num("angle"), 1.0, rows=rows)
+        sets = _names(f, f.raw("sets", []))
+        f.done()
+        if sets:
+            self.drivers.append((driver, sets, f))
+        else:
+            constraints.append(driver)
+
+    # -- forces ------------------------------------------------------------------------------
+    def _force(self, f, forces, g_const):
+        self._bind()
+        kind = f.raw("type", None)
+        if kind in ("spring", "damper", "spring_damper"):
+            return super()._force(f, forces, g_const)
+        if kind not in _FORCES:
+            raise f.error(f"unknown force type {kind!r} ({', '.join(_FORCES)})")
+        f.text("type")
+        f.text("name", None)
+        read = {"force": self._point_force, "torque": self._torque, "torsional": self._torsional,
+                "bushing": self._bushing, "rotor": self._rotor}[kind]
+        read(f, forces, g_const)
+
+    def _point_force(self, f, forces, g_const):
+        p, body = self._point_and_body(f, "point")
+        vec = f.vec("vector", 3)
+        follower = f.flag("follower", False)
+        f.done()
+        if not follower:
+            np.add.at(g_const, p.idx, p.C.T @ vec)
+            return
+        if body is None:
+            raise f.error("a follower force needs a point on a body ({body, at} or a point the "
+                          "body carries)")
+        F = frame_vector(self.frames[body], vec)
+        forces.append(PointFollowerForce(f.label, combine([(1.0, p), (1.0, F)], stack=True)))
+
+    def _torque(self, f, forces, g_const):
+        body = self.body(f, f.text("body"))
+        vec = f.vec("vector", 3)
+        follower = f.flag("follower", False)
+        f.done()
+        frame = self.frames[body]
+        T = frame_vector(frame, vec) if follower else Affine.constant(vec)
+        forces.append(BodyMoment(f.label, combine([(1.0, frame), (1.0, T)], stack=True)))
+
+    def _torsional(self, f, forces, g_const):
+        frames, axis = self._revolute(f)
+        k = f.num("stiffness", 0.0, nonnegative=True)
+        c = f.num("damping", 0.0, nonnegative=True)
+        a0 = f.num("angle0", 0.0)
+        f.done()
+        rows = angle_rows(frames, axis)
+        if rows.aff.idx.size:
+            forces.append(SpatialTorsional(f.label, rows.aff, k, c, a0, 1.0, rows=rows))
+
+    def _bushing(self, f, forces, g_const):
+        b1, b2 = self._two_bodies(f)
+        at = f.vec("at", 3)
+        K = self._matrix(f, "stiffness", 6, REQUIRED)
+        D = self._matrix(f, "damping", 6)
+        f.done()
+        if not (np.all(np.isfinite(K)) and np.all(np.isfinite(D))):
+            raise f.error("stiffness and damping must be finite")
+        frames = (self.frame(f, b1), self.frame(f, b2))
+        locals_ = (self.local(b1, at), self.local(b2, at))
+        for b, fr, loc in zip((b1, b2), frames, locals_):
+            self._station(b, f.label, frame_point(fr, loc))
+        forces.append(QuadraticSpringDamper(f.label, bushing_rows(frames, locals_), K, D))
+
+    def _rotor(self, f, forces, g_const):
+        body = self.body(f, f.text("body"))
+        axis = self._unit(f, "axis")
+        jp = f.num("polar_inertia", positive=True)
+        speed = f.num("speed")
+        f.done()
+        forces.append(Rotor(f.label, self.frames[body], axis, jp, speed, body=body))
+
+
+
+def _names(f, value):
+    """An element name or a list of names (``sets``)."""
+    names = [value] if isinstance(value, str) else value
+    if not isinstance(names, list) or not all(isinstance(x, str) for x in names):
+        raise f.error("sets must be an element name or a list of names")
+    return names

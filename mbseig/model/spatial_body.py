@@ -1,0 +1,122 @@
+"""Spatial rigid bodies in natural coordinates: one basic point and three unit vectors.
+
+A body's natural coordinates (García de Jalón & Bayo, "Kinematic and Dynamic Simulation of
+Multibody Systems", 1994, ch. 3) are chosen by mbseig, not by the user (docs/spatial.md):
+
+    q_b = [r₀; u; v; w]   (12 numbers)
+
+r₀ is the body's basic point (its first carried point, else its centre of mass) and u, v, w are
+body-fixed unit vectors equal to the global x, y, z axes at the reference configuration.  A body
+point with reference position X and a body-fixed vector with reference components e are then
+
+    r_P = r₀ + ξ₁ u + ξ₂ v + ξ₃ w,   ξ = X − X₀        (affine in q: r_P = C(ξ) q_b)
+    e_b = e₁ u + e₂ v + e₃ w                           (linear in q)
+
+so every point, direction and difference is an :class:`~mbseig.model.affine.Affine` map, the mass
+matrix is constant and the six rigid-body conditions (unit lengths and right angles of u, v, w)
+are quadratic.  With a = [1, ξ₁, ξ₂, ξ₃] and the frame written as a 3×4 matrix F = [r₀ u v w],
+r_P = F a, so
+
+    M_b = ∫ Cᵀ C dm = A ⊗ I₃,   A = ∫ a aᵀ dm = ┌ m      m ξ_Gᵀ              ┐
+                                               └ m ξ_G  J_G + m ξ_G ξ_Gᵀ    ┘
+
+with ξ_G the centre of mass and J_G = ∫ ρρᵀ dm = ½ tr(I_G) I₃ − I_G the second moment about it
+(I_G the inertia tensor about the centre of mass, global axes at the reference).  A is positive
+semidefinite exactly when I_G satisfies the triangle inequalities; the kinetic energy ½ q̇ᵀM q̇
+equals ½ m v_G² + ½ ωᵀ I_G ω for every motion of the frame (tests/test_spatial_body.py).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .affine import Affine, combine
+
+__all__ = [
+    "FRAME_SIZE",
+    "GROUND",
+    "frame_gravity",
+    "frame_of",
+    "frame_point",
+    "frame_vector",
+    "inertia_problem",
+    "point_matrix",
+    "second_moment",
+    "spatial_mass_matrix",
+    "vector_matrix",
+]
+
+FRAME_SIZE = 12
+#: the ground frame: origin at 0, axes equal to the global axes (local coordinates are global)
+GROUND = Affine.constant(np.concatenate([np.zeros(3), np.eye(3).ravel()]))
+
+
+def frame_of(origin: Affine, triad_idx) -> Affine:
+    """The 12-row frame map [r₀; u; v; w] of a body whose origin is ``origin`` and whose unit
+    vectors are the free coordinates ``triad_idx`` (9 indices, u then v then w)."""
+    return combine([(1.0, origin), (1.0, Affine.select(triad_idx))], stack=True)
+
+
+def point_matrix(local) -> np.ndarray:
+    """C(ξ) (3×12): r_P = C(ξ) [r₀; u; v; w] for a point with local coordinates ξ."""
+    return np.kron(np.concatenate([[1.0], np.asarray(local, float)]), np.eye(3))
+
+
+def vector_matrix(local) -> np.ndarray:
+    """V(e) (3×12): e_b = V(e) [r₀; u; v; w] for a body vector with local components e."""
+    return np.kron(np.concatenate([[0.0], np.asarray(local, float)]), np.eye(3))
+
+
+def _mapped(frame: Affine, T: np.ndarray) -> Affine:
+    return Affine(frame.idx, T @ frame.C, T @ frame.d)
+
+
+def frame_point(frame: Affine, local) -> Affine:
+    """Affine map of the body point with local coordinates ξ."""
+    return _mapped(frame, point_matrix(local))
+
+
+def frame_vector(frame: Affine, local) -> Affine:
+    """Linear map of the body-fixed vector with local components e."""
+    return _mapped(frame, vector_matrix(local))
+
+
+def second_moment(inertia) -> np.ndarray:
+    """J = ∫ρρᵀ dm = ½ tr(I) I₃ − I from the inertia tensor I = tr(J) I₃ − J."""
+    inertia = np.asarray(inertia, float)
+    return 0.5 * np.trace(inertia) * np.eye(3) - inertia
+
+
+def spatial_mass_matrix(mass: float, com_local, inertia) -> np.ndarray:
+    """Constant 12×12 mass matrix A ⊗ I₃ of a body on [r₀; u; v; w] (module docstring)."""
+    xg = np.asarray(com_local, float)
+    A = np.empty((4, 4))
+    A[0, 0] = mass
+    A[0, 1:] = A[1:, 0] = mass * xg
+    A[1:, 1:] = second_moment(inertia) + mass * np.outer(xg, xg)
+    return np.kron(A, np.eye(3))
+
+
+def frame_gravity(mass: float, com_local, gravity) -> np.ndarray:
+    """Generalized weight on the frame coordinates: C(ξ_G)ᵀ m g (12,)."""
+    return point_matrix(com_local).T @ (mass * np.asarray(gravity, float))
+
+
+def inertia_problem(inertia, *, rtol: float = 1e-12) -> str | None:
+    """Why ``inertia`` (3×3, about the centre of mass) is not a rigid body's inertia tensor, or
+    None: it must be symmetric, positive definite and satisfy the triangle inequalities
+    I₁ ≤ I₂ + I₃ of its principal moments (equality: a plane lamina)."""
+    I = np.asarray(inertia, float)
+    scale = float(np.max(np.abs(I), initial=0.0))
+    if not np.all(np.isfinite(I)):
+        return "inertia must be finite"
+    if np.max(np.abs(I - I.T), initial=0.0) > rtol * max(scale, 1e-300):
+        return "inertia tensor must be symmetric"
+    p = np.linalg.eigvalsh(0.5 * (I + I.T))
+    if p[0] <= 0:
+        return (f"inertia tensor must be positive definite (principal moments "
+                f"{', '.join(f'{x:.6g}' for x in p)})")
+    if p[2] > (p[0] + p[1]) * (1 + 1e-12):
+        return (f"principal moments {p[0]:.6g}, {p[1]:.6g}, {p[2]:.6g} violate the triangle "
+                f"inequality I3 <= I1 + I2 (no mass distribution has them)")
+    return None

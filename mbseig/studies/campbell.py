@@ -1,0 +1,192 @@
+"""Campbell diagrams of spinning rotors (docs/spatial.md, "Campbell diagrams").
+
+Over a swept parameter p (usually the rotor speed itself), every point is an independent pure
+computation (:func:`campbell_point`: load → equilibrium → linearize → listed modes, plus the
+whirl of each mode from :func:`mbseig.model.spatial_whirl.whirl`).  Along p:
+
+- the listed eigenvalues (ω ≥ 0) are tracked by MAC (:func:`mbseig.studies.sweep.track_line`);
+- per track and point: frequency ω = Im s, whirl (forward / backward / mixed / none),
+  logarithmic decrement Λ = 2π δ / ω (δ = −Re s) and stability;
+- the excitation line ω = h·|Ω| (h = ``harmonic``, 1 for unbalance; Ω the rotor element's speed
+  in rad/s at that point, so the swept parameter may be any quantity Ω depends on);
+- critical speeds: wherever ω_j(p) − h|Ω(p)| changes sign between grid points of a track with
+  lateral motion (whirl ≠ none, not a rigid-body mode), the crossing is located by Brent's
+  method to ``xtol = xtol_rel × span``, each evaluation re-solving the model and following the
+  track by MAC.  Each is reported as ``{value, speed, mode, whirl, frequency}``: ``value`` the
+  parameter, ``speed`` Ω there [rad/s], ``mode`` the track, ``whirl`` its whirl at the crossing.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import CaseError, MbseigError
+from ..linear import linearize
+from ..modal import modes
+from ..model.spatial_whirl import rotors, whirl
+from ..numerics import jsonable
+from ..statics import equilibrium, solved
+from .point import as_spec
+from .runners import Runner
+from .sweep import mac_matrix, track_line
+
+__all__ = ["CampbellResult", "campbell", "campbell_point", "speed_parameter"]
+
+
+def campbell_point(case, config, params):
+    """Listed modes, their whirl and the rotor speed at one parameter point (picklable)."""
+    try:
+        model = case.build(config, **params)
+        eq = equilibrium(model)
+        md = modes(linearize(model, eq))
+    except MbseigError as exc:
+        return {"params": dict(params), "error": exc.one_line()}
+    model = solved(model, eq)
+    rs = rotors(model)
+    if not rs:
+        return {"params": dict(params), "error": f"{model.name}: the model has no rotor"}
+    return {"params": dict(params), "error": None, "eigenvalues": md.eigenvalues,
+            "shapes": md.shapes, "tol": md.tolerance, "kind": list(md.kind),
+            "stability": list(md.stability), "speed": float(rs[0].speed),
+            "whirl": [whirl(model, eq.q, md.shapes[:, k], md.eigenvalues[k])
+                      for k in range(len(md))]}
+
+
+def speed_parameter(case, name, values, *, config=None, fixed=None) -> bool:
+    """Whether parameter ``name`` sets the speed of a rotor of the case (the rotor speed
+    differs between the first and last value)."""
+    spec = as_spec(case)
+    speeds = []
+    for v in (values[0], values[-1]):
+        rs = rotors(spec.build(config, **{**(fixed or {}), name: float(v)}))
+        if not rs:
+            return False
+        speeds.append(rs[0].speed)
+    return speeds[0] != speeds[1]
+
+
+def _match(pt, ref_shape):
+    """Column of a point's listed modes best matching ``ref_shape`` by MAC."""
+    return int(np.argmax(mac_matrix(ref_shape[:, None], pt["shapes"])[0]))
+
+
+def _crossing(case, config, params, axis, lo, hi, ref_shape, harmonic, xtol, f_lo, f_hi):
+    from scipy.optimize import brentq
+
+    def f(p):
+        if p == lo:
+            return f_lo
+        if p == hi:
+            return f_hi
+        pt = campbell_point(case, config, {**params, axis: p})
+        if pt["error"]:
+            raise MbseigError(f"critical speed search at {axis} = {p!r}: {pt['error']}",
+                              element="campbell")
+        c = _match(pt, ref_shape)
+        return float(abs(pt["eigenvalues"][c].imag) - harmonic * abs(pt["speed"]))
+
+    root = brentq(f, lo, hi, xtol=xtol)
+    pt = campbell_point(case, config, {**params, axis: root})
+    c = _match(pt, ref_shape)
+    return {"value": float(root), "speed": pt["speed"], "whirl": pt["whirl"][c],
+            "frequency": float(abs(pt["eigenvalues"][c].imag))}
+
+
+@dataclass(frozen=True, eq=False)
+class CampbellResult:
+    """Tracked modes against the swept parameter, with whirl, log decrement, the excitation
+    line and the critical speeds (module docstring)."""
+
+    case: str
+    parameter: str
+    values: np.ndarray
+    speeds: np.ndarray  # Ω [rad/s] at each point
+    tracks: np.ndarray  # (points, tracks) complex eigenvalues, NaN where absent
+    whirl: list  # per point, per track: str or None
+    kind: list
+    critical_speeds: list
+    harmonic: float = 1.0
+    tolerances: dict = field(default_factory=dict)
+
+    @property
+    def frequency(self):
+        return np.abs(self.tracks.imag)
+
+    @property
+    def log_decrement(self):
+        """Λ = 2π δ/ω per point and track (NaN for real eigenvalues)."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            w = self.frequency
+            return np.where(w > 0, 2 * math.pi * (-self.tracks.real) / w, np.nan)
+
+    def to_json(self) -> dict:
+        tracks = []
+        for j in range(self.tracks.shape[1]):
+            col = self.tracks[:, j]
+            tracks.append({
+                "track": j,
+                "frequency": [None if np.isnan(v) else float(abs(v.imag)) for v in col],
+                "delta": [None if np.isnan(v) else float(-v.real) for v in col],
+                "log_decrement": [None if np.isnan(x) else float(x) for x in self.log_decrement[:, j]],
+                "whirl": [self.whirl[k][j] for k in range(len(self.values))],
+                "kind": [self.kind[k][j] for k in range(len(self.values))],
+            })
+        return jsonable({"case": self.case, "parameter": self.parameter,
+                         "values": [float(v) for v in self.values],
+                         "speed": [float(v) for v in self.speeds], "harmonic": self.harmonic,
+                         "excitation": [float(self.harmonic * abs(v)) for v in self.speeds],
+                         "tracks": tracks, "critical_speeds": self.critical_speeds,
+                         "tolerances": self.tolerances})
+
+
+def campbell(case, parameter, values, *, config=None, fixed=None, harmonic=1.0, jobs=1,
+             xtol_rel=1e-10) -> CampbellResult:
+    """Campbell diagram of ``case`` (a path or :class:`~mbseig.casefile.CaseSpec`) over
+    ``parameter`` = ``values`` (module docstring)."""
+    spec = as_spec(case)
+    values = np.asarray(values, float)
+    if values.size < 2:
+        raise CaseError("a Campbell diagram needs at least two parameter values", element="campbell")
+    fixed = dict(fixed or {})
+    calls = [((spec, config, {**fixed, parameter: float(v)}), {}) for v in values]
+    xtol = xtol_rel * abs(float(values[-1] - values[0]))
+    with Runner(jobs=jobs) as runner:
+        points = runner.map(campbell_point, calls, "points")
+        bad = next((p["error"] for p in points if p["error"]), None)
+        if bad:
+            raise MbseigError(bad, element="campbell")
+        S, _, _ = track_line(points)
+        n_pts, n_tr = S.shape
+        col = np.full((n_pts, n_tr), -1)
+        for k, pt in enumerate(points):
+            for j in range(n_tr):
+                if not np.isnan(S[k, j]):
+                    col[k, j] = int(np.flatnonzero(pt["eigenvalues"] == S[k, j])[0])
+        whirls = [[points[k]["whirl"][col[k, j]] if col[k, j] >= 0 else None for j in range(n_tr)]
+                  for k in range(n_pts)]
+        kinds = [[points[k]["kind"][col[k, j]] if col[k, j] >= 0 else None for j in range(n_tr)]
+                 for k in range(n_pts)]
+        speeds = np.array([p["speed"] for p in points])
+        F = np.abs(S.imag) - harmonic * np.abs(speeds)[:, None]
+        searches, meta = [], []
+        for j in range(n_tr):
+            for k in range(n_pts - 1):
+                a, b = F[k, j], F[k + 1, j]
+                if (np.isnan(a) or np.isnan(b) or (a < 0) == (b < 0)
+                        or "rigid-body" in (kinds[k][j], kinds[k + 1][j])
+                        or "none" in (whirls[k][j], whirls[k + 1][j])):
+                    continue
+                shape = points[k]["shapes"][:, col[k, j]]
+                searches.append(((spec, config, fixed, parameter, float(values[k]),
+                                  float(values[k + 1]), shape, harmonic, xtol, float(a), float(b)),
+                                 {}))
+                meta.append(j)
+        found = runner.map(_crossing, searches, "critical speeds")
+    critical = sorted(({**res, "mode": j} for j, res in zip(meta, found)),
+                      key=lambda c: c["value"])
+    return CampbellResult(case=spec.name, parameter=parameter, values=values, speeds=speeds,
+                          tracks=S, whirl=whirls, kind=kinds, critical_speeds=critical,
+                          harmonic=harmonic, tolerances={"xtol": xtol, "xtol_rel": xtol_rel})
