@@ -44,3 +44,17 @@ class SolverError(MbseigError, RuntimeError):
 
 class SimulationError(MbseigError, RuntimeError):
     """The time-domain check cannot integrate the model (massless free motion, a failed step)."""
+
+
+class ReportedWarning(UserWarning):
+    """A warning whose text the command-line outputs carry (the beam-theory guidance, notes on
+    the equilibrium): ``mbseig modes``, ``linearize`` and ``check`` print it with their results,
+    so they do not repeat it on stderr (README, "Exit codes").  A library caller sees it as a
+    Python warning as usual."""
+
+
+class NumericalError(MbseigError, ArithmeticError):
+    """A stage's arithmetic left the double-precision range: an overflow, a NaN, or a value
+    that vanished below it.  The element is the stage (equilibrium, linearization, eigen,
+    check) or the model element whose numbers overflowed; the message names the likely cause
+    (README, "Input rules")."""

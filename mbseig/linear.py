@@ -14,6 +14,10 @@ and q = q₀ + N x:
 
 Neither P nor Q is assumed symmetric: follower forces make Q non-symmetric and gyroscopic terms
 make P skew.
+
+Boundaries (README, "Input rules"): the equilibrium handed in must be finite, and M, P, Q, N
+come out finite; an overflow on the way (numpy's warning, an arithmetic exception) or a
+non-finite matrix is a :class:`~mbseig.errors.NumericalError` naming the linearization.
 """
 
 from __future__ import annotations
@@ -24,12 +28,15 @@ import numpy as np
 import scipy.sparse as sp
 
 from .model.linear_case import LinearCase
-from .numerics import null_space_basis
+from .numerics import DOUBLE_RANGE, null_space_basis, require_finite, watched
 from .statics import Equilibrium, solved
 
 __all__ = ["LinearModel", "linearize"]
 
 SPARSE_MIN = 5000  # coordinates above which linearize keeps M, P, Q sparse by default
+CAUSE = (f"the model's masses, damping, stiffnesses or constraint forces at the equilibrium "
+         f"leave {DOUBLE_RANGE} (values of the case too large or too small together)")
+LINEAR_CASE_CAUSE = f"a matrix of the case (a factor times a matrix) leaves {DOUBLE_RANGE}"
 
 
 @dataclass(frozen=True, eq=False)
@@ -102,7 +109,18 @@ def linearize(model, eq: Equilibrium, *, rank_tol: float | None = None,
 
     The model linearized is the one ``eq`` belongs to (:func:`mbseig.statics.solved`): with
     inverse-statics commands resolved, the actuator settings found by the equilibrium.
+    Raises :class:`~mbseig.errors.NumericalError` when the equilibrium or the result is not
+    finite, or the arithmetic overflowed on the way (module docstring).
     """
+    require_finite("linearization", "the equilibrium is not finite", q0=eq.q, lam0=eq.lam)
+    cause = LINEAR_CASE_CAUSE if isinstance(model, LinearCase) else CAUSE
+    with watched("linearization", cause):
+        lin = _linearize(model, eq, rank_tol, constraint_stiffness, sparse)
+    require_finite("linearization", cause, M=lin.M, P=lin.P, Q=lin.Q, N=lin.N)
+    return lin
+
+
+def _linearize(model, eq, rank_tol, constraint_stiffness, sparse):
     model = solved(model, eq)
     if rank_tol is None:
         rank_tol = float(eq.tolerances.get("rank_tol", 1e-10))

@@ -4,19 +4,31 @@
 - the rank of a constraint Jacobian and the orthonormal basis of its null space, one rule for
   the whole pipeline (docs/design.md, "Tolerances"): σ_k counts when σ_k > rank_tol · σ_max;
 - column norms of real or complex blocks without complex temporaries;
-- :func:`jsonable`, strict-JSON values (non-finite floats become null).
+- :func:`jsonable`, strict-JSON values (non-finite floats become null);
+- stage boundaries (README, "Input rules"): :func:`require_finite` and :func:`watched` turn a
+  non-finite result or an arithmetic overflow inside a stage into one
+  :class:`~mbseig.errors.NumericalError` naming the stage and the likely cause.
 """
 
 from __future__ import annotations
 
+import contextlib
 import math
+import re
+import warnings
 
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
+from .errors import MbseigError, NumericalError
+
 __all__ = ["scatter", "coo_sum", "dense", "constraint_rank", "null_space_basis", "colnorm",
-           "unit_columns", "jsonable"]
+           "unit_columns", "jsonable", "nonfinite", "require_finite", "watched", "DOUBLE_RANGE"]
+
+DOUBLE_RANGE = "the double-precision range (2.2e-308 to 1.8e308)"
+# numpy's floating-point warnings (np.errstate "warn"): a number left the double range
+_FLOAT_WARNING = re.compile(r"(overflow|divide by zero|invalid value) encountered")
 
 
 def scatter(n_rows, n_cols, blocks):
@@ -88,3 +100,75 @@ def jsonable(x):
     if isinstance(x, (list, tuple)):
         return [jsonable(v) for v in x]
     return x
+
+
+# ---------------------------------------------------------------------------------------------
+# stage boundaries
+# ---------------------------------------------------------------------------------------------
+def nonfinite(arrays: dict):
+    """The name of the first array (dense or sparse, real or complex; None skipped) holding a
+    NaN or an infinity, or None."""
+    for name, A in arrays.items():
+        if A is None:
+            continue
+        data = A.data if sp.issparse(A) else np.asarray(A)
+        if data.dtype.kind in "fc" and data.size and not np.all(np.isfinite(data)):
+            return name
+    return None
+
+
+def require_finite(stage: str, cause: str, **arrays):
+    """Raise :class:`NumericalError` (element = the stage) when one of ``arrays`` is not finite."""
+    bad = nonfinite(arrays)
+    if bad is not None:
+        raise NumericalError(f"{bad} is not finite (inf or NaN entries); likely cause: {cause}",
+                             element=stage)
+
+
+@contextlib.contextmanager
+def watched(stage: str, cause: str, *, float_warnings: bool = True):
+    """Run one stage of the pipeline with its floating-point arithmetic watched.
+
+    numpy reports a number leaving the double range by a RuntimeWarning ("overflow / invalid
+    value / divide by zero encountered"); after such an event the stage's result cannot be
+    trusted (an infinity divided away leaves a finite, wrong number), so the warning becomes a
+    :class:`NumericalError` naming the stage and the likely cause instead of a warning followed
+    by an answer.  An arithmetic exception (OverflowError, ZeroDivisionError,
+    FloatingPointError) or SciPy's refusal of non-finite input ("array must not contain infs or
+    NaNs") inside the stage becomes the same error.  Other warnings pass through unchanged.
+    ``float_warnings=False`` leaves every warning to the stage (the eigensolvers judge their
+    own) and converts only the exceptions.
+    """
+    if not float_warnings:
+        with _arithmetic_errors(stage, cause):
+            yield
+        return
+    with warnings.catch_warnings(record=True) as caught, \
+            np.errstate(over="warn", invalid="warn", divide="warn"):
+        warnings.simplefilter("always")
+        with _arithmetic_errors(stage, cause):
+            yield
+    floats = [w for w in caught if issubclass(w.category, RuntimeWarning)
+              and _FLOAT_WARNING.search(str(w.message))]
+    for w in caught:
+        if w not in floats:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    if floats:
+        raise NumericalError(f"floating-point {floats[0].message} (numpy); likely cause: {cause}",
+                             element=stage)
+
+
+@contextlib.contextmanager
+def _arithmetic_errors(stage, cause):
+    try:
+        yield
+    except MbseigError:
+        raise
+    except ArithmeticError as exc:
+        raise NumericalError(f"arithmetic failed ({exc}); likely cause: {cause}",
+                             element=stage) from None
+    except ValueError as exc:
+        if "infs or NaNs" not in str(exc):
+            raise
+        raise NumericalError(f"a non-finite intermediate result (inf or NaN); likely cause: "
+                             f"{cause}", element=stage) from None

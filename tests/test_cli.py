@@ -8,6 +8,9 @@ from conftest import CASES
 
 from mbseig.cli import main
 
+# the CLI contract: an accepted run prints no warning, a refusal one line (README, "Exit codes")
+pytestmark = pytest.mark.filterwarnings("error")
+
 CASE_FILES = sorted(CASES.glob("*.toml"))
 MODE_KEYS = {"index", "eigenvalue", "delta", "omega_n", "omega_d", "freq_hz", "zeta", "stability",
              "kind", "backward_error"}
@@ -52,6 +55,9 @@ def test_modes_table_and_linearize(path, capsys, tmp_path):
     data = json.loads(capsys.readouterr().out)
     M, Q = np.array(data["M"]), np.array(data["Q"])
     assert M.shape == Q.shape == (data["dof"], data["dof"])
+    for key in ("M", "P", "Q", "A"):  # never inf or NaN (null in JSON) with exit 0
+        if key in data:
+            assert np.all(np.isfinite(np.array(data[key], dtype=float))), key
 
 
 def test_linearize_npz_round_trip(tmp_path):

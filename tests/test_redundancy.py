@@ -27,10 +27,13 @@ def test_duplicated_rod_same_modes(tmp_path, source, rod):
 
 
 def test_redundant_multipliers_are_minimum_norm(tmp_path):
-    """Two identical rods share the load equally: λ = λ_single / 2 each (minimum norm)."""
+    """Two identical rods share the load equally: λ = λ_single / 2 each (minimum norm).  Their
+    self-stress (one rod in tension, the other in compression) changes no stiffness, so the
+    statics accepts the minimum-norm choice and records no undetermined self-stress."""
     ref = analyze(CASES / "pendulum.toml")
     red = analyze(with_duplicate_rod(tmp_path, "pendulum.toml", '["O", "P"]'))
     np.testing.assert_allclose(red.eq.lam, [ref.eq.lam[0] / 2] * 2, rtol=1e-12)
+    assert red.eq.self_stress == () and red.eq.static["verdict"] == "stable"
 
 
 def test_redundancy_in_json(tmp_path, capsys):

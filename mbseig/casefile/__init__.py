@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import CaseError, MbseigError
+from ..numerics import DOUBLE_RANGE, watched
 from .builder import Builder
 from .expr import evaluate
 from .matrices import linear_case, matrix_file
@@ -35,6 +36,7 @@ from .spatial import SpatialBuilder
 __all__ = ["CaseSpec", "read_case", "load_case", "parse_param_overrides", "SCHEMA_VERSION"]
 
 SCHEMA_VERSION = 1
+READ_CAUSE = f"values of the case too large or too small together (beyond {DOUBLE_RANGE})"
 _TOP_KEYS = {
     "schema_version", "title", "description", "source", "kind", "dimension", "gravity",
     "parameters", "points", "masses", "bodies", "joints", "forces", "matrices", "expected",
@@ -82,7 +84,8 @@ class CaseSpec:
         """The model at these parameters (numbers or expressions overriding ``[parameters]``)
         and named configuration; ``mesh`` maps a beam's name or index to its element count."""
         try:
-            return _build(self, config, params, mesh)
+            with watched("reading the case", READ_CAUSE):
+                return _build(self, config, params, mesh)
         except MbseigError as exc:
             raise exc.located(file=self.source) from None
 
@@ -127,7 +130,7 @@ def _build(spec, config, overrides, mesh):
     if unknown:
         raise CaseError(f"unknown top-level field {unknown[0]!r}", element="case")
     version = data.get("schema_version", None)
-    if version != SCHEMA_VERSION:
+    if version != SCHEMA_VERSION or isinstance(version, bool):
         raise CaseError(f"schema_version must be {SCHEMA_VERSION}, got {version!r}", element="case")
     params = _parameters(data.get("parameters", {}), data.get("configurations", {}), config,
                          dict(overrides or {}))

@@ -5,10 +5,10 @@ index at once: each expression is parsed once and evaluated on a numpy array of 
 (the whitelist of :mod:`mbseig.casefile.expr`, walked by the same code with numpy functions), each name template is formatted
 once per member, and springs become one :class:`~mbseig.model.batched.SpringDamperSet`.
 
-Anything unusual (an unknown field, a non-finite value, a name that clashes, a point that is a
-body marker, an ``enabled`` or ``name`` field, ...) makes the batch decline, and the element is
-expanded one member at a time by :mod:`mbseig.casefile.builder`, which then reports the precise error. The
-batch path therefore changes speed, never results or messages.
+Anything unusual (an unknown field, a value outside the number rule, a name that clashes, a point
+that is a body marker, an ``enabled`` or ``name`` field, ...) makes the batch decline, and the
+element is expanded one member at a time by :mod:`mbseig.casefile.builder`, which then reports
+the precise error. The batch path therefore changes speed, never results or messages.
 """
 
 from __future__ import annotations
@@ -23,6 +23,7 @@ from ..errors import ExpressionError
 from ..model.affine import Affine
 from ..model.batched import SpringDamperSet
 from .expr import Dialect, parse, walk
+from .fields import in_range
 
 __all__ = ["Batcher", "vector_evaluate", "vector_template", "LazyPoints"]
 
@@ -61,8 +62,8 @@ def vector_evaluate(value, names, var, ivals):
             raise _Decline from None
     else:
         raise _Decline
-    if not np.all(np.isfinite(out)):
-        raise _Decline
+    if not (np.all(np.isfinite(out)) and in_range(out)):
+        raise _Decline  # the member-by-member path names the member and the rule
     return out
 
 

@@ -45,7 +45,7 @@ class Builder:
         self.files = files  # reads matrix files (FE bodies) once: mbseig.casefile.CaseSpec
         self.mesh = mesh  # beam name or index → element count (mbseig.studies.refine)
         dim = data.get("dimension")
-        if dim not in (1, 2, 3):
+        if type(dim) is not int or dim not in (1, 2, 3):
             raise CaseError(f"dimension must be 1, 2 or 3, got {dim!r}", element="case")
         self.dim = dim
         self.point_index: dict[str, np.ndarray] = {}  # name → coordinate indices (−1: fixed)
@@ -132,7 +132,8 @@ class Builder:
                 raise f.error("markers must be a table name = [x, y]")
             ri, rj = self.affine_of(pi), self.affine_of(pj)
             qb = combine([(1.0, ri), (1.0, rj)], stack=True)
-            Mb = body_mass_matrix(m, inertia, tuple(com), L)
+            Mb = f.formed("the body's mass matrix",
+                          lambda: body_mass_matrix(m, inertia, tuple(com), L))
             mass_blocks.append(self._embed(qb, Mb))
             if gravity is not None:
                 G = body_point(ri, rj, com, L)
@@ -188,8 +189,7 @@ class Builder:
 
     def _driver_targets(self, names, f):
         """Elements named by a driver's ``sets``; names of disabled elements are skipped."""
-        declared = {item.get("name") for sec in ("joints", "forces")
-                    for item in self.data.get(sec, []) if isinstance(item, dict)}
+        declared = self.declared_names()
         targets = []
         for nm in names:
             if nm in self.named:
@@ -197,6 +197,12 @@ class Builder:
             elif nm not in declared:
                 raise f.error(f"sets unknown element {nm!r} (a named spring or distance joint)")
         return targets
+
+    def declared_names(self):
+        """Names of the case's joints and forces as written (enabled or not; strings only)."""
+        return {item.get("name") for sec in ("joints", "forces")
+                for item in (self.data.get(sec) if isinstance(self.data.get(sec), list) else [])
+                if isinstance(item, dict) and isinstance(item.get("name"), str)}
 
     def gravity(self):
         g = self.data.get("gravity")
@@ -255,9 +261,9 @@ class Builder:
         pts = f.raw("points")
         if not isinstance(pts, list) or len(pts) != 2:
             raise f.error("points must be a list of two point references")
-        f.t = {**f.t, "_a": pts[0], "_b": pts[1]}
-        a, b = self.point_ref(f, "_a"), self.point_ref(f, "_b")
-        f.used |= {"_a", "_b"}
+        f.t = {**f.t, "points[0]": pts[0], "points[1]": pts[1]}
+        a, b = self.point_ref(f, "points[0]"), self.point_ref(f, "points[1]")
+        f.used |= {"points[0]", "points[1]"}
         return a, b
 
     def add_constraint(self, constraints, c, f):
@@ -306,7 +312,7 @@ class Builder:
             local = f.vec("local", 2, None)
             f.done()
             if local is None:
-                local = _local_coordinates(self, body, p(self.q0))
+                local = _local_coordinates(self, body, p(self.q0), f)
             diff = p - self.body_point(body, local)
             c = LinearConstraint(f.label, diff, np.eye(2), np.zeros(2), self.length_scale)
             self.element_body[f.label] = body
@@ -418,11 +424,14 @@ def _normal_basis(u):
     return vt[1:]
 
 
-def _local_coordinates(builder, body, r):
+def _local_coordinates(builder, body, r, f):
     b = builder.bodies[body]
     pi, pj = b["points"]
     ri, rj = builder.point_pos[pi], builder.point_pos[pj]
     L = np.linalg.norm(rj - ri)
+    if L == 0:
+        raise f.error(f"give local: the basic points of body {body!r} coincide in the case, so "
+                      "the point's local coordinates are undefined")
     e = (rj - ri) / L
     n = np.array([-e[1], e[0]])
     return np.array([(r - ri) @ e, (r - ri) @ n]) * (b["length"] / L)

@@ -62,7 +62,11 @@ def evaluate(value, names: Mapping[str, float] | None = None) -> float:
     if isinstance(value, bool):
         raise ExpressionError(f"expected a number, got the boolean {value!r}")
     if isinstance(value, (int, float)):
-        result = float(value)
+        try:
+            result = float(value)
+        except OverflowError:  # a TOML integer beyond the double range
+            raise ExpressionError(f"an integer of {len(str(abs(value)))} digits is beyond the "
+                                  "double-precision range") from None
     elif isinstance(value, str):
         result = _evaluate_string(value, names or {})
     else:

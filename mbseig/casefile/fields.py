@@ -3,6 +3,21 @@
 One helper validates every element table (style: name the element, echo the bad value): a
 :class:`Fields` reads numbers (or whitelisted expressions, :mod:`~mbseig.casefile.expr`),
 vectors, strings and flags, and :meth:`Fields.done` rejects unknown keys.
+
+The input rules (README, "Input rules"), each refused with the file, the element, the value and
+the rule:
+
+- a number is finite, and 0 or of magnitude MIN_MAGNITUDE … MAX_MAGNITUDE (1e-100 … 1e100):
+  then its square and cube, the powers the elements form of one value (L², L³ of a beam
+  element, d⁴ of a section), stay normal double-precision numbers.  Quantities formed from
+  several values (a section's I, a body's mass matrix, a beam's stiffness) are checked where
+  they are formed, and every stage boundary checks what comes out (mbseig.studies.point);
+- ``factor`` scales a matrix and follows the matrix rule instead (finite entries, a finite
+  sum; the eigensolver scales M, P, Q);
+- a name is a string; a number is a number or an expression string, never a boolean, a list or
+  a table;
+- ``repeat`` bounds are integers of magnitude ≤ MAX_INDEX, and a case repeats at most
+  MAX_REPEAT elements in all.
 """
 
 from __future__ import annotations
@@ -14,10 +29,29 @@ import numpy as np
 from ..errors import CaseError, MbseigError
 from .expr import evaluate
 
-__all__ = ["Fields", "REQUIRED", "MAX_REPEAT", "template", "expand", "enabled"]
+__all__ = ["Fields", "REQUIRED", "MAX_REPEAT", "MAX_INDEX", "MAX_MAGNITUDE", "MIN_MAGNITUDE",
+           "RANGE_RULE", "in_range", "check_range", "template", "expand", "enabled"]
 
-MAX_REPEAT = 2_000_000
+MAX_REPEAT = 2_000_000  # repeated elements in one case
+MAX_INDEX = 1e15  # |first|, |last| of a repeat range: exact integers, formatted exactly
+MAX_MAGNITUDE = 1e100
+MIN_MAGNITUDE = 1e-100
+RANGE_RULE = f"a case number must be 0 or of magnitude {MIN_MAGNITUDE:g} to {MAX_MAGNITUDE:g}"
+UNRANGED = {"factor"}  # scales a matrix: the matrix rule applies (module docstring)
 REQUIRED = object()
+
+
+def in_range(x) -> bool:
+    """The number rule: finite, and 0 or MIN_MAGNITUDE ≤ |x| ≤ MAX_MAGNITUDE (arrays: all)."""
+    a = np.abs(np.asarray(x, dtype=float))
+    return bool(np.all((a == 0) | ((a >= MIN_MAGNITUDE) & (a <= MAX_MAGNITUDE))))
+
+
+def check_range(x, what, label):
+    """``x`` if it obeys the number rule, else a CaseError naming ``what`` and the rule."""
+    if not in_range(x):
+        raise CaseError(f"{what} = {float(x)!r} is out of range: {RANGE_RULE}", element=label)
+    return x
 
 
 class Fields:
@@ -50,6 +84,9 @@ class Fields:
             x = evaluate(value, self.names)
         except MbseigError as exc:
             raise exc.located(element=f"{self.label}.{key}") from None
+        if key not in UNRANGED:
+            check_range(x, key if key in self.t else f"{key} (not given; its default from the "
+                        f"case's other values)", self.label)
         if positive and not x > 0:
             raise self.error(f"{key} must be positive, got {x:g}")
         if nonnegative and not x >= 0:
@@ -64,30 +101,69 @@ class Fields:
         if value is None:
             return None
         if not isinstance(value, list) or len(value) != size:
-            raise self.error(f"{key} must be a list of {size} numbers, got {value!r}")
+            raise self.error(f"{key} must be a list of {size} numbers, got {_short(value)}")
         try:
-            return np.array([evaluate(v, self.names) for v in value])
+            out = np.array([evaluate(v, self.names) for v in value])
         except MbseigError as exc:
             raise exc.located(element=f"{self.label}.{key}") from None
+        for k, x in enumerate(out):
+            check_range(x, f"{key}[{k}]", self.label)
+        return out
 
     def text(self, key, default=REQUIRED):
         value = self.raw(key, default)
         if value is None:
             return None
         if not isinstance(value, str):
-            raise self.error(f"{key} must be a string, got {value!r}")
+            raise self.error(f"{key} must be a string, got {_short(value)}")
         return template(value, self.names, self)
 
     def flag(self, key, default):
         value = self.raw(key, default)
         if not isinstance(value, bool):
-            raise self.error(f"{key} must be true or false, got {value!r}")
+            raise self.error(f"{key} must be true or false, got {_short(value)}")
+        return value
+
+    def formed(self, what, compute):
+        """``compute()``: a quantity formed from several of the element's values (``what``,
+        e.g. "the body's mass matrix").  An overflow, a division by zero or a non-finite number
+        in the result (an array, a number, or a tuple or dict of them) is this element's error,
+        named, instead of an inf or a traceback downstream."""
+        try:
+            with np.errstate(all="raise", under="ignore"):
+                value = compute()
+        except ArithmeticError:
+            ok = False
+        else:
+            ok = all(_finite(v) for v in _numbers(value))
+        if not ok:
+            raise self.error(f"{what} leaves the double-precision range (2.2e-308 to 1.8e308): "
+                             "the element's values are too large or too small together")
         return value
 
     def done(self):
         extra = sorted(set(self.t) - self.used)
         if extra:
             raise self.error(f"unknown field {extra[0]!r}")
+
+
+def _numbers(value):
+    if isinstance(value, dict):
+        value = tuple(value.values())
+    if isinstance(value, tuple):
+        return [x for v in value for x in _numbers(v)]
+    return [value] if isinstance(value, (int, float, np.ndarray, np.generic)) else []
+
+
+def _finite(value) -> bool:
+    a = np.asarray(value)
+    return a.dtype.kind not in "fc" or bool(np.all(np.isfinite(a)))
+
+
+def _short(value, limit=80):
+    """repr of a value, cut to ``limit`` characters (an echo, not a dump)."""
+    text = repr(value)
+    return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
 def template(text, names, fields):
@@ -129,8 +205,10 @@ def expand(section, items, params, batch=None):
             first, last = (evaluate(b, params) for b in bounds)
         except MbseigError as exc:
             raise exc.located(element=label) from None
-        if not (first.is_integer() and last.is_integer()):
-            raise CaseError("repeat bounds must be integers", element=label)
+        if not (first.is_integer() and last.is_integer()
+                and max(abs(first), abs(last)) <= MAX_INDEX):
+            raise CaseError(f"repeat bounds must be integers of magnitude at most {MAX_INDEX:g}, "
+                            f"got [{first:g}, {last:g}]", element=label)
         count = int(last) - int(first) + 1
         total += max(count, 0)
         if total > MAX_REPEAT:

@@ -30,11 +30,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import CaseError
+from ..errors import CaseError, ReportedWarning
 from ..model.affine import Affine, combine
 from ..model.beams import THEORIES, BeamElement, BeamSection, RotationLock, section_properties
 from ..model.fe_body import LinearFEBody
-from .fields import Fields, expand, template
+from .fields import Fields, check_range, expand, template
 from .matrices import matrix_value
 
 __all__ = ["BeamTheoryWarning", "EB_SLENDERNESS", "MIN_SLENDERNESS", "AUTO_START_ELEMENTS",
@@ -43,10 +43,11 @@ __all__ = ["BeamTheoryWarning", "EB_SLENDERNESS", "MIN_SLENDERNESS", "AUTO_START
 EB_SLENDERNESS = 10.0  # below this, Euler–Bernoulli neglects shear that matters
 MIN_SLENDERNESS = 5.0  # below this, no beam theory is adequate
 AUTO_START_ELEMENTS = 2  # elements of an "auto" beam before refinement
-MAX_ELEMENTS = 4096
+MAX_ELEMENTS = 4096  # elements of one beam (a stated limit: README, "Input rules")
+MIN_NORMAL = float(np.finfo(float).tiny)  # smallest normal double
 
 
-class BeamTheoryWarning(UserWarning):
+class BeamTheoryWarning(ReportedWarning):
     """A beam theory used outside the slenderness range where it is accurate."""
 
 
@@ -121,13 +122,18 @@ def _beam_spec(b, f, mesh_override):
         else:
             raise sf.error(f"shape must be 'rectangle' (b, h) or 'circle' (d), got {shape!r}")
         sf.done()
-        props = section_properties(shape=shape, dims=dims)
+        props = sf.formed("the section's area and second moment",
+                          lambda: section_properties(shape=shape, dims=dims))
         A, I, depth, kappa_default = props["A"], props["I"], props["depth"], props["kappa"]
+        if not (A >= MIN_NORMAL and I >= MIN_NORMAL):
+            raise sf.error(f"the section's area {A:g} or second moment {I:g} vanishes below "
+                           f"the double-precision range: the section is too small")
         f.raw("depth", None)
     else:
         A = f.num("A", positive=True)
         I = f.num("I", positive=True)
-        depth = f.num("depth", math.sqrt(12.0 * I / A), positive=True)
+        depth = f.num("depth", f.formed("the depth sqrt(12 I/A)", lambda: math.sqrt(12.0 * I / A)),
+                      positive=True)
     kappa = f.num("shear_coefficient", kappa_default, positive=True)
     G = f.num("G", None)
     nu = f.num("nu", None)
@@ -140,7 +146,7 @@ def _beam_spec(b, f, mesh_override):
             nu = 0.3
         if not -1.0 < nu < 0.5:
             raise f.error(f"nu must lie in (−1, 0.5), got {nu:g}")
-        G = E / (2.0 * (1.0 + nu))
+        G = check_range(E / (2.0 * (1.0 + nu)), "G = E/(2(1 + nu))", f.label)
     elif not G > 0:
         raise f.error(f"G must be positive, got {G:g}")
     raw_n = f.raw("elements", "auto")
@@ -181,7 +187,8 @@ def allocate(b, mesh=None):
     names = set()
     for k, (item, label, params) in enumerate(expand("beams", items, b.params)):
         f = Fields(item, label, params)
-        spec = _beam_spec(b, f, mesh.get(k, mesh.get(item.get("name"))))
+        name = item.get("name")  # any TOML value; a non-string is refused by _beam_spec
+        spec = _beam_spec(b, f, mesh.get(k, mesh.get(name) if isinstance(name, str) else None))
         if spec.name in names:
             raise f.error(f"duplicate beam name {spec.name!r}")
         names.add(spec.name)
@@ -221,6 +228,7 @@ def _fe_spec(b, f):
         raise f.error(f"FE body name {name!r} is used already or contains '.'")
     M = matrix_value(f.raw("mass"), f"{f.label}.mass", f.names, b.files)
     K = matrix_value(f.raw("stiffness"), f"{f.label}.stiffness", f.names, b.files)
+    f.formed("the mass and stiffness matrices", lambda: (M, K))
     if M.shape != K.shape:
         raise f.error(f"mass is {M.shape[0]}×{M.shape[0]} but stiffness {K.shape[0]}×{K.shape[0]}")
     iface = f.raw("interface")
@@ -283,9 +291,13 @@ def parse_refinement(table, params):
         raise f.error("name the modes of interest: modes = K (the lowest K) and/or f_max [Hz]")
     if out["modes"] is not None:
         if not (float(out["modes"]).is_integer() and out["modes"] >= 1):
-            raise f.error(f"modes must be a positive integer, got {out['modes']!r}")
+            raise f.error(f"modes must be a positive integer, got {out['modes']:g}")
         out["modes"] = int(out["modes"])
-    out["max_elements"] = int(out["max_elements"])
+    n = out["max_elements"]
+    if not (float(n).is_integer() and AUTO_START_ELEMENTS <= n <= MAX_ELEMENTS):
+        raise f.error(f"max_elements must be an integer in {AUTO_START_ELEMENTS}..{MAX_ELEMENTS}, "
+                      f"got {n:g}")
+    out["max_elements"] = int(n)
     return {k: v for k, v in out.items() if v is not None}
 
 
@@ -313,10 +325,12 @@ def _assemble_beam(b, spec, q_init, forces, constraints, mass_blocks, mass_eleme
     for k in range(n):
         (r1, t1), (r2, t2) = nodes[k], nodes[k + 1]
         w = combine([(1.0, r1), (1.0, t1), (1.0, r2), (1.0, t2)], stack=True)
-        el = BeamElement(f"{spec.label} element {k + 1}", w, spec.section, l0)
+        f = _ErrorOnly(spec.label)
+        el = f.formed("the beam element's stiffness and mass",
+                      lambda: BeamElement(f"{spec.label} element {k + 1}", w, spec.section, l0))
         if el.idx.size == 0:
             continue
-        M_ref = el.mass(q_init)
+        M_ref = f.formed("the beam element's mass matrix", lambda: el.mass(q_init))
         forces.append(el)
         mass_elements.append((el, M_ref))
         mass_blocks.append((el.idx, el.idx, M_ref))
@@ -344,12 +358,11 @@ def _assemble_beam(b, spec, q_init, forces, constraints, mass_blocks, mass_eleme
     }
 
 
-class _ErrorOnly:
-    def __init__(self, label):
-        self.label = label
+class _ErrorOnly(Fields):
+    """The error helpers of :class:`Fields` for an element whose table was read already."""
 
-    def error(self, message):
-        return CaseError(message, element=self.label)
+    def __init__(self, label):
+        super().__init__({}, label, {})
 
 
 def _assemble_fe(b, spec, constraints, forces, mass_blocks, q_init):

@@ -5,7 +5,9 @@ from __future__ import annotations
 
 from ..errors import CaseError
 from ..model.driver import AngleDriver
-from .fields import Fields
+from .fields import Fields, in_range
+
+MAX_STUDY_POINTS = 10_000  # points of one [[report.studies]] sweep (a stated limit)
 
 __all__ = ["parse_report"]
 
@@ -28,8 +30,7 @@ def parse_report(table, builder) -> dict:
     act = [act] if isinstance(act, str) else act
     if not isinstance(act, list) or not all(isinstance(a, str) for a in act):
         raise CaseError("actuator must be an element name or a list of names", element="report.actuator")
-    declared = {item.get("name") for sec in ("joints", "forces")
-                for item in builder.data.get(sec, []) if isinstance(item, dict)}
+    declared = builder.declared_names()
     for a in act:
         if a in builder.named:
             out["actuator"].append(builder.named[a])
@@ -64,26 +65,39 @@ def parse_report(table, builder) -> dict:
         unknown = sorted(set(item) - _STUDY_KEYS)
         if unknown:
             raise CaseError(f"unknown field {unknown[0]!r}", element=label)
-        if item.get("config") is not None and item["config"] not in configs:
-            raise CaseError(f"unknown configuration {item['config']!r}", element=label)
+        config = item.get("config")
+        if config is not None and (not isinstance(config, str) or config not in configs):
+            raise CaseError(f"unknown configuration {config!r}", element=label)
         if "compare" in item:
             if item["compare"] != "constraint_stiffness":
                 raise CaseError("compare must be \"constraint_stiffness\"", element=label)
         else:
-            if item.get("sweep") not in builder.params:
-                raise CaseError(f"sweep must name a parameter, got {item.get('sweep')!r}", element=label)
+            sweep = item.get("sweep")
+            if not isinstance(sweep, str) or sweep not in builder.params:
+                raise CaseError(f"sweep must name a parameter, got {sweep!r}", element=label)
             rng, count = item.get("range"), item.get("count")
-            if (not isinstance(rng, list) or len(rng) != 2
-                    or not all(isinstance(x, (int, float)) for x in rng) or rng[0] == rng[1]):
-                raise CaseError("range must be [start, stop] with start ≠ stop", element=label)
-            if not isinstance(count, int) or count < 2:
-                raise CaseError("count must be an integer ≥ 2", element=label)
+            if (not isinstance(rng, list) or len(rng) != 2 or not all(_number(x) for x in rng)
+                    or rng[0] == rng[1]):
+                raise CaseError("range must be [start, stop] of case numbers with start ≠ stop",
+                                element=label)
+            if not isinstance(count, int) or isinstance(count, bool) or not (
+                    2 <= count <= MAX_STUDY_POINTS):
+                raise CaseError(f"count must be an integer in 2..{MAX_STUDY_POINTS}", element=label)
             lines = item.get("lines", {})
             if not isinstance(lines, dict) or not all(
-                    n in builder.params and isinstance(v, list) and v for n, v in lines.items()):
+                    n in builder.params and isinstance(v, list) and v and all(map(_number, v))
+                    for n, v in lines.items()):
                 raise CaseError("lines must be {parameter = [values, ...]}", element=label)
+            xtol = item.get("xtol_rel", 1e-10)
+            if not (_number(xtol) and 0 < xtol < 1):
+                raise CaseError("xtol_rel must be a number in (0, 1)", element=label)
         out["studies"].append(dict(item))
     return out
+
+
+def _number(x) -> bool:
+    """A number that obeys the case's number rule (finite, 0 or 1e-100 ≤ |x| ≤ 1e100)."""
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and in_range(x)
 
 
 def _table_list(value, label):

@@ -5,10 +5,26 @@ Exit 0 when every simulated mode passes, 1 when one fails, 2 on bad input.
 
 from __future__ import annotations
 
+import math
+
+import numpy as np
+
 from ..check import INTEGRATORS, check_modes, parse_mode_list
 from ..eigen import dense_solvers
+from ..errors import CaseError, MbseigError, NumericalError
+from ..numerics import DOUBLE_RANGE, watched
 from ..studies import analyze
-from .common import add_case_arguments, case_kwargs, print_json, print_reactions
+from .common import (add_case_arguments, case_kwargs, number_option, output_notes, print_json,
+                     print_reactions)
+
+CHECK_CAUSE = (f"the simulation left {DOUBLE_RANGE} (an amplitude too large for the model, or "
+               f"values of the case too large or too small together)")
+# SciPy's explicit Runge-Kutta methods raise a smaller rtol to 100 machine epsilons with a
+# warning: the check refuses such a tolerance instead of running at another one
+MIN_ODE_RTOL = 100 * np.finfo(float).eps
+# stated limits of a run (README, "Input rules"): beyond them a run would not end (10⁹ periods
+# of samples), or a growing mode would leave the double range (e^efolds)
+LIMITS = {"periods": 1e4, "efolds": 100.0, "amplitude": 1.0}
 
 
 def register(sub):
@@ -39,17 +55,46 @@ def register(sub):
     p.set_defaults(run=run)
 
 
-def run(args) -> int:
-    a = analyze(args.case, solver=args.solver, **case_kwargs(args))
+def _options(args):
+    # positivity and finiteness of every option are checked by check_modes; here the limits
+    if math.isfinite(args.ode_rtol) and args.ode_rtol > 0:
+        number_option("--ode-rtol", args.ode_rtol, minimum=MIN_ODE_RTOL)
+    for name, limit in LIMITS.items():
+        value = getattr(args, name)
+        if math.isfinite(value) and value > limit:
+            raise CaseError(f"--{name} must be at most {limit:g}, got {value:g}",
+                            element="command line")
+
+
+def _checked(a, args):
+    """check_modes between its boundary checks: no overflow inside, finite measurements."""
     indices = None if args.modes is None else parse_mode_list(args.modes, len(a.modes))
-    res = check_modes(a.model, a.eq, a.linear, a.modes, indices=indices, amplitude=args.amplitude,
-                      periods=args.periods, efolds=args.efolds, delta_rtol=args.delta_rtol,
-                      omega_rtol=args.omega_rtol, zero_delta_tol=args.zero_delta_tol,
-                      method=args.method, ode_rtol=args.ode_rtol)
+    try:
+        with watched("check", CHECK_CAUSE):
+            res = check_modes(a.model, a.eq, a.linear, a.modes, indices=indices,
+                              amplitude=args.amplitude, periods=args.periods, efolds=args.efolds,
+                              delta_rtol=args.delta_rtol, omega_rtol=args.omega_rtol,
+                              zero_delta_tol=args.zero_delta_tol, method=args.method,
+                              ode_rtol=args.ode_rtol)
+        for m in res.modes:
+            if not m.skipped and not (math.isfinite(m.measured_delta)
+                                      and math.isfinite(m.measured_omega)):
+                raise NumericalError(f"mode {m.index}: the measured delta or omega is not finite; "
+                                     f"likely cause: {CHECK_CAUSE}", element="check")
+    except MbseigError as exc:
+        raise exc.located(file=getattr(a.model, "source", None)) from None
+    return res
+
+
+def run(args) -> int:
+    _options(args)
+    a = analyze(args.case, solver=args.solver, **case_kwargs(args))
+    res = _checked(a, args)
     plots = res.plot(args.plot) if args.plot else []
     if args.json:
         out = res.to_dict()
         out["plots"] = [str(p) for p in plots]
+        out["notes"] = output_notes(a.model, a.eq)
         print_json(out)
         return 0 if res.passed else 1
     tol = res.tolerances
@@ -64,6 +109,8 @@ def run(args) -> int:
         print(f"constraint drift before projection <= {max(m.constraint_drift for m in sim):.1e} "
               f"(relative); largest projection {max(m.max_projection for m in sim):.1e}; "
               f"{sum(m.nfev for m in sim)} force evaluations in {res.elapsed:.2f} s")
+    for note in output_notes(a.model, a.eq):
+        print(f"note: {note}")
     print_reactions(res.reactions)
     for rec in res.actuators:
         print(f"actuator {rec.get('driver', '?')}: effort {rec.get('effort', float('nan')):.6g} "

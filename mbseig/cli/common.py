@@ -6,9 +6,12 @@ import json
 import sys
 
 from ..casefile import parse_param_overrides
+from ..casefile.fields import RANGE_RULE, in_range
+from ..errors import CaseError
 from ..numerics import jsonable
 
-__all__ = ["add_case_arguments", "case_kwargs", "print_json", "print_reactions"]
+__all__ = ["add_case_arguments", "case_kwargs", "print_json", "print_reactions", "number_option",
+           "output_notes", "equilibrium_notes"]
 
 
 def add_case_arguments(parser):
@@ -42,3 +45,32 @@ def print_reactions(rows):
         carried = f"{c['label']} {', '.join(f'{v:.6g}' for v in value)} {c['unit']}".rstrip()
         forces = "; ".join(f"{p} ({', '.join(f'{v:.6g}' for v in f)})" for p, f in r["forces"].items())
         print(f"  {r['element']}: λ = {lam}; {carried}; on {forces}")
+
+
+def number_option(name, value, *, positive=False, nonnegative=False, minimum=None):
+    """A numeric command-line option checked like a case number (finite, 0 or of magnitude
+    1e-100 to 1e100), and positive, non-negative or at least ``minimum`` where the option says
+    so (None passes through)."""
+    if value is None:
+        return None
+    rule = ("a positive number" if positive else "a non-negative number" if nonnegative
+            else f"a number >= {minimum:g}" if minimum is not None else "a number")
+    ok = in_range(value) and (not positive or value > 0) and (
+        not nonnegative or value >= 0) and (minimum is None or value >= minimum)
+    if not ok:
+        raise CaseError(f"{name} must be {rule} ({RANGE_RULE}), got {value!r}",
+                        element="command line")
+    return value
+
+
+def output_notes(model, eq):
+    """What the reported warnings said (mbseig.errors.ReportedWarning), for the output: the
+    beam-theory guidance of every beam and the equilibrium's notes."""
+    bodies = (getattr(model, "flexible", None) or {}).get("bodies") or {}
+    return ([f"beam {nm}: {w}" for nm, r in bodies.items() for w in r.get("warnings", ())]
+            + [f"equilibrium: {n}" for n in equilibrium_notes(eq)])
+
+
+def equilibrium_notes(eq):
+    """The equilibrium's notes (static stability, self-stress), as strings."""
+    return [str(n) for n in (getattr(eq, "notes", None) or ())]

@@ -9,11 +9,14 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..casefile import load_case
-from ..errors import CaseError
-from ..linear import linearize
-from ..numerics import jsonable
-from ..statics import equilibrium, solved
-from .common import add_case_arguments, case_kwargs, print_json
+from ..errors import CaseError, MbseigError
+from ..numerics import jsonable, require_finite
+from ..statics import solved
+from ..studies.point import linear_stage
+from .common import add_case_arguments, case_kwargs, output_notes, print_json
+
+STATE_CAUSE = ("M is nearly singular against P and Q (a negligible mass or inertia): "
+               "A = [0 I; -M^-1 Q  -M^-1 P] overflows")
 
 FORMATS = (".npz", ".mat", ".json")
 
@@ -34,9 +37,12 @@ def _arrays(model, eq, lin):
     if sp.issparse(lin.M):
         return arrays  # large model kept sparse (mbseig.linear.SPARSE_MIN): no dense state matrix
     try:
-        arrays["A"] = lin.state_matrix()
+        with np.errstate(all="ignore"):  # judged by the finiteness check below
+            arrays["A"] = lin.state_matrix()
     except np.linalg.LinAlgError:
         pass  # singular M: no first-order state matrix (descriptor form only)
+    else:
+        require_finite("linearization", STATE_CAUSE, A=arrays["A"])
     return arrays
 
 
@@ -65,10 +71,12 @@ def _npz_arrays(arrays):
 def run(args) -> int:
     kwargs = case_kwargs(args)
     model = load_case(args.case, config=kwargs["config"], **kwargs["params"])
-    eq = equilibrium(model)
-    lin = linearize(model, eq)
-    model = solved(model, eq)
-    arrays = _arrays(model, eq, lin)
+    try:
+        eq, lin = linear_stage(model)
+        model = solved(model, eq)
+        arrays = _arrays(model, eq, lin)
+    except MbseigError as exc:
+        raise exc.located(file=model.source) from None
     meta = {
         "case": model.name, "parameters": dict(model.parameters),
         "n_coordinates": int(model.n), "n_constraints": int(lin.n_constraints),
@@ -76,6 +84,7 @@ def run(args) -> int:
         "equilibrium": {"residual": float(eq.residual), "iterations": int(eq.iterations)},
         "coordinate_names": list(model.coordinate_names),
         "rank_tol": lin.tolerances.get("rank_tol"),
+        "notes": output_notes(model, eq),
     }
     if args.out:
         _write(Path(args.out), arrays, meta)
@@ -85,6 +94,8 @@ def run(args) -> int:
         print(f"case {model.name}: {model.n} coordinates, {lin.n_constraints} constraints "
               f"({eq.n_redundant} redundant), {lin.dof} DOF; equilibrium residual "
               f"{eq.residual:.2e} after {eq.iterations} iterations")
+        for note in meta["notes"]:
+            print(f"note: {note}")
         if args.out:
             print(f"wrote {args.out}: {', '.join(arrays)}")
         elif lin.dof <= 8:

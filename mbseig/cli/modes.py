@@ -8,7 +8,8 @@ from ..eigen import SOLVERS
 from ..errors import CaseError
 from ..statics.reactions import reaction_forces
 from ..studies import analyze, modes_json
-from .common import add_case_arguments, case_kwargs, print_json, print_reactions
+from .common import (add_case_arguments, case_kwargs, equilibrium_notes, number_option, print_json,
+                     print_reactions)
 
 
 def register(sub):
@@ -38,12 +39,17 @@ def _partial_options(args) -> dict:
     opts = {}
     if args.n_modes is not None:
         if args.n_modes < 1:
-            raise CaseError(f"--n-modes must be a positive integer, got {args.n_modes}")
+            raise CaseError(f"--n-modes must be a positive integer, got {args.n_modes}",
+                            element="command line")
         opts["n_modes"] = args.n_modes
     if args.target_hz is not None:
-        opts["target"] = 2 * math.pi * args.target_hz
+        opts["target"] = 2 * math.pi * number_option("--target-hz", args.target_hz,
+                                                      nonnegative=True)
     if args.band_hz is not None:
-        opts["band"] = tuple(2 * math.pi * f for f in args.band_hz)
+        lo, hi = (number_option("--band-hz", f, nonnegative=True) for f in args.band_hz)
+        if not lo < hi:
+            raise CaseError(f"--band-hz needs F1 < F2, got {lo:g} {hi:g}", element="command line")
+        opts["band"] = (2 * math.pi * lo, 2 * math.pi * hi)
     return opts
 
 
@@ -53,10 +59,10 @@ def _refine_request(args):
         if args.accuracy is None:
             return None
     if args.refine_modes is not None and args.refine_modes < 1:
-        raise CaseError(f"--refine-modes must be a positive integer, got {args.refine_modes}")
-    for name, v in (("--refine-fmax", args.refine_fmax), ("--accuracy", args.accuracy)):
-        if v is not None and not v > 0:
-            raise CaseError(f"{name} must be positive, got {v:g}")
+        raise CaseError(f"--refine-modes must be a positive integer, got {args.refine_modes}",
+                        element="command line")
+    number_option("--refine-fmax", args.refine_fmax, positive=True)
+    number_option("--accuracy", args.accuracy, positive=True)
     return {"modes": args.refine_modes, "f_max": args.refine_fmax, "accuracy": args.accuracy}
 
 
@@ -101,6 +107,8 @@ def run(args) -> int:
     if eq.redundant:
         print("redundant: " + "; ".join(eq.redundant))
     print(f"equilibrium: residual {eq.residual:.2e} after {eq.iterations} Newton iterations")
+    for note in equilibrium_notes(eq):
+        print(f"equilibrium note: {note}")
     print(f"solver: {a.modes.solver} ({a.modes.solver_reason})")
     _print_flexible(a)
     print(a.modes.table())

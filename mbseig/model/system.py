@@ -15,6 +15,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..numerics import coo_sum, scatter
+from .batched import spring_tangents
 
 __all__ = ["Model"]
 
@@ -143,8 +144,47 @@ class Model:
             return np.zeros(0)
         return np.concatenate([c.gamma(q, qd) for c in self.constraints])
 
+    # ---- input safety (README, "Input rules") -------------------------------------------------
+    def nonfinite_element(self, q):
+        """(element name, what) of the first element whose force, stiffness, constraint or
+        constraint derivatives are not finite at q, or None: the check before the equilibrium,
+        so that an overflow is named by its element instead of surfacing inside a solver."""
+        qd = np.zeros(self.n)
+        if self.mass.nnz and not np.all(np.isfinite(self.mass.data)):
+            return "mass matrix", "the assembled mass matrix"
+        if not np.all(np.isfinite(self.g_const)):
+            k = int(np.argmax(~np.isfinite(self.g_const)))
+            return f"coordinate {self.coordinate_names[k]}", "the sum of gravity and point forces"
+        # evaluated under errstate "ignore": an overflow is judged by the results below
+        with np.errstate(all="ignore"):
+            for f in self.forces:
+                if hasattr(f, "member_forces"):  # a batch: name the member
+                    d, dd, k, l0, c, label = f.members(q, qd)
+                    parts = (f.member_forces(q, qd), *spring_tangents(d, dd, k, l0, c, label))
+                    rows = [np.reshape(~np.isfinite(p), (len(f), -1)).any(axis=1) for p in parts]
+                    bad = np.logical_or.reduce(rows)
+                    if bad.any():
+                        return label(int(np.argmax(bad))), "the force or its stiffness"
+                elif not _finite(lambda: (f.force(q, qd), *f.jacobians(q, qd))):
+                    return f.name, "the force or its stiffness"
+            for e, _ in self.mass_elements:
+                if not _finite(lambda: (e.mass(q),)):
+                    return e.name, "the mass matrix"
+            for c in self.constraints:
+                if not _finite(lambda: (c.phi(q), c.jac(q), c.hess(q, np.ones(c.n_eq)))):
+                    return c.name, "the constraint or its derivatives"
+        return None
+
     def constraint_scales(self) -> np.ndarray:
         if not self.constraints:
             return np.zeros(0)
         return np.concatenate([np.full(c.n_eq, c.scale()) for c in self.constraints])
 
+
+def _finite(evaluate) -> bool:
+    """Whether every array ``evaluate()`` returns is finite (a Python-float overflow is not)."""
+    try:
+        arrays = evaluate()
+    except (OverflowError, ZeroDivisionError, FloatingPointError):
+        return False
+    return all(np.all(np.isfinite(a)) for a in arrays)

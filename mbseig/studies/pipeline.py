@@ -8,6 +8,7 @@ factory) or an already built model.
 
 from __future__ import annotations
 
+from ..model.spatial_whirl import whirl
 from ..numerics import jsonable
 from .point import Analysis, analyze_model, as_spec
 from .refine import refine_analysis
@@ -46,8 +47,12 @@ def modes_json(a: Analysis) -> dict:
         "n_redundant": int(eq.n_redundant),
         "dof": int(lin.dof),
         "solver": md.solver,
-        "equilibrium": {"residual": float(eq.residual), "iterations": int(eq.iterations)},
+        "equilibrium": {"residual": float(eq.residual), "iterations": int(eq.iterations),
+                        "notes": [str(n) for n in (getattr(eq, "notes", None) or ())]},
         "verdict": md.verdict,
+        "verdict_scope": getattr(md.verdict, "scope", ""),  # partial spectrum: what it covers
+        "coverage": md.coverage,
+        "accounting": md.accounting,
         "modes": [],
         "solver_reason": md.solver_reason,
         "n_infinite": int(md.n_infinite),
@@ -61,6 +66,8 @@ def modes_json(a: Analysis) -> dict:
         out["refinement"] = a.refinement.as_dict()
     for k in range(len(md)):
         s = md.eigenvalues[k]
+        # extension: the whirl of each mode of a model with a rotor (docs/spatial.md)
+        w = whirl(model, eq.q, md.shapes[:, k], s) if md.shapes.shape[0] == model.n else None
         out["modes"].append({
             "index": k + 1,
             "eigenvalue": [float(s.real), float(s.imag)],
@@ -75,5 +82,8 @@ def modes_json(a: Analysis) -> dict:
             "condition": float(md.condition[k]),
             "tolerance": float(md.tolerance[k]),
             "dominant": [[nm, float(v)] for nm, v in md.dominant[k]],
+            "multiplicity": int(md.multiplicity[k]) if md.multiplicity is not None else 1,
+            "flags": list(md.flags[k]) if md.flags else [],
+            **({} if w is None else {"whirl": w}),
         })
     return jsonable(out)
