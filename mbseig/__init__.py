@@ -63,4 +63,6 @@ __all__ = [
     "EquilibriumError",
     "SolverError",
     "SimulationError",
+    "NumericalError",
+    "ReportedWarning",
 ]

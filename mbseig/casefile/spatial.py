@@ -271,6 +271,8 @@ class SpatialBuilder(Builder):
     # -- joints ------------------------------------------------------------------------------
     def _joint(self, f, constraints):
         kind = f.raw("type", None)
+        if not isinstance(kind, str):
+            raise f.error(f"type must be a string, got {kind!r}")
         if kind in JOINT_ROWS and (kind != "point_on_line" or f.has("bodies")):
             self._spatial_joint(f, kind, constraints)
         elif kind == "angle_driver":
@@ -348,6 +350,8 @@ class SpatialBuilder(Builder):
     def _force(self, f, forces, g_const):
         self._bind()
         kind = f.raw("type", None)
+        if not isinstance(kind, str):
+            raise f.error(f"type must be a string, got {kind!r}")
         if kind in ("spring", "damper", "spring_damper"):
             return super()._force(f, forces, g_const)
         if kind not in _FORCES:

@@ -21,7 +21,7 @@ command line), and each says only what was shown:
 
 from __future__ import annotations
 
-from ..errors import EquilibriumError
+from ..errors import EquilibriumError, ReportedWarning
 
 __all__ = ["ConstraintsUnsatisfiable", "NoStaticEquilibrium", "NotConverged",
            "UndeterminedSelfStress", "StaticInstabilityWarning"]
@@ -43,5 +43,5 @@ class UndeterminedSelfStress(EquilibriumError):
     """Redundant constraints with a self-stress that changes the stiffness."""
 
 
-class StaticInstabilityWarning(RuntimeWarning):
+class StaticInstabilityWarning(ReportedWarning, RuntimeWarning):
     """The equilibrium found is statically unstable (a divergence)."""
