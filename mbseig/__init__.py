@@ -29,7 +29,8 @@ contract in pyproject.toml is checked by the test suite):
 from .casefile import CaseSpec, load_case, read_case
 from .check import CheckResult, ModeCheck, check_modes
 from .eigen import QEPSolution, solve_qep
-from .errors import CaseError, EquilibriumError, ExpressionError, MbseigError, SimulationError, SolverError
+from .errors import (CaseError, EquilibriumError, ExpressionError, MbseigError, NumericalError,
+                     ReportedWarning, SimulationError, SolverError)
 from .linear import LinearModel, linearize
 from .modal import Modes, modes
 from .model import LinearCase, Model
