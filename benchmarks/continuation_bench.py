@@ -12,10 +12,10 @@ Models:
 
 - the finger device, C4, follower force f = 0 … 2.4 N (25 points; the actuator's held command is
   resolved once, outside the timings, for both);
-- a 10⁴-coordinate model: a cable of 5000 point masses on 5001 stiff springs between two
+- a 10⁴-coordinate model: a taut cable of 5000 point masses on 5001 stiff springs between two
   supports (10 000 coordinates; the springs are one vectorized batch), started on a circular arc
-  at the springs' free lengths, under gravity and a horizontal load w per unit mass swept
-  0 … 5 m/s² (11 points).  Its family changes the constant load vector of one built model (the
+  with the springs 0.1 % longer than their free length (1 N of pretension), under gravity and a
+  horizontal load w per unit mass swept 0 … 5 m/s² (11 points).  Its family changes the constant load vector of one built model (the
   reader is not what is measured).  (A chain of rods instead of springs is limited by the
   assembly of 5000 separate constraint elements, ≈ 0.1–0.5 s per Jacobian, not by the solver.)
 
@@ -56,9 +56,10 @@ def device_family():
     return make
 
 
-def chain_case(n=5000, span=3.5, length=5.0, stiffness=1e6):
+def chain_case(n=5000, span=3.5, length=5.0, stiffness=1e6, pretension=1e-3):
     """A case file text: n masses on n + 1 equal springs on the circular arc through both
-    supports (at their free lengths), gravity, a horizontal load w·m."""
+    supports, each ``pretension`` (relative) longer than its free length, gravity, a horizontal
+    load w·m."""
     a = length / (n + 1)
     # half-angle θ of the arc: R = a / (2 sin(θ/(n+1))), span = 2 R sin θ
     from scipy.optimize import brentq
@@ -77,7 +78,8 @@ def chain_case(n=5000, span=3.5, length=5.0, stiffness=1e6):
     for i, (x, y) in enumerate(pts, 1):
         lines.append(f'[[points]]\nname = "m{i}"\nposition = [{x!r}, {y!r}]')
     lines.append(f'[[masses]]\nrepeat = {{ i = [1, {n}] }}\npoint = "m{{i}}"\nmass = 0.001')
-    spring = f'type = "spring"\nstiffness = {stiffness!r}\nfree_length = {a!r}'
+    spring = (f'type = "spring"\nstiffness = {stiffness!r}\n'
+              f'free_length = {a * (1 - pretension)!r}')
     lines.append(f'[[forces]]\n{spring}\npoints = ["A", "m1"]')
     lines.append(f'[[forces]]\n{spring}\nrepeat = {{ i = [1, {n - 1}] }}\n'
                  f'points = ["m{{i}}", "m{{i + 1}}"]')

@@ -14,13 +14,16 @@ difference with step ``FD_REL``·p_scale (p_scale: the span of the sweep).
 Tangent: J ẏ = R_p ṗ, normalized so that ‖ẏ_q‖²_W + (ṗ/p_scale)² = 1 in the model's scales
 (W = diag 1/ℓ², multipliers weightless), oriented along the previous tangent.
 
-Step: while the branch moves towards the next grid value p_g, Newton on R(y, p_g) = 0 from the
-tangent predictor (natural-parameter continuation: the grid point itself), accepted when it
-converges within ``REACH`` × the predicted step of its predictor (so it cannot land on another
-branch) and the tangent keeps its sense of p (no fold between); otherwise a pseudo-arclength step
+Step: while the branch moves towards the next grid value p_g, the equilibrium at p_g from the
+tangent predictor bent through the previous point (second order, :func:`_predict`): plain Newton
+while its corrections shrink, then the statics' own Newton (natural-parameter continuation: the
+grid point itself), accepted when it converges within ``REACH`` × the predicted step of its
+predictor (so it cannot land on another branch) and the tangent keeps its sense of p (no fold
+between); otherwise a pseudo-arclength step
 (Keller): predictor z + ds·t, corrector Newton on [R(y, p) = 0; (Wt)ᵀ(z − z_pred) = 0] with the
-bordered matrix B = [[J, −R_p], [(Wt)ᵀ]].  An arclength step whose corrector does not converge in
-``CORRECTOR_ITER`` iterations is halved; an easy one (≤ ``EASY`` iterations) lengthens the next
+bordered matrix B = [[J, −R_p], [(Wt)ᵀ]] (:func:`~mbseig.statics.linalg.solve_bordered`),
+to ``STEP_TOL``.  An arclength step whose corrector does not converge in ``CORRECTOR_ITER``
+iterations is halved; an easy one (≤ ``EASY`` iterations) lengthens the next
 by 3/2, up to ds_max.  Grid values an arclength step passes are corrected at their value.
 
 Folds (limit points): ṗ changes sign between two points; located by Brent's method on ṗ(s)
@@ -47,11 +50,13 @@ import scipy.sparse.linalg as spla
 
 from ..errors import EquilibriumError, MbseigError
 from ..numerics import constraint_rank
-from .linalg import DENSE_LIMIT, NewtonMatrix, StepScales, multipliers
+from .linalg import DENSE_LIMIT, SMALL, NewtonMatrix, StepScales, multipliers, solve_bordered
+from .newton import Memo, Stall, newton, settings_for
 
 __all__ = ["Family", "BranchPoint", "Branch", "follow", "CORRECTOR_ITER", "FD_REL", "CTOL"]
 
 CORRECTOR_ITER = 8  # Newton iterations of a continuation corrector
+STEP_TOL = 1e-8  # an arclength step between grid points is corrected to this (model scales)
 EASY = 3  # a corrector converged in at most EASY iterations lengthens the next step
 FD_REL = 1e-7  # forward-difference step of ∂R/∂p, relative to p_scale
 CTOL = 1e-11  # corrector converged: correction below CTOL in the model's scales (and p_scale)
@@ -270,42 +275,54 @@ def tangent(fam, y, p, *, prev=None, direction=1.0):
     return t
 
 
-def _correct_fixed(fam, y, p, reach, s_ctol=CTOL):
-    """Newton on R(y, p) = 0 at fixed p from the predictor y; (y, iterations), or None when it
-    does not converge or ends farther than ``reach`` (model scales) from the predictor (it would
-    have left the branch)."""
+def _correct_fixed(fam, y, p, reach):
+    """The equilibrium at fixed p from the predictor y to ``CTOL``: plain Newton on R(y, p) = 0
+    while its corrections shrink (at most ``CORRECTOR_ITER``), then, from its last iterate, the
+    statics' own Newton (:func:`mbseig.statics.newton.newton`: position solve, trust region,
+    homotopy steps for stiff members); (y, iterations), or None when neither converges or the
+    result is farther than ``reach`` (model scales) from the predictor (it would have left the
+    branch)."""
     n = fam.n
     w = fam.weights()[:-1]
-    y0 = y
+    y0, yk, last, its = y, y, np.inf, 0
     for it in range(1, CORRECTOR_ITER + 1):
         try:
-            NM = NewtonMatrix(fam.J(y, p), weights=w)
-            dy, e = NM.solve(fam.R(y, p))
+            dy = NewtonMatrix(fam.J(yk, p), weights=w).solve(fam.R(yk, p))[0]
         except (EquilibriumError, ArithmeticError, ValueError):
-            return None
-        if not np.all(np.isfinite(dy)):
-            return None
-        y = y + dy
+            break
         size = fam.scales.size(dy[:n])
-        if size > 0.5 or fam.scales.size(y[:n] - y0[:n]) > reach:
-            return None
-        if size <= s_ctol:
-            return y, it
-    return None
+        if not np.isfinite(size) or size > reach or size >= last:
+            break
+        yk, last, its = yk + dy, size, it
+        if size <= CTOL:
+            return (yk, it) if fam.scales.size(yk[:n] - y0[:n]) <= reach else None
+    model = Memo(fam.model(p))
+    try:
+        s = settings_for(model, yk[:n], tol=1e-12, xtol=CTOL, floor_tol=1e-8,
+                         max_iter=2 * CORRECTOR_ITER, rank_tol=1e-10)
+        sol = newton(model, yk[:n], s, prove=False)
+    except (Stall, MbseigError, ArithmeticError, ValueError):
+        return None
+    if fam.scales.size(sol.q - y0[:n]) > reach:
+        return None
+    return fam.start(sol.q, p), its + sol.iterations + sol.position_iterations
 
 
-def _correct_arclength(fam, z0, t, ds):
-    """Newton on [R = 0; (Wt)ᵀ(z − z0 − ds t) = 0] from the predictor; (z, iterations) or None."""
+def _correct_arclength(fam, z0, t, ds, tol=CTOL):
+    """Newton on [R = 0; (Wt)ᵀ(z − z0 − ds t) = 0] from the predictor to ``tol``; (z,
+    iterations) or None."""
     n = fam.n
     w = fam.weights()
     zp = z0 + ds * t
     z = zp.copy()
+    c = w * t
     for it in range(1, CORRECTOR_ITER + 1):
         y, p = z[:-1], z[-1]
         try:
-            _, _, B = _bordered(fam, y, p, t, w)
-            rhs = np.concatenate([fam.R(y, p), [-float(np.sum(w * t * (z - zp)))]])
-            dz = NewtonMatrix(B, weights=w).solve(rhs)[0]
+            with np.errstate(all="ignore"):
+                dy, dp = solve_bordered(fam.J(y, p), -fam.Rp(y, p), c[:-1], c[-1], fam.R(y, p),
+                                        -float(np.sum(c * (z - zp))), weights=w)
+            dz = np.concatenate([dy, [dp]])
         except (EquilibriumError, ArithmeticError, ValueError, MbseigError):
             return None
         if not np.all(np.isfinite(dz)):
@@ -314,20 +331,39 @@ def _correct_arclength(fam, z0, t, ds):
         size = max(fam.scales.size(dz[:n]), abs(dz[-1]) / fam.p_scale)
         if size > max(0.5, 2 * abs(ds)):
             return None
-        if size <= CTOL:
+        if size <= tol:
             return z, it
     return None
 
 
 def _det_B(fam, y, p, t):
-    return _det_sign(_bordered(fam, y, p, t, fam.weights())[2])
+    """sign det B, B = [[J, −R_p], [(Wt)ᵀ]]: above SMALL unknowns as sign det J times the sign
+    of the Schur complement (the dense border would fill a factorization of B)."""
+    w = fam.weights()
+    if fam.N > SMALL:
+        J, rp = fam.J(y, p), fam.Rp(y, p)
+        sj = _det_sign(J)
+        if sj:
+            try:
+                b = NewtonMatrix(J).solve(-rp)[0]
+            except EquilibriumError:
+                b = None
+            if b is not None and np.all(np.isfinite(b)):
+                c = w * t
+                schur = c[-1] - float(c[:-1] @ b)
+                return int(sj * np.sign(schur))
+    return _det_sign(_bordered(fam, y, p, t, w)[2])
 
 
 def _point(fam, z, t, kind, segment, iterations=0):
+    """A branch point with the signs of det J and det B.  Where ṗ ≠ 0, sign det B =
+    sign det J · sign ṗ (block elimination: the Schur complement of J in B is
+    (w_p + ẏᵀW ẏ/ṗ²)·ṗ/|t|² up to a positive factor), so one factorization gives both."""
     y, p = z[:-1], z[-1]
-    return BranchPoint(p=float(p), y=y, kind=kind, segment=segment, tangent=t,
-                       det_J=_det_sign(fam.J(y, p)), det_B=_det_B(fam, y, p, t),
-                       iterations=iterations)
+    dj = _det_sign(fam.J(y, p))
+    db = dj * int(np.sign(t[-1])) if dj and abs(t[-1]) > 1e-12 else _det_B(fam, y, p, t)
+    return BranchPoint(p=float(p), y=y, kind=kind, segment=segment, tangent=t, det_J=dj,
+                       det_B=db, iterations=iterations)
 
 
 def _on_hyperplane(fam, z0, t0, s):
@@ -461,12 +497,12 @@ def follow(fam, values, y0, *, stability=None, restart=None, switch=True, ds_max
         new = None
         if land and forward:  # the next grid value directly, from the tangent predictor
             ds_g = (p_g - z[-1]) / t[-1]
-            res = _correct_fixed(fam, z[:-1] + ds_g * t[:-1], p_g, REACH * abs(ds_g) + 1e-9)
+            res = _correct_fixed(fam, _predict(z, t, z_prev, p_g), p_g, REACH * abs(ds_g) + 1e-9)
             if res is not None:
                 new_z, its = np.concatenate([res[0], [p_g]]), res[1]
                 new = (new_z, its, ds_g, True)
         if new is None:
-            res = _correct_arclength(fam, z, t, ds)
+            res = _correct_arclength(fam, z, t, ds, STEP_TOL)
             if res is not None:
                 new = (res[0], res[1], ds, False)
         if new is None:
@@ -555,11 +591,26 @@ def follow(fam, values, y0, *, stability=None, restart=None, switch=True, ds_max
         ds = min(1.5 * ds, ds_max) if its <= EASY else ds
     br.record = {"steps": steps, "accepted": accepted, "rejected": rejected,
                  "model_builds": fam.evaluations, "fd_rel": FD_REL, "ctol": CTOL,
-                 "corrector_iter": CORRECTOR_ITER, "xtol_fold": xtol, "ds_max": ds_max,
+                 "corrector_iter": CORRECTOR_ITER, "step_tol": STEP_TOL,
+                 "xtol_fold": xtol, "ds_max": ds_max,
                  "ds_min": DS_MIN, "reach": REACH, "back_arc": BACK_ARC, "easy": EASY,
                  "segments": segment + 1, "constraint_rows": int(fam.rows.size),
                  "constraint_rows_dropped": int(fam.m - fam.rows.size)}
     return br
+
+
+def _predict(z, t, z_prev, p):
+    """y at p: the tangent at z, bent by the previous point of the segment when there is one
+    (y ≈ y_k + a (p − p_k) + c (p − p_k)² with a = ẏ/ṗ and c fitted to z_prev), so that a
+    rotation of the equilibrium is predicted to second order."""
+    a = t[:-1] / t[-1]
+    dp = p - z[-1]
+    y = z[:-1] + a * dp
+    h = z_prev[-1] - z[-1]
+    if z_prev is not z and h * dp < 0 and abs(h) > 1e-12 * (abs(dp) + abs(z[-1])):
+        c = (z_prev[:-1] - z[:-1] - a * h) / (h * h)
+        y = y + c * dp * dp
+    return y
 
 
 def _fresh(z, t, cur, spacing):

@@ -29,7 +29,7 @@ from ..model.elements import DistanceConstraint
 from ..numerics import constraint_rank
 
 __all__ = ["SMALL", "DENSE_LIMIT", "StepScales", "NewtonMatrix", "multipliers",
-           "augmented", "blas_threads"]
+           "augmented", "blas_threads", "solve_bordered"]
 
 SMALL = 300  # augmented size up to which the Newton matrix is decomposed by the SVD
 DENSE_LIMIT = 4000  # size up to which a singular sparse factor falls back to the dense SVD
@@ -163,10 +163,9 @@ class NewtonMatrix:
             self.null = self.d[:, None] * Vt[~keep].T  # null A = D · null(DAD)
             self.cond = float(s[0] / s[keep][-1]) if keep.any() else np.inf
             self.rank = int(keep.sum())
-        else:
+        else:  # (no condition estimate: forming U from SuperLU costs more than the solve)
             self.rank = N
-            piv = np.abs(self.lu.U.diagonal())
-            self.cond = float(piv.max() / max(piv.min(), np.finfo(float).tiny)) if piv.size else 1.0
+            self.cond = float("nan")
 
     def motion(self, b):
         """The motion without restoring force along which the force b pushes: the projection
@@ -197,6 +196,40 @@ class NewtonMatrix:
             if np.any(Zw):
                 x = x - self.null @ np.linalg.lstsq(Zw, w * x, rcond=None)[0]
         return x, es / self.d
+
+
+def solve_bordered(A, col, row, corner, f, g, weights=None):
+    """(x, τ) solving [[A, col], [rowᵀ, corner]] [x; τ] = [f; g] (a pseudo-arclength corrector's
+    matrix).  Above ``SMALL`` unknowns by block elimination on one sparse LU of A — the dense
+    border would fill a factorization of the whole matrix — accepted when the bordered residual
+    is below 1e-10 of its terms; otherwise (A singular at a fold, or small) by
+    :class:`NewtonMatrix` on the whole bordered matrix."""
+    N = A.shape[0]
+    if N > SMALL:
+        try:
+            NM = NewtonMatrix(A)
+        except EquilibriumError:
+            NM = None
+        if NM is not None and NM.lu is not None:
+            a, _ = NM.solve(f)
+            b, _ = NM.solve(col)
+            den = corner - float(row @ b)
+            if den and np.isfinite(den):
+                tau = (g - float(row @ a)) / den
+                x = a - tau * b
+                with np.errstate(all="ignore"):
+                    r1 = A @ x + col * tau - f
+                    r2 = float(row @ x) + corner * tau - g
+                    scale = (abs(A) @ np.abs(x) + np.abs(col) * abs(tau) + np.abs(f))
+                    ok = (np.all(np.abs(r1) <= 1e-10 * scale + 1e-300)
+                          and abs(r2) <= 1e-10 * (float(np.abs(row) @ np.abs(x))
+                                                  + abs(corner * tau) + abs(g)) + 1e-300)
+                if ok and np.all(np.isfinite(x)):
+                    return x, tau
+    B = sp.bmat([[sp.csr_matrix(A), sp.csr_matrix(col[:, None])],
+                 [sp.csr_matrix(row[None, :]), sp.csr_matrix([[corner]])]], format="csr")
+    z = NewtonMatrix(B, weights=weights).solve(np.concatenate([f, [g]]))[0]
+    return z[:N], float(z[N])
 
 
 def multipliers(Phi_q, g, rank_tol, *, check):

@@ -46,7 +46,8 @@ import numpy as np
 
 from ..errors import EquilibriumError
 from .failures import NoStaticEquilibrium, NotConverged
-from .linalg import DENSE_LIMIT, NewtonMatrix, StepScales, augmented, multipliers
+from .linalg import (DENSE_LIMIT, NewtonMatrix, StepScales, augmented, multipliers,
+                     solve_bordered)
 from .position import STATIONARY, constraint_residual, position_solve
 
 __all__ = ["Equilibrium", "solved", "Settings", "newton", "Stall", "Memo", "finish",
@@ -209,8 +210,6 @@ def _homotopy_step(model, q, lam, NM, R, x, motion, h, s):
     """One predictor–corrector step of length h (model's scales) on the Newton homotopy
     F(y, τ) = R(y) − (1 − τ) R_k = 0 from y_k = (q, λ) at τ = 0, pseudo-arclength in q
     (module docstring).  Returns (q, λ) on Φ = 0 with λ least-squares, or None."""
-    import scipy.sparse as sp
-
     n, N = model.n, R.size
     if motion is not None:  # J singular, R_k outside its range: leave along the free motion
         yd, td = motion.copy(), 0.0
@@ -225,16 +224,15 @@ def _homotopy_step(model, q, lam, NM, R, x, motion, h, s):
     tau = h * td
     qp = y[:n].copy()
     c = np.concatenate([yd[:n] / s.scales.ell**2, np.zeros(N - n)])
-    border = sp.csr_matrix(c[None, :])
-    col = sp.csr_matrix(-R[:, None])
     for _ in range(CORRECTOR_ITER):
         qy, ly = y[:n], y[n:]
         try:
             with np.errstate(all="ignore"):
                 F = _rhs(model, qy, ly, s) - (1.0 - tau) * R
                 A, _ = augmented(model, qy, ly)
-                B = sp.bmat([[A, col], [border, None]], format="csr")
-                dz = NewtonMatrix(B, weights=s.scales.weights(N + 1)).solve(np.concatenate([F, [-(c[:n] @ (qy - qp))]]))[0]
+                dy, dtau = solve_bordered(A, -R, c, 0.0, F, -(c[:n] @ (qy - qp)),
+                                          weights=s.scales.weights(N + 1))
+                dz = np.concatenate([dy, [dtau]])
         except (EquilibriumError, ArithmeticError, ValueError):
             return None
         if not np.all(np.isfinite(dz)):
