@@ -12,6 +12,23 @@ and q = q₀ + N x:
                                             ├─► Nᵀ(·)N ──► M_r, P, Q
           λ₀ ────► [ Σ λ ∇²Φ ] ──► H ───────┘
 
+Null-space basis (docs/design.md, "Null-space basis"): among the orthonormal bases of
+null Φ_q, N is the one closest (Frobenius) to the coordinate directions E of d independent
+coordinates, N = Π E (Eᵀ Π E)^(−1/2) with Π the orthogonal projector onto null Φ_q, i.e. the
+polar factor of the projected directions.  It depends on the null space alone (not on how the
+SVD happened to return it), so the same input gives the same N and N(p) is continuous in a
+parameter p while the selection of independent coordinates holds (pass ``reference`` to hold it
+across a sweep).  The selection is made by column-pivoted QR of a basis of the null space.
+
+Inputs and outputs (:mod:`mbseig.model.signals`): M ẍ + P ẋ + Q x = B u with B = Nᵀ [b_1 … b_k]
+(b_i = ∂g/∂u_i at q₀), and y = C [x; ẋ] + D u with the outputs' Jacobians through N.  A joint's
+reaction depends on δλ, which the linearized dynamics fix exactly:
+
+    Φ_qᵀ δλ = b u − K_t N x − C_d N ẋ − M N ẍ,   ẍ = M_r⁻¹ (B u − Q x − P ẋ)
+
+(K_t = K + H(λ₀), C_d = −∂g/∂q̇; the right side lies in range Φ_qᵀ), solved with the left inverse
+(Φ_q Φ_qᵀ)⁻¹ Φ_q; with redundant constraints δλ is not unique and such an output is refused.
+
 Neither P nor Q is assumed symmetric: follower forces make Q non-symmetric and gyroscopic terms
 make P skew.
 
@@ -25,13 +42,16 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.linalg as sla
 import scipy.sparse as sp
 
+from .errors import CaseError
 from .model.linear_case import LinearCase
+from .model.signals import input_forces, output_rows
 from .numerics import DOUBLE_RANGE, null_space_basis, require_finite, watched
 from .statics import Equilibrium, solved
 
-__all__ = ["LinearModel", "linearize"]
+__all__ = ["LinearModel", "linearize", "continuous_null_basis"]
 
 SPARSE_MIN = 5000  # coordinates above which linearize keeps M, P, Q sparse by default
 CAUSE = (f"the model's masses, damping, stiffnesses or constraint forces at the equilibrium "
@@ -63,6 +83,15 @@ class LinearModel:
     constraint_stiffness: bool = True
     tolerances: dict = field(default_factory=dict)
     constraint_jacobian: object = None  # sparse Φ_q when M, P, Q stay in full coordinates
+    B: np.ndarray = None  # dof × n_u: M ẍ + P ẋ + Q x = B u (None: not formed, sparse path)
+    C: np.ndarray = None  # n_y × 2 dof: y = C [x; ẋ] + D u
+    D: np.ndarray = None  # n_y × n_u
+    input_names: tuple = ()
+    output_names: tuple = ()
+    output_units: tuple = ()
+    angle_names: tuple = ()  # named angles of the case (mode shapes in angles)
+    angle_rows: np.ndarray = None  # n_a × n: δθ = angle_rows δq
+    independent: tuple = ()  # coordinates whose directions fix the null-space basis
 
     @property
     def dof(self) -> int:
@@ -81,27 +110,63 @@ class LinearModel:
         MinvP = np.linalg.solve(self.M, self.P)
         return np.block([[np.zeros((n, n)), np.eye(n)], [-MinvQ, -MinvP]])
 
-    def to_statespace(self):
-        """python-control StateSpace with generalized-force inputs and x, ẋ outputs.
-
-        ż = A z + B u,  B = [0; M⁻¹],  y = z.
-        """
-        import control
-
+    def state_space(self):
+        """(A, B, C, D) of ż = A z + B u, y = C z + D u, z = [x; ẋ] (the named inputs and
+        outputs; without any: generalized-force inputs M⁻¹ and y = z)."""
         n = self.dof
         A = self.state_matrix()
-        B = np.vstack([np.zeros((n, n)), np.linalg.inv(self.M)])
-        return control.ss(A, B, np.eye(2 * n), np.zeros((2 * n, n)))
+        if self.B is None or (not self.input_names and not self.output_names):
+            return (A, np.vstack([np.zeros((n, n)), np.linalg.inv(self.M)]), np.eye(2 * n),
+                    np.zeros((2 * n, n)))
+        Bss = np.vstack([np.zeros((n, self.B.shape[1])), np.linalg.solve(self.M, self.B)])
+        return A, Bss, self.C, self.D
+
+    def to_statespace(self):
+        """python-control StateSpace ż = A z + B u, y = C z + D u, z = [x; ẋ].
+
+        With named inputs and outputs (``[[inputs]]``, ``[[outputs]]``) its input and output
+        labels are their names; without, the inputs are the generalized forces (B = [0; M⁻¹])
+        and the outputs the state (the earlier interface, kept).
+        """
+        import control  # lazily: python-control costs ~0.3 s at import
+
+        if self.B is None:
+            raise CaseError("no input or output matrices: the model was kept sparse (large "
+                            "model); linearize(..., sparse=False)", element="to_statespace")
+        A, B, C, D = self.state_space()
+        n = self.dof
+        states = [f"x{k + 1}" for k in range(n)] + [f"xdot{k + 1}" for k in range(n)]
+        if self.input_names or self.output_names:
+            return control.ss(A, B, C, D, inputs=list(self.input_names),
+                              outputs=list(self.output_names), states=states)
+        return control.ss(A, B, C, D)
+
+    def transfer(self, s, input_name, output_name):
+        """Y(s)/U(s) of one input and one output from the second-order form,
+        (C_q + s C_v)(M s² + P s + Q)⁻¹ B + D, for an array of complex s (no M⁻¹ formed)."""
+        i = _index(self.input_names, input_name, "input")
+        j = _index(self.output_names, output_name, "output")
+        n = self.dof
+        Cq, Cv = self.C[j, :n], self.C[j, n:]
+        b = self.B[:, i]
+        out = []
+        for z in np.atleast_1d(s):
+            x = np.linalg.solve(self.M * z * z + self.P * z + self.Q, b)
+            out.append((Cq + z * Cv) @ x + self.D[j, i])
+        return np.array(out)
 
 
 def linearize(model, eq: Equilibrium, *, rank_tol: float | None = None,
-              constraint_stiffness: bool = True, sparse: bool | None = None) -> LinearModel:
+              constraint_stiffness: bool = True, sparse: bool | None = None,
+              reference=None) -> LinearModel:
     """Linear model about ``eq`` (see module docstring).
 
     rank_tol : relative singular-value threshold for null Φ_q (default: the one the equilibrium
         used for the redundancy count, so both stages see the same rank).
     constraint_stiffness : include H(λ₀).  ``False`` reproduces the common mistake of dropping
         the constraint-force stiffness; it exists to measure that error, never for production.
+    reference : coordinate names fixing the null-space basis (module docstring; default: the
+        independent coordinates chosen at this point, recorded as ``independent``).
     sparse : keep M, P, Q sparse (default: when the model has more than ``SPARSE_MIN``
         coordinates).  Without constraints N is the sparse identity; with constraints no
         null-space basis is formed: M, P, Q stay in full coordinates and ``constraint_jacobian``
@@ -115,19 +180,21 @@ def linearize(model, eq: Equilibrium, *, rank_tol: float | None = None,
     require_finite("linearization", "the equilibrium is not finite", q0=eq.q, lam0=eq.lam)
     cause = LINEAR_CASE_CAUSE if isinstance(model, LinearCase) else CAUSE
     with watched("linearization", cause):
-        lin = _linearize(model, eq, rank_tol, constraint_stiffness, sparse)
+        lin = _linearize(model, eq, rank_tol, constraint_stiffness, sparse, reference)
     require_finite("linearization", cause, M=lin.M, P=lin.P, Q=lin.Q, N=lin.N)
     return lin
 
 
-def _linearize(model, eq, rank_tol, constraint_stiffness, sparse):
+def _linearize(model, eq, rank_tol, constraint_stiffness, sparse, reference=None):
     model = solved(model, eq)
     if rank_tol is None:
         rank_tol = float(eq.tolerances.get("rank_tol", 1e-10))
     if isinstance(model, LinearCase):
         return LinearModel(M=model.M, P=model.P, Q=model.Q, N=np.eye(model.n), q0=np.zeros(model.n),
                            lam0=np.zeros(0), coordinate_names=model.coordinate_names, name=model.name,
-                           parameters=model.parameters, tolerances={"rank_tol": rank_tol})
+                           parameters=model.parameters, tolerances={"rank_tol": rank_tol},
+                           B=np.zeros((model.n, 0)), C=np.zeros((0, 2 * model.n)),
+                           D=np.zeros((0, 0)), independent=tuple(model.coordinate_names))
     q0, lam0 = eq.q, eq.lam
     K, C = model.force_jacobians(q0)
     if constraint_stiffness and model.n_constraints:
@@ -141,15 +208,146 @@ def _linearize(model, eq, rank_tol, constraint_stiffness, sparse):
             rank=eq.rank, n_constraints=model.n_constraints,
             constraint_stiffness=constraint_stiffness,
             tolerances={"rank_tol": rank_tol, "sparse": True}, constraint_jacobian=G)
-    N, rank = null_space_basis(model.phi_q(q0), model.n, rank_tol)
+    G = model.phi_q(q0)
+    N, rank, independent, sigma = continuous_null_basis(G, model.n, rank_tol, model.coordinate_names,
+                                                        reference)
     Md, Cd, Kd = (A.toarray() for A in (model.mass_matrix(q0), C, K))
     if model.n_constraints == 0:
         Mr, Pr, Qr = Md, Cd, Kd
     else:
         Mr, Pr, Qr = (N.T @ A @ N for A in (Md, Cd, Kd))
+    io = _signals(model, q0, N, G, rank, Md, Cd, Kd, Mr, Pr, Qr)
+    tol = {"rank_tol": rank_tol}
+    if sigma is not None:
+        tol["basis_min_cosine"] = sigma  # σ_min(Eᵀ Π E)^(1/2): how well E fixes N
     return LinearModel(
         M=Mr, P=Pr, Q=Qr, N=N, q0=q0, lam0=lam0, coordinate_names=model.coordinate_names,
         name=model.name, parameters=model.parameters, rank=rank,
         n_constraints=model.n_constraints, constraint_stiffness=constraint_stiffness,
-        tolerances={"rank_tol": rank_tol},
+        tolerances=tol, independent=independent, **io,
     )
+
+
+def continuous_null_basis(Phi_q, n, rank_tol, names=None, reference=None):
+    """(N, rank, independent names, cosine) of the module docstring's "Null-space basis".
+
+    reference : coordinate names (or indices) whose directions E fix N; default: the d
+        coordinates chosen by column-pivoted QR of a basis of the null space.  ``cosine`` is the
+        smallest singular value of Zᵀ E (the cosine of the largest angle between span E and the
+        null space); None without constraints.
+    """
+    Z, rank = null_space_basis(Phi_q, n, rank_tol)
+    names = list(names) if names is not None else [f"q{k + 1}" for k in range(n)]
+    d = Z.shape[1]
+    if Phi_q.shape[0] == 0 or d == 0:
+        return Z, rank, tuple(names) if d == n else (), None
+    if reference is None:
+        _, _, piv = sla.qr(Z.T, mode="economic", pivoting=True)
+        sel = np.sort(piv[:d])
+    else:
+        sel = np.array([names.index(r) if isinstance(r, str) else int(r) for r in reference])
+        if sel.size != d:
+            raise CaseError(f"reference names {sel.size} coordinates for a null space of "
+                            f"dimension {d}", element="linearization")
+    A = Z[sel, :].T  # Zᵀ E
+    U, sv, Vt = np.linalg.svd(A)
+    N = Z @ (U @ Vt)
+    # N is the polar factor of Π E: independent of the SVD's choice of Z (up to rounding)
+    return N, rank, tuple(names[i] for i in sel), float(sv[-1])
+
+
+def _index(names, name, what):
+    try:
+        return list(names).index(name)
+    except ValueError:
+        known = ", ".join(names) or "none"
+        raise CaseError(f"unknown {what} {name!r} (known: {known})",
+                        element=f"--{what}") from None
+
+
+def _signals(model, q0, N, G, rank, Md, Cd, Kd, Mr, Pr, Qr):
+    """B, C, D, names and the named angles (module docstring, "Inputs and outputs")."""
+    inputs, outputs = getattr(model, "inputs", ()) or (), getattr(model, "outputs", ()) or ()
+    d = N.shape[1]
+    b = input_forces(model, q0)
+    B = N.T @ b
+    in_names = tuple(i.name for i in inputs)
+    C = np.zeros((len(outputs), 2 * d))
+    D = np.zeros((len(outputs), len(inputs)))
+    lam_maps = None
+    for j, out in enumerate(outputs):
+        Jq, Jv, Jl, Du = output_rows(model, out, q0)
+        C[j, :d], C[j, d:] = Jq @ N, Jv @ N
+        for nm, v in Du.items():
+            D[j, in_names.index(nm)] += v
+        if Jl is not None:
+            if lam_maps is None:
+                lam_maps = _multiplier_maps(model, G, rank, N, b, Md, Cd, Kd, Mr, Pr, Qr, out)
+            Lx, Lv, Lu = lam_maps
+            C[j, :d] += Jl @ Lx
+            C[j, d:] += Jl @ Lv
+            D[j] += Jl @ Lu
+    names, rows = _named_angles(model, q0, outputs)
+    return {"B": B, "C": C, "D": D, "input_names": in_names,
+            "output_names": tuple(o.name for o in outputs),
+            "output_units": tuple(o.unit for o in outputs),
+            "angle_names": names, "angle_rows": rows}
+
+
+def _multiplier_maps(model, G, rank, N, b, Md, Cd, Kd, Mr, Pr, Qr, out):
+    """(L_x, L_v, L_u) with δλ = L_x x + L_v ẋ + L_u u (module docstring)."""
+    G = G.toarray() if sp.issparse(G) else np.asarray(G)
+    if rank < G.shape[0]:
+        raise CaseError(f"{G.shape[0] - rank} redundant constraints: the multipliers, and so "
+                        f"the reaction output {out.name!r}, are not unique", element=out.label)
+    try:
+        MN = Md @ N
+        Xq = np.linalg.solve(Mr, Qr)
+        Xp = np.linalg.solve(Mr, Pr)
+        Xu = np.linalg.solve(Mr, N.T @ b)
+        left = np.linalg.solve(G @ G.T, G)  # (Φ_q Φ_qᵀ)⁻¹ Φ_q
+    except np.linalg.LinAlgError:
+        raise CaseError(f"the reduced mass matrix is singular: the reaction output {out.name!r} "
+                        f"has no linearization (accelerations undetermined)",
+                        element=out.label) from None
+    Lx = left @ (-Kd @ N + MN @ Xq)
+    Lv = left @ (-Cd @ N + MN @ Xp)
+    Lu = left @ (b - MN @ Xu)
+    return Lx, Lv, Lu
+
+
+def _short_name(label):
+    """'forces[3] 'MCP'' → 'MCP' (the element's own name), else the label."""
+    if label.endswith("'") and " '" in label:
+        return label[label.index(" '") + 2:-1]
+    return label
+
+
+def _named_angles(model, q0, outputs):
+    """Names and full-coordinate rows of the case's named angles: report angles, torsional
+    elements and angle outputs (first name wins)."""
+    from .model.elements import TorsionalSpringDamper
+
+    names, rows = [], []
+
+    def add(name, idx, grad):
+        if name in names:
+            return
+        r = np.zeros(model.n)
+        np.add.at(r, idx, grad)
+        names.append(name)
+        rows.append(r)
+
+    for a in (getattr(model, "report", None) or {}).get("angles", ()):
+        drv = a.get("driver")
+        if drv is not None and drv.idx.size:
+            add(a["name"], drv.idx, drv.jac(q0)[0])
+    for f in model.forces:
+        if isinstance(f, TorsionalSpringDamper):
+            W, g = f._parts(q0, np.zeros(model.n))[:2]
+            add(_short_name(f.name), f.idx, g @ W)
+    for o in outputs:
+        if o.kind == "angle" and o.quantity == "angle":
+            Jq = output_rows(model, o, q0)[0]
+            add(o.name, np.arange(model.n), Jq)
+    return tuple(names), (np.array(rows) if rows else np.zeros((0, model.n)))

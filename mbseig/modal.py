@@ -1,7 +1,9 @@
 """Stage 4: modes and their stability (docs/design.md, "Tolerances").
 
 For an eigenvalue s_k = −δ_k + iω_k:  ω_n = |s|,  ζ = δ/|s| (0 for a rigid-body mode),
-f = ω/2π, and
+f = ω/2π (``freq_hz``: the damped frequency ω_d/2π, 0 for a real eigenvalue) and
+f_n = ω_n/2π (``freq_n_hz``: the natural frequency |s|/2π, what python-control's ``damp``
+reports and what ``--band-hz`` and ``--target-hz`` select on), and
 
     δ > tol_k  stable,   |δ| ≤ tol_k  critical,   δ < −tol_k  unstable,
 
@@ -52,7 +54,6 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
-from scipy.spatial import cKDTree
 
 from .eigen import EPS, SOLVERS, SingularPencilError, solve_partial, solve_qep
 from .errors import SolverError
@@ -62,6 +63,7 @@ __all__ = ["Modes", "Verdict", "modes", "STABILITY_ORDER", "tolerances", "stabil
 
 STABILITY_ORDER = {"stable": 0, "critical": 1, "unstable": 2}
 DENSE_MAX = 5000  # sparse input above this size needs a partial-spectrum request
+BAND_DENSE_MAX = 2000  # a band of a model up to this size is listed from the dense solution
 
 
 class Verdict(str):
@@ -121,9 +123,42 @@ class Modes:
     def __len__(self):
         return self.eigenvalues.size
 
+    @property
+    def freq_n_hz(self) -> np.ndarray:
+        """Natural frequencies ω_n/2π = |s|/2π (Hz); ``freq_hz`` is the damped ω_d/2π."""
+        return self.omega_n / (2 * np.pi)
+
+    def __repr__(self):
+        n = len(self)
+        scope = f", {self.coverage}" if self.coverage else ""
+        if n == 0:
+            return f"<Modes: none listed, verdict {self.verdict}, solver {self.solver}{scope}>"
+        lo, hi = float(np.min(self.freq_n_hz)), float(np.max(self.freq_n_hz))
+        return (f"<Modes: {n} listed, f_n {lo:.4g} … {hi:.4g} Hz, verdict {self.verdict}, "
+                f"solver {self.solver}{scope}>")
+
+    def to_dataframe(self):
+        """The listed modes as a pandas DataFrame, one row a mode (index: mode number from 1):
+        eigenvalue parts, δ, ω_n, ω_d, f_n, f_d, ζ, stability, kind, η, κ, tolerance, dominant
+        coordinates.  pandas is optional: ImportError with the install hint when missing."""
+        try:
+            import pandas as pd
+        except ImportError:
+            raise ImportError("Modes.to_dataframe needs pandas (pip install pandas)") from None
+        n = len(self)
+        return pd.DataFrame({
+            "re": self.eigenvalues.real, "im": self.eigenvalues.imag, "delta": self.delta,
+            "omega_n": self.omega_n, "omega_d": self.omega_d, "freq_n_hz": self.freq_n_hz,
+            "freq_hz": self.freq_hz, "zeta": self.zeta, "stability": list(self.stability),
+            "kind": list(self.kind), "backward_error": self.backward_error,
+            "condition": self.condition, "tolerance": self.tolerance,
+            "dominant": [", ".join(nm for nm, _ in d) for d in self.dominant],
+        }, index=pd.RangeIndex(1, n + 1, name="mode"))
+
     def table(self) -> str:
         """Readable fixed-width table of the listed modes."""
-        head = (f"{'#':>3} {'Re s':>13} {'Im s':>13} {'delta':>11} {'omega_n':>11} {'f [Hz]':>11} "
+        head = (f"{'#':>3} {'Re s':>13} {'Im s':>13} {'delta':>11} {'omega_n':>11} "
+                f"{'f_n [Hz]':>11} {'f_d [Hz]':>11} "
                 f"{'zeta':>10} {'eta':>8}  {'stability':<9} {'kind':<11} dominant")
         rows = [head, "-" * len(head)]
         for k in range(len(self)):
@@ -132,11 +167,14 @@ class Modes:
             note = f"  [{'; '.join(self.flags[k])}]" if self.flags and self.flags[k] else ""
             rows.append(
                 f"{k + 1:>3} {s.real:>13.6g} {s.imag:>13.6g} {self.delta[k]:>11.4g} "
-                f"{self.omega_n[k]:>11.6g} {self.freq_hz[k]:>11.6g} {self.zeta[k]:>10.3g} "
+                f"{self.omega_n[k]:>11.6g} {self.freq_n_hz[k]:>11.6g} {self.freq_hz[k]:>11.6g} "
+                f"{self.zeta[k]:>10.3g} "
                 f"{self.backward_error[k]:>8.1e}  {self.stability[k]:<9} {self.kind[k]:<11} {dom}{note}"
             )
         if self.coverage:
             rows.append(f"partial spectrum: {self.coverage}")
+        rows.append("f_n = omega_n/2pi = |s|/2pi (natural), f_d = omega_d/2pi (damped; 0 for a "
+                    "real eigenvalue)")
         return "\n".join(rows)
 
 
@@ -188,6 +226,15 @@ def modes(M, P=None, Q=None, *, solver: str = "auto", N=None, coordinate_names=N
     if Q is None:
         raise SolverError("modes(M, P, Q) needs Q (or a LinearModel alone)")
     path = SOLVERS.get(solver)
+    if (band is not None and n_modes is None and target is None and constraints is None
+            and (path is None or not path.partial)
+            and (not sp.issparse(M) or M.shape[0] <= BAND_DENSE_MAX)):
+        # a band of a model small enough for the dense path: solve it all, list the band
+        full = modes(M, P, Q, solver=solver, N=N, coordinate_names=coordinate_names,
+                     stability_rtol=stability_rtol, stability_atol=stability_atol,
+                     safety=safety, n_dominant=n_dominant, rigid_rank_tol=rigid_rank_tol,
+                     eta_warn=eta_warn, **solver_options)
+        return _band(full, band)
     partial = (n_modes is not None or target is not None or band is not None
                or constraints is not None or (path is not None and path.partial))
     try:
@@ -209,11 +256,41 @@ def modes(M, P=None, Q=None, *, solver: str = "auto", N=None, coordinate_names=N
                           f"would be an eigenvalue): give it mass or a spring, or remove it") from None
     b = _bounds(sol, safety=safety, stability_rtol=stability_rtol, stability_atol=stability_atol,
                 rank_tol=rigid_rank_tol)
+    b = _zero_pair_floor(b, sol, M, P, safety)
     return _listing(sol, b, N=N, coordinate_names=coordinate_names, n_dominant=n_dominant,
                     eta_warn=eta_warn,
                     tolerances_used={"stability_rtol": stability_rtol,
                                      "stability_atol": stability_atol, "safety": safety,
                                      "rigid_rank_tol": rigid_rank_tol, "eta_warn": eta_warn})
+
+
+def _band(md: Modes, band) -> Modes:
+    """The modes of a full listing with ω_lo ≤ ω_n ≤ ω_hi: a partial listing (its verdict
+    covers those modes only), every eigenvalue of the band found by the dense solve."""
+    import dataclasses
+
+    lo, hi = (float(b) for b in band)
+    if not (0 <= lo <= hi):
+        raise SolverError(f"band must be (ω_lo, ω_hi) with 0 ≤ ω_lo ≤ ω_hi, got {band!r}")
+    keep = np.flatnonzero((md.omega_n >= lo) & (md.omega_n <= hi))
+    cut = lambda a: None if a is None else (a[..., keep] if np.ndim(a) > 1 else a[keep])
+    pick = lambda seq: [seq[k] for k in keep]
+    coverage = (f"{keep.size} modes of {md.vectors.shape[0]} DOF; every eigenvalue with "
+                f"{lo:.6g} ≤ |s| ≤ {hi:.6g} rad/s found (dense solve of the whole spectrum); "
+                f"modes outside were not listed")
+    stab = pick(md.stability)
+    verdict = Verdict(worst(stab), f"of the modes computed ({coverage})")
+    acc = {**md.accounting, "listed_modes": int(keep.size), "band": [lo, hi]}
+    return dataclasses.replace(
+        md, eigenvalues=cut(md.eigenvalues), delta=cut(md.delta), omega_n=cut(md.omega_n),
+        omega_d=cut(md.omega_d), freq_hz=cut(md.freq_hz), zeta=cut(md.zeta), stability=stab,
+        kind=pick(md.kind), backward_error=cut(md.backward_error), condition=cut(md.condition),
+        error_estimate=cut(md.error_estimate), tolerance=cut(md.tolerance),
+        vectors=md.vectors[:, keep], shapes=md.shapes[:, keep], dominant=pick(md.dominant),
+        verdict=verdict, left_vectors=None if md.left_vectors is None else md.left_vectors[:, keep],
+        multiplicity=None if md.multiplicity is None else md.multiplicity[keep],
+        accounting=acc, coverage=coverage, partial=True,
+        flags=pick(md.flags) if md.flags else md.flags)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -295,6 +372,38 @@ class _Bounds:
     geometric: np.ndarray = None  # independent eigenvectors of the eigenvalue's cluster
 
 
+class _AllPairs:
+    """The two cKDTree queries :func:`_bounds` uses, by all pairs: for the few eigenvalues of a
+    small model this is faster than importing scipy.spatial (≈ 0.1 s of start-up)."""
+
+    def __init__(self, points):
+        self.z = points[:, 0] + 1j * points[:, 1]
+
+    def query(self, points, k=2):
+        z = points[:, 0] + 1j * points[:, 1]
+        d = np.sort(np.abs(z[:, None] - self.z[None, :]), axis=1)[:, :k]
+        return d, None
+
+    def query_ball_point(self, x, r):
+        x = np.asarray(x, float)
+        single = x.ndim == 1
+        x = np.atleast_2d(x)
+        d = np.abs((x[:, 0] + 1j * x[:, 1])[:, None] - self.z[None, :])
+        r = np.broadcast_to(np.asarray(r, float), (x.shape[0],))
+        out = [np.flatnonzero(d[i] <= r[i]).tolist() for i in range(x.shape[0])]
+        return out[0] if single else out
+
+
+def _neighbour_index(points, small=256):
+    """Nearest-neighbour queries on the eigenvalues: all pairs for a small spectrum, a k-d tree
+    (scipy.spatial, imported here: off the start-up path) above."""
+    if points.shape[0] <= small:
+        return _AllPairs(points)
+    from scipy.spatial import cKDTree
+
+    return cKDTree(points)
+
+
 def _bounds(sol, *, safety=10.0, stability_rtol=1e-12, stability_atol=0.0, rank_tol=1e-6):
     """Error bounds, tolerances and clusters of every eigenvalue of ``sol`` (module docstring)."""
     s = np.asarray(sol.eigenvalues)
@@ -311,7 +420,7 @@ def _bounds(sol, *, safety=10.0, stability_rtol=1e-12, stability_atol=0.0, rank_
     if k > 1:  # the tree on s / max|s|: squared distances of |s| ~ 1e300 would overflow
         unit = float(np.max(np.abs(s))) or 1.0
         points = np.column_stack([s.real, s.imag]) / unit
-        tree = cKDTree(points)
+        tree = _neighbour_index(points)
         near = tree.query(points, k=2)[0][:, 1] * unit
     else:
         near = np.full(k, np.inf)
@@ -381,17 +490,65 @@ def _bounds(sol, *, safety=10.0, stability_rtol=1e-12, stability_atol=0.0, rank_
     return _Bounds(err, tol, tol_re, np.abs(s) <= tol, cluster, block, geometric)
 
 
+def _zero_pair_floor(b, sol, M, P, safety, nQ=None, gamma=1.0):
+    """Near s = 0, an undamped eigenvalue comes from s² = −ω² with ω² a small difference of
+    stiffness terms: an ε-relative error of Q (its formation Nᵀ K N, rounding of K) moves ω² by
+    up to ε‖Q‖‖x‖²/|xᴴMx| and s by the square root of that, which no first-order bound sees.  For
+    an eigenvalue whose damping term is below its inertia term (|xᴴPx| ≤ |s||xᴴMx|, the ±√ω²
+    structure), the error bound is raised to that Hölder radius,
+    h = √(max(η, ε) ‖Q‖_F ‖x‖² / |xᴴMx|),  with the mode's own modal mass (a light body's spin
+    has a far larger h than the global √(ε‖Q‖/‖M‖)); s within safety·h of 0 is then rigid-body
+    (critical).  An eigenvalue beyond it keeps its verdict."""
+    import dataclasses
+
+    s = np.asarray(sol.eigenvalues)
+    if s.size == 0 or sol.complex_problem or sol.vectors is None or M is None:
+        return b
+    scale = _frequency_scale(sol.norms)
+    cand = np.flatnonzero(np.abs(s) <= 1e-3 * scale)
+    if cand.size == 0:
+        return b
+    nQ = float(sol.norms[2]) if nQ is None else nQ
+    s = s / gamma  # M, P, Q of a problem scaled by s = γ μ: work in μ, radius back in s
+    eta = np.maximum(np.asarray(sol.backward_error, float), EPS)
+    err, tol, tol_re, rigid = b.err.copy(), b.tol.copy(), b.tol_re.copy(), b.rigid.copy()
+    Mm = M if sp.issparse(M) else np.asarray(M)
+    Pm = None if P is None else (P if sp.issparse(P) else np.asarray(P))
+    for k in cand:
+        x = sol.vectors[:, k]
+        if x.shape[0] != Mm.shape[0]:
+            return b
+        mx = abs(np.vdot(x, Mm @ x))
+        px = 0.0 if Pm is None else abs(np.vdot(x, Pm @ x))
+        if mx == 0 or px > abs(s[k]) * mx:
+            continue
+        h = math.sqrt(eta[k] * nQ * float(np.vdot(x, x).real) / mx)
+        s_k, h = s[k] * gamma, h * gamma
+        if abs(s_k) <= safety * h:
+            err[k] = max(err[k], h)
+            tol[k] = max(tol[k], safety * h)
+            tol_re[k] = max(tol_re[k], safety * h)
+            rigid[k] = True
+    return dataclasses.replace(b, err=err, tol=tol, tol_re=tol_re, rigid=rigid)
+
+
 def tolerances(sol, *, safety=10.0, stability_rtol=1e-12, stability_atol=0.0, rank_tol=1e-6):
     """(err, tol, tol_re, rigid) per eigenvalue of a :class:`~mbseig.eigen.QEPSolution`.
 
     err: error bound of s (first order, normwise or componentwise, or the cluster bound of a
     defective or nearly defective cluster: module docstring); tol = max(safety·err,
     stability_rtol·|s|, stability_atol) for the rigid-body and real tests, tol_re the same with
-    the path's sharper bound of Re s where it has one (the δ test), rigid: |s| ≤ tol.  The one
+    the path's sharper bound of Re s where it has one (the δ test), rigid: |s| ≤ tol, with the
+    zero-pair floor of :func:`_zero_pair_floor` (from the problem the pairs refer to).  The one
     definition used by :func:`modes` and by the sweeps.
     """
     b = _bounds(sol, safety=safety, stability_rtol=stability_rtol, stability_atol=stability_atol,
                 rank_tol=rank_tol)
+    prob = sol.problem
+    if prob is not None and len(prob) == 4:  # the zero-pair floor, as modes() applies it
+        Ms, Ps, Qs, gamma = prob
+        nQs = float(np.linalg.norm(Qs.tocsr().data) if sp.issparse(Qs) else np.linalg.norm(Qs))
+        b = _zero_pair_floor(b, sol, Ms, Ps, safety, nQ=nQs, gamma=float(gamma))
     return b.err, b.tol, b.tol_re, b.rigid
 
 

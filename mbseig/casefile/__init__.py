@@ -31,7 +31,6 @@ from ..numerics import DOUBLE_RANGE, watched
 from .builder import Builder
 from .expr import evaluate
 from .matrices import linear_case, matrix_file
-from .spatial import SpatialBuilder
 
 __all__ = ["CaseSpec", "read_case", "load_case", "parse_param_overrides", "SCHEMA_VERSION"]
 
@@ -40,7 +39,7 @@ READ_CAUSE = f"values of the case too large or too small together (beyond {DOUBL
 _TOP_KEYS = {
     "schema_version", "title", "description", "source", "kind", "dimension", "gravity",
     "parameters", "points", "masses", "bodies", "joints", "forces", "matrices", "expected",
-    "configurations", "report", "beams", "fe_bodies", "refinement",
+    "configurations", "report", "beams", "fe_bodies", "refinement", "inputs", "outputs",
 }
 
 
@@ -144,7 +143,10 @@ def _build(spec, config, overrides, mesh):
                            expected)
     if kind != "multibody":
         raise CaseError(f"kind must be 'multibody' or 'linear', got {kind!r}", element="case")
-    builder = SpatialBuilder if data.get("dimension") == 3 else Builder
+    if data.get("dimension") == 3:  # the 3-D reader and elements only where a case needs them
+        from .spatial import SpatialBuilder as builder
+    else:
+        builder = Builder
     return builder(data, spec.name, spec.source, params, description, expected,
                    files=spec.read_matrix, mesh=mesh).build()
 

@@ -27,10 +27,18 @@ from ..model.elements import (
 )
 from ..model.system import Model
 from ..numerics import scatter
-from . import flexible
 from .batch import Batcher, LazyPoints
 from .fields import REQUIRED, Fields, expand, template
 from .report_table import parse_report
+
+
+def _flexible():
+    """The beams and FE-body reader (model.beams, model.fe_body), imported at first use: most
+    cases have neither, and `mbseig modes` starts faster without them."""
+    from . import flexible
+
+    return flexible
+
 
 __all__ = ["Builder"]
 
@@ -57,6 +65,8 @@ class Builder:
         self.named: dict[str, tuple] = {}  # element name → ("joint" | "force", index, label)
         self.drivers: list = []  # (AngleDriver, [names it sets], fields) for inverse statics
         self.element_body: dict[str, str] = {}  # attach / follower element label → body
+        self.point_forces: dict[str, tuple] = {}  # name of a constant `force` → (point, vector)
+        self.mass_parts: list = []  # (name, idx, block) of every body and mass (modal energy)
 
     # -- points ------------------------------------------------------------------------
     def build(self):
@@ -79,7 +89,7 @@ class Builder:
                 self.q_init += list(pos)
             self.point_index[pname] = idx
             self.point_pos[pname] = pos
-        flexible.allocate(self, self.mesh)  # beam nodes, FE-body coordinates
+        _flexible().allocate(self, self.mesh)  # beam nodes, FE-body coordinates
         if not self.q_init:
             raise CaseError("the model has no free coordinates (every point is fixed)", element="points")
         self.n = len(self.q_init)
@@ -103,6 +113,9 @@ class Builder:
             idx = self.point_index[point]
             free = idx[idx >= 0]
             mass_blocks.append((free, free, m * np.eye(free.size)))
+            mname = item.get("name")
+            self.mass_parts.append((mname if isinstance(mname, str) else f"mass at {point}",
+                                    *mass_blocks[-1]))
             if gravity is not None:
                 g_const[free] += m * gravity[idx >= 0]
 
@@ -135,6 +148,7 @@ class Builder:
             Mb = f.formed("the body's mass matrix",
                           lambda: body_mass_matrix(m, inertia, tuple(com), L))
             mass_blocks.append(self._embed(qb, Mb))
+            self.mass_parts.append((bname, *mass_blocks[-1]))
             if gravity is not None:
                 G = body_point(ri, rj, com, L)
                 np.add.at(g_const, G.idx, G.C.T @ (m * gravity))
@@ -146,8 +160,9 @@ class Builder:
             self.add_constraint(constraints, rod, f)
 
         mass_elements = []  # configuration-dependent masses (co-rotational beams)
-        flexible_record = flexible.assemble(self, forces, constraints, mass_blocks, mass_elements,
+        flexible_record = _flexible().assemble(self, forces, constraints, mass_blocks, mass_elements,
                                      g_const, gravity)
+        self.gravity_force = g_const.copy() if gravity is not None else None  # masses, bodies, beams
 
         for item, label, names in expand("joints", self.data.get("joints", []), self.params):
             before = len(constraints)
@@ -170,6 +185,9 @@ class Builder:
         if "report" in self.data:
             report = parse_report(self.data["report"], self)
 
+        from .signals import read_signals  # only cases with [[inputs]]/[[outputs]] need it
+
+        inputs, outputs = read_signals(self, forces, constraints)
         commands = tuple((d, self._driver_targets(names, f)) for d, names, f in self.drivers)
         for driver, targets in commands:  # checked now; resolved by mbseig.equilibrium
             check_command(driver, targets, forces, constraints)
@@ -180,6 +198,8 @@ class Builder:
             bodies=self.bodies, length_scale=self.length_scale, description=self.description,
             expected=self.expected, report=report, commands=commands,
             mass_elements=tuple(mass_elements), flexible=flexible_record,
+            inputs=inputs, outputs=outputs, gravity_force=self.gravity_force,
+            mass_parts=tuple(self.mass_parts),
         )
 
     def _remember(self, item, kind, elements, before, label):
@@ -397,6 +417,8 @@ class Builder:
             vec = f.vec("vector", self.dim)
             f.done()
             np.add.at(g_const, p.idx, p.C.T @ vec)
+            if isinstance(f.t.get("name"), str):
+                self.point_forces[f.t["name"]] = (p, vec, f.label)
         elif kind == "follower":
             if self.dim != 2:
                 raise f.error("follower forces need dimension = 2")

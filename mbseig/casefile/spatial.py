@@ -154,14 +154,19 @@ class SpatialBuilder(Builder):
     def _finish(self, model):
         self._bind()
         constraints, blocks, g = list(model.constraints), [], model.g_const.copy()
+        mass_parts = list(model.mass_parts)
+        g_gravity = np.zeros(model.n) if model.gravity_force is None else model.gravity_force.copy()
         gravity = self.gravity()
         for spec in self.specs:
             name, f = spec["name"], spec["f"]
             b, frame = self.bodies[name], self.frames[name]
             com = self.local(name, b["com"])
             blocks.append(self._embed(frame, spatial_mass_matrix(b["mass"], com, b["inertia"])))
+            mass_parts.append((name, *blocks[-1]))
             if gravity is not None:
-                np.add.at(g, frame.idx, frame.C.T @ frame_gravity(b["mass"], com, gravity))
+                gz = frame.C.T @ frame_gravity(b["mass"], com, gravity)
+                np.add.at(g, frame.idx, gz)
+                np.add.at(g_gravity, frame.idx, gz)
             constraints.append(triad_constraint(f"{f.label} (rigid body)", frame))
             for p in b["carried"][1:]:
                 diff = self.affine_of(p) - frame_point(frame, self.local(name, self.point_pos[p]))
@@ -179,6 +184,8 @@ class SpatialBuilder(Builder):
         mass = model.mass + scatter(model.n, model.n, blocks) if blocks else model.mass
         return dataclasses.replace(
             model, mass=mass.tocsr(), g_const=g, constraints=tuple(constraints), forces=forces,
+            mass_parts=tuple(mass_parts),
+            gravity_force=None if gravity is None else g_gravity,
             points=LazyPoints(self.point_index, self.point_pos, self.markers),
             length_scale=self.length_scale)
 
@@ -369,6 +376,8 @@ class SpatialBuilder(Builder):
         f.done()
         if not follower:
             np.add.at(g_const, p.idx, p.C.T @ vec)
+            if isinstance(f.t.get("name"), str):
+                self.point_forces[f.t["name"]] = (p, vec, f.label)
             return
         if body is None:
             raise f.error("a follower force needs a point on a body ({body, at} or a point the "

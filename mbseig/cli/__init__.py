@@ -17,7 +17,17 @@ from ..errors import CaseError, MbseigError, ReportedWarning
 
 __all__ = ["main", "SUBCOMMANDS"]
 
-SUBCOMMANDS = ["linearize", "modes", "check", "sweep", "report", "bench"]
+SUBCOMMANDS = ["linearize", "modes", "frf", "check", "sweep", "report", "bench"]
+# one line each for ``mbseig --help`` without importing every command's module
+SUBCOMMAND_HELP = {
+    "linearize": "equilibrium and reduced linear model M, P, Q (and B, C, D of named signals)",
+    "modes": "solve the modes and classify their stability",
+    "frf": "frequency response, poles, zeros and DC gain of one input to one output",
+    "check": "cross-check predicted modes against a nonlinear simulation",
+    "sweep": "sweep parameters and track modes and stability boundaries",
+    "report": "write a stability report (Markdown and self-contained HTML)",
+    "bench": "measure speed against accuracy; write reports/benchmarks.md",
+}
 # commands whose output carries the text of every ReportedWarning (beam-theory guidance, notes on
 # the equilibrium: mbseig.cli.common.output_notes), so the warning would only repeat it on stderr
 REPORTING_COMMANDS = {"modes", "linearize", "check"}
@@ -30,17 +40,30 @@ class _Parser(argparse.ArgumentParser):
         raise CaseError(f"{message} (see {self.prog} --help)", element="command line")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The parser; with ``only`` (a subcommand), only that command's module is imported and
+    the others are listed by name and help line (startup time: each module pulls its stages)."""
     parser = _Parser(
         prog="mbseig", description="Modal and stability analysis of constrained multibody systems.")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in SUBCOMMANDS:
-        importlib.import_module(f".{name}", __name__).register(sub)
+        if only is None or name == only:
+            importlib.import_module(f".{name}", __name__).register(sub)
+        else:
+            sub.add_parser(name, help=SUBCOMMAND_HELP[name])
     return parser
 
 
+def _chosen(argv):
+    """The subcommand named by the command line (its first non-option word), or None."""
+    for word in sys.argv[1:] if argv is None else argv:
+        if not str(word).startswith("-"):
+            return word if word in SUBCOMMANDS else None
+    return None
+
+
 def main(argv=None) -> int:
-    parser = build_parser()
+    parser = build_parser(_chosen(argv))
     try:
         args = parser.parse_args(argv)
         with warnings.catch_warnings():

@@ -1,4 +1,8 @@
-"""``mbseig linearize CASE``: M, P, Q, the null-space basis, q₀, λ₀ and the state matrix."""
+"""``mbseig linearize CASE``: M, P, Q, the null-space basis, q₀, λ₀ and the state matrix.
+
+With named ``[[inputs]]`` / ``[[outputs]]`` also B_r (M ẍ + P ẋ + Q x = B_r u), the first-order
+B = [0; M⁻¹ B_r], C, D (y = C [x; ẋ] + D u) and ``input_names``, ``output_names`` (npz: string
+arrays; mat: cell arrays; json: lists)."""
 
 from __future__ import annotations
 
@@ -36,13 +40,18 @@ def _arrays(model, eq, lin):
     arrays = {k: v for k, v in arrays.items() if v is not None}
     if sp.issparse(lin.M):
         return arrays  # large model kept sparse (mbseig.linear.SPARSE_MIN): no dense state matrix
+    if lin.B is not None and (lin.input_names or lin.output_names):
+        # named signals: M ẍ + P ẋ + Q x = B_r u; y = C [x; ẋ] + D u
+        arrays.update({"B_r": lin.B, "C": lin.C, "D": lin.D})
     try:
         with np.errstate(all="ignore"):  # judged by the finiteness check below
             arrays["A"] = lin.state_matrix()
+            if "B_r" in arrays:  # the first-order quadruple (A, B, C, D), z = [x; ẋ]
+                arrays["B"] = lin.state_space()[1]
     except np.linalg.LinAlgError:
         pass  # singular M: no first-order state matrix (descriptor form only)
     else:
-        require_finite("linearization", STATE_CAUSE, A=arrays["A"])
+        require_finite("linearization", STATE_CAUSE, A=arrays["A"], B=arrays.get("B"))
     return arrays
 
 
@@ -85,6 +94,8 @@ def run(args) -> int:
         "coordinate_names": list(model.coordinate_names),
         "rank_tol": lin.tolerances.get("rank_tol"),
         "notes": output_notes(model, eq),
+        "input_names": list(lin.input_names), "output_names": list(lin.output_names),
+        "output_units": list(lin.output_units),
     }
     if args.out:
         _write(Path(args.out), arrays, meta)
@@ -100,8 +111,13 @@ def run(args) -> int:
             print(f"wrote {args.out}: {', '.join(arrays)}")
         elif lin.dof <= 8:
             with np.printoptions(precision=6, suppress=False, linewidth=120):
-                for k in ("M", "P", "Q"):
-                    print(f"{k} =\n{arrays[k]}")
+                for k in ("M", "P", "Q", "B_r", "C", "D"):
+                    if k in arrays:
+                        print(f"{k} =\n{arrays[k]}")
+                if meta["input_names"] or meta["output_names"]:
+                    print(f"inputs: {', '.join(meta['input_names']) or 'none'}; outputs: "
+                          f"{', '.join(meta['output_names']) or 'none'} "
+                          f"(y = C [x; xdot] + D u, M x'' + P x' + Q x = B_r u)")
     return 0
 
 
@@ -110,11 +126,16 @@ def _write(path, arrays, meta):
         raise CaseError(f"output must end in {', '.join(FORMATS)}", file=str(path), element="--out")
     try:
         if path.suffix == ".npz":
-            np.savez(path, coordinate_names=np.array(meta["coordinate_names"]), **_npz_arrays(arrays))
+            np.savez(path, coordinate_names=np.array(meta["coordinate_names"]),
+                     input_names=np.array(meta["input_names"], dtype=str),
+                     output_names=np.array(meta["output_names"], dtype=str),
+                     **_npz_arrays(arrays))
         elif path.suffix == ".mat":
             import scipy.io
 
-            scipy.io.savemat(str(path), {**arrays, "coordinate_names": meta["coordinate_names"]})
+            names = {k: np.array(meta[k], dtype=object) for k in ("input_names", "output_names")}
+            scipy.io.savemat(str(path), {**arrays, "coordinate_names": meta["coordinate_names"],
+                                         **names})
         else:
             path.write_text(json.dumps(jsonable({**meta, **{k: _json_value(v) for k, v in arrays.items()}})))
     except OSError as exc:

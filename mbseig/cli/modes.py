@@ -5,11 +5,18 @@ from __future__ import annotations
 import math
 
 from ..eigen import SOLVERS
-from ..errors import CaseError
+from ..errors import CaseError, MbseigError
 from ..statics.reactions import reaction_forces
 from ..studies import analyze, modes_json
-from .common import (add_case_arguments, case_kwargs, equilibrium_notes, number_option, print_json,
-                     print_reactions)
+from ..studies.pipeline import as_spec
+from .common import (
+    add_case_arguments,
+    case_kwargs,
+    equilibrium_notes,
+    number_option,
+    print_json,
+    print_reactions,
+)
 
 
 def register(sub):
@@ -20,15 +27,24 @@ def register(sub):
     p.add_argument("--n-modes", type=int, default=None, metavar="K",
                    help="only the K modes nearest the target (sparse shift-invert path, large models)")
     p.add_argument("--target-hz", type=float, default=None, metavar="F",
-                   help="with --n-modes: the modes nearest F Hz (default 0: the lowest)")
+                   help="with --n-modes: the modes whose natural frequency omega_n/2pi = "
+                        "|s|/2pi is nearest F Hz (default 0: the lowest)")
     p.add_argument("--band-hz", type=float, nargs=2, default=None, metavar=("F1", "F2"),
-                   help="every mode with F1 <= omega_n/2pi <= F2 (sparse shift-invert path)")
+                   help="every mode with natural frequency F1 <= omega_n/2pi = |s|/2pi <= F2 "
+                        "(small models: the dense solve, listed in the band; large ones: the "
+                        "sparse shift-invert path)")
     p.add_argument("--refine-modes", type=int, default=None, metavar="K",
                    help='refine elements = "auto" beams until the lowest K modes converge')
     p.add_argument("--refine-fmax", type=float, default=None, metavar="HZ",
                    help='refine elements = "auto" beams until the modes below HZ converge')
     p.add_argument("--accuracy", type=float, default=None, metavar="A",
                    help="relative accuracy of the refined modes (default: the case's, else 1e-3)")
+    p.add_argument("--sensitivities", action="store_true",
+                   help="each mode's eigenvalue derivative ds/dp for every real parameter of "
+                        "[parameters] that enters the model")
+    p.add_argument("--energy", action="store_true",
+                   help="each mode's kinetic and potential energy shares (bodies and masses; "
+                        "springs, torsional elements, constraints, gravity)")
     p.add_argument("--reactions", action="store_true",
                    help="also print the joint reactions at equilibrium (multipliers, what they "
                         "carry, forces on the points)")
@@ -91,11 +107,35 @@ def _print_flexible(a):
               f"{ref.estimated_error:.2g} after {ref.solves} solves")
 
 
+def _design(args, spec, a):
+    """(sensitivities, energies) asked for by --sensitivities / --energy (None when not)."""
+    if not (args.sensitivities or args.energy):
+        return None, None
+    from ..studies.design import eigen_sensitivities, modal_energy
+
+    kw = case_kwargs(args)
+    try:
+        sens = eigen_sensitivities(spec, config=kw["config"], params=kw["params"],
+                                   analysis=a) if args.sensitivities else None
+        energy = modal_energy(a.model, a.eq, a.linear, a.modes) if args.energy else None
+    except MbseigError as exc:
+        raise exc.located(file=a.model.source) from None
+    return sens, energy
+
+
 def run(args) -> int:
-    a = analyze(args.case, solver=args.solver, modes_options=_partial_options(args) or None,
+    spec = as_spec(args.case)
+    a = analyze(spec, solver=args.solver, modes_options=_partial_options(args) or None,
                 refine=_refine_request(args), **case_kwargs(args))
+    sens, energy = _design(args, spec, a)
     if args.json:
         out = modes_json(a)
+        for k, mode in enumerate(out["modes"]):
+            if sens is not None:
+                mode["sensitivity"] = {p: [float(v[k].real), float(v[k].imag)]
+                                       for p, v in sens.items()}
+            if energy is not None:
+                mode["energy"] = energy[k]
         if args.reactions:
             out["reactions"] = reaction_forces(a.model, a.eq)
         print_json(out)
@@ -113,6 +153,15 @@ def run(args) -> int:
     _print_flexible(a)
     print(a.modes.table())
     print(f"verdict: {a.modes.verdict}")
+    for k in range(len(a.modes)):
+        if sens:
+            print(f"mode {k + 1} ds/dp: " + "; ".join(
+                f"{p} {v[k].real:.4g}{v[k].imag:+.4g}j" for p, v in sens.items()))
+        if energy is not None:
+            for kind in ("kinetic", "potential"):
+                shares = sorted(energy[k][kind].items(), key=lambda t: -abs(t[1]))
+                print(f"mode {k + 1} {kind} energy: " + (", ".join(
+                    f"{nm} {v:.1%}" for nm, v in shares) or "none"))
     if args.reactions:
         print_reactions(reaction_forces(a.model, eq))
     return 0

@@ -43,6 +43,11 @@ class Model:
     mass_elements : (element, M_ref) pairs for masses that depend on the configuration
         (co-rotational beams, ``element.mass(q)`` on ``element.idx``); ``mass`` holds them as
         M_ref (at the builder's initial positions) and :meth:`mass_matrix` re-evaluates them.
+    inputs, outputs : named :class:`~mbseig.model.signals.Input` / ``Output`` of the case's
+        ``[[inputs]]`` and ``[[outputs]]`` (:mod:`mbseig.model.signals`).
+    gravity_force : the part of ``g_const`` that is gravity (masses, bodies, beams), or None.
+    mass_parts : (name, rows, cols, block) per body and point mass: ``mass`` is their sum plus any
+        batched or flexible masses (modal energy per body, :mod:`mbseig.studies.design`).
     flexible : ``{"bodies": {name: record}, "refinement": {...}}`` for beams and FE bodies
         (theory, slenderness, elements, warnings), see :mod:`mbseig.casefile.flexible`.
     """
@@ -67,6 +72,10 @@ class Model:
     commands: tuple = ()  # pending inverse-statics commands (resolved by mbseig.equilibrium)
     mass_elements: tuple = ()
     flexible: dict = field(default_factory=dict)
+    inputs: tuple = ()
+    outputs: tuple = ()
+    gravity_force: np.ndarray = None
+    mass_parts: tuple = ()
 
     # ---- sizes ---------------------------------------------------------------------------
     @property
@@ -92,10 +101,15 @@ class Model:
         return (self.mass + scatter(self.n, self.n, blocks)).tocsr()
 
     # ---- forces --------------------------------------------------------------------------
-    def generalized_force(self, q, qd=None) -> np.ndarray:
-        """g(q, q̇)."""
+    def generalized_force(self, q, qd=None, u=None) -> np.ndarray:
+        """g(q, q̇), plus Σ b_i(q) u_i of the named inputs when ``u`` ({name: value}) is given
+        (:mod:`mbseig.model.signals`)."""
         qd = np.zeros(self.n) if qd is None else qd
         g = self.g_const.copy()
+        if u:
+            known = {i.name: i for i in self.inputs}
+            for nm, value in u.items():
+                g += value * known[nm].generalized_force(self, q)
         for f in self.forces:
             if hasattr(f, "add_force"):  # a batch of identical elements (model/batched.py)
                 f.add_force(g, q, qd)

@@ -1,5 +1,10 @@
 """The whole pipeline on one case and parameter point, and its JSON form (the fixed `mbseig modes --json` interface).
 
+Each mode of the JSON has ``freq_hz`` = ω_d/2π (damped, as fixed in DESIGN §8) and
+``freq_n_hz`` = ω_n/2π = |s|/2π (natural), and, when the case names angles (report angles,
+torsional elements, angle outputs), ``angles``: the mode shape in those angles [re, im] with
+the normalization of the coordinate shape (largest coordinate component 1).
+
     case ─► Model ─► equilibrium ─► linearize ─► modes        (analyze)
 
 ``case`` is a path (read once here), a parsed :class:`~mbseig.casefile.CaseSpec` (a model
@@ -8,7 +13,8 @@ factory) or an already built model.
 
 from __future__ import annotations
 
-from ..model.spatial_whirl import whirl
+import math
+
 from ..numerics import jsonable
 from .point import Analysis, analyze_model, as_spec
 from .refine import refine_analysis
@@ -38,6 +44,8 @@ def analyze(case=None, *, config=None, params=None, solver="auto", constraint_st
 
 def modes_json(a: Analysis) -> dict:
     """The fixed ``mbseig modes --json`` object (extra keys only extend it)."""
+    from ..model.spatial_whirl import whirl  # spatial models only: off the start-up path
+
     md, lin, eq, model = a.modes, a.linear, a.eq, a.model
     out = {
         "case": model.name,
@@ -64,6 +72,10 @@ def modes_json(a: Analysis) -> dict:
         out["flexible_bodies"] = {nm: dict(r) for nm, r in flexible.items()}
     if a.refinement is not None:
         out["refinement"] = a.refinement.as_dict()
+    rows = getattr(lin, "angle_rows", None)
+    angle_shapes = None
+    if rows is not None and rows.shape[0] and md.shapes.shape[0] == rows.shape[1]:
+        angle_shapes = rows @ md.shapes  # the named angles of each mode (same normalization)
     for k in range(len(md)):
         s = md.eigenvalues[k]
         # extension: the whirl of each mode of a model with a rotor (docs/spatial.md)
@@ -74,7 +86,8 @@ def modes_json(a: Analysis) -> dict:
             "delta": float(md.delta[k]),
             "omega_n": float(md.omega_n[k]),
             "omega_d": float(md.omega_d[k]),
-            "freq_hz": float(md.freq_hz[k]),
+            "freq_hz": float(md.freq_hz[k]),  # damped: omega_d / 2 pi
+            "freq_n_hz": float(md.omega_n[k] / (2 * math.pi)),  # natural: omega_n / 2 pi
             "zeta": float(md.zeta[k]),
             "stability": md.stability[k],
             "kind": md.kind[k],
@@ -85,5 +98,8 @@ def modes_json(a: Analysis) -> dict:
             "multiplicity": int(md.multiplicity[k]) if md.multiplicity is not None else 1,
             "flags": list(md.flags[k]) if md.flags else [],
             **({} if w is None else {"whirl": w}),
+            **({} if angle_shapes is None else {"angles": {
+                nm: [float(angle_shapes[i, k].real), float(angle_shapes[i, k].imag)]
+                for i, nm in enumerate(lin.angle_names)}}),
         })
     return jsonable(out)
