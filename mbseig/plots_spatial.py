@@ -12,9 +12,10 @@ read by their attributes (duck typing):
 - a Campbell result: ``values``, ``parameter``, ``speeds``, ``harmonic``, ``frequency``,
   ``log_decrement``, ``whirl`` (per point, per track) and ``critical_speeds``.
 
-A body is drawn rigid: its markers are affine maps of the body's frame, so the displaced
-drawing q₀ ± a·L·Re(e^{−iφ} x) moves them together; each body is drawn as the segments from its
-centre of mass to its other markers.
+A body is drawn rigid: the displaced configuration q₀ ± a·L·Re(e^{−iφ} x) is projected back
+onto the constraints Φ(q) = 0 (:func:`mbseig.plots.project_constraints`), and its markers are
+affine maps of the body's frame, so they move together; each body is drawn as the segments
+from its centre of mass to its other markers.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ import math
 
 import numpy as np
 
-from .plots import save
+from .plots import project_constraints, save
 
 __all__ = ["VIEWS", "WHIRL_COLOURS", "campbell_diagram", "save", "spatial_modes"]
 
@@ -80,11 +81,15 @@ def spatial_modes(model, q0, shapes, labels, *, amplitude=0.15, title=""):
                  if a.idx.size == 0]
         for k in range(len(labels)):
             d = amplitude * L * _real_shape(shapes[:, k])
+            # moved along the mode and projected back onto Φ(q) = 0: unit vectors stay unit
+            # and rigid bodies rigid (a linear displacement stretches them by O(a²))
+            q_plus = project_constraints(model, q0 + d)[0]
+            q_minus = project_constraints(model, q0 - d)[0]
             for c, (h, v, name) in enumerate(VIEWS):
                 ax = axes[k][c]
                 _draw(ax, model, q0, h, v, color="k", lw=2)
-                _draw(ax, model, q0 + d, h, v, color="tab:red", lw=1, alpha=0.8)
-                _draw(ax, model, q0 - d, h, v, color="tab:blue", lw=1, alpha=0.8)
+                _draw(ax, model, q_plus, h, v, color="tab:red", lw=1, alpha=0.8)
+                _draw(ax, model, q_minus, h, v, color="tab:blue", lw=1, alpha=0.8)
                 for p in fixed:
                     ax.plot(p[h], p[v], "ks", ms=4)
                 _min_span(ax, 0.2 * L)
@@ -116,7 +121,7 @@ def campbell_diagram(res):
     from matplotlib.lines import Line2D
 
     with matplotlib.rc_context(_STYLE):
-        fig = _figure(figsize=(7.5, 7))
+        fig = _figure(figsize=(8.8, 7))
         a1, a2 = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
         x = np.asarray(res.values, float)
         F = np.asarray(res.frequency) / (2 * math.pi)
@@ -133,7 +138,8 @@ def campbell_diagram(res):
         handles = [Line2D([], [], color=WHIRL_COLOURS[w], label=w) for w in
                    ("forward", "backward", "mixed", "none")]
         handles.append(Line2D([], [], color="k", ls="--", label=f"{res.harmonic:g}x excitation"))
-        a1.legend(handles=handles, fontsize=7, loc="upper left")
+        a1.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0),
+                  borderaxespad=0.0)  # outside the axes, never over the curves
         a1.set_ylabel("frequency [Hz]")
         a1.set_title(f"Campbell diagram of {res.case}: circles = critical speeds")
         a2.set_ylabel("log decrement")

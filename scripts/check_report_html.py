@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import base64
+import os
 import re
 import shutil
 import subprocess
@@ -25,7 +26,15 @@ FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-ne
 
 
 def find_chromium():
-    for name in ("chromium", "chromium-browser", "google-chrome", "chrome"):
+    """A headless-capable Chromium: $CHROMIUM, else the first of the usual names on PATH
+    (Debian's ``chromium`` or ``chromium-headless-shell``, Chrome).  None when there is none:
+    browsers from pip (playwright, pyppeteer) download their binary from a CDN at install time,
+    which this project's machines cannot reach, so only a system package provides one."""
+    env = os.environ.get("CHROMIUM")
+    if env and shutil.which(env):
+        return shutil.which(env)
+    for name in ("chromium", "chromium-headless-shell", "chromium-browser", "google-chrome",
+                 "chrome"):
         path = shutil.which(name)
         if path:
             return path
@@ -75,6 +84,15 @@ def check_in_browser(page: Path, screenshot: Path, chromium: str, width=1200, he
     if not m:
         raise RuntimeError("chromium did not run the probe script:\n" + dom.stderr[-2000:])
     return int(m.group(1)), int(m.group(2))
+
+
+def print_to_pdf(page: Path, pdf: Path, chromium: str):
+    """The page printed by Chromium (its @media print styles applied) to ``pdf``."""
+    with tempfile.TemporaryDirectory() as tmp:
+        subprocess.run([chromium, *FLAGS, f"--user-data-dir={Path(tmp) / 'profile'}",
+                        "--no-pdf-header-footer", f"--print-to-pdf={pdf}",
+                        page.resolve().as_uri()], capture_output=True, timeout=120)
+    return pdf
 
 
 def main(argv=None) -> int:

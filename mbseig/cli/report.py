@@ -15,6 +15,8 @@ def register(sub):
     p.add_argument("--out", default=None, metavar="DIR", help="output directory (default reports/CASE)")
     p.add_argument("--no-check", action="store_true", help="skip the time-domain check")
     p.add_argument("--no-studies", action="store_true", help="skip the [[report.studies]] sweeps")
+    p.add_argument("--no-sensitivities", action="store_true",
+                   help="leave out the eigenvalue sensitivities of the summary")
     p.add_argument("--jobs", type=int, default=None, metavar="N",
                    help="local worker processes for the studies' sweeps (default: CPU count)")
     p.set_defaults(run=run)
@@ -25,6 +27,7 @@ def run(args) -> int:
 
     md, page = write_report(args.case, out_dir=args.out, configs=args.config,
                             all_configs=args.all_configs, run_check=not args.no_check,
-                            jobs=args.jobs, studies=not args.no_studies)
+                            jobs=args.jobs, studies=not args.no_studies,
+                            sensitivities=not args.no_sensitivities)
     print(f"wrote {md} and {page}")
     return 0

@@ -57,7 +57,7 @@ def run(args) -> int:
                     diagram=args.diagram)
     stem = Path(args.case).stem + (f"-{args.config}" if args.config else "")
     out_dir = args.out or f"sweep-{stem}"
-    paths = write_outputs(res, out_dir)
+    paths = write_outputs(res, out_dir, units=_units(args.case))
     camp = _campbell(args, ranges, fixed, out_dir, paths)
     if args.json:
         print_json({**res.to_json(), **camp})
@@ -92,6 +92,17 @@ def run(args) -> int:
               f"{c['mode']}, {c['whirl']} whirl")
     print("wrote " + ", ".join(str(p) for p in paths))
     return 0
+
+
+def _units(case) -> dict:
+    """Parameter units for the plots' axis labels (mbseig.report.units), {} if not found."""
+    from ..report.units import parameter_units
+    from ..studies.point import as_spec
+
+    try:
+        return {k: v for k, v in parameter_units(as_spec(case)).items() if v}
+    except (OSError, AttributeError, TypeError):
+        return {}
 
 
 def _campbell(args, ranges, fixed, out_dir, paths) -> dict:

@@ -20,7 +20,11 @@ also written next to report.md, which links them.
 
 from __future__ import annotations
 
+import hashlib
 import math
+import os
+import re
+import time
 from pathlib import Path
 
 import numpy as np
@@ -35,6 +39,7 @@ from ..statics.reactions import posture, reactions
 from ..studies import analyze, run_sweep, write_outputs
 from ..studies.point import as_spec
 from .render import render_html, render_markdown
+from .units import parameter_units, with_unit
 
 __all__ = ["build_report", "write_report"]
 
@@ -56,11 +61,13 @@ def _fmt(x, digits=6):
     return f"{x:.{digits}g}"
 
 
-def _config_blocks(case, config, out_dir, *, run_check, stem):
+def _config_blocks(case, config, out_dir, *, run_check, stem, units):
     a = analyze(case, config=config)
     model, eq, lin, md = a.model, a.eq, a.linear, a.modes
     tag = config or "base"
-    blocks = [("h2", f"Configuration {tag}" + (f": {_describe(case, config)}" if config else ""))]
+    blocks = [("h2", f"Configuration {tag}")]
+    blocks.append(("p", f"**{tag}**: " + (_describe(case, config) if config else
+                                          "the case as written, no configuration applied") + "."))
     blocks.append(("h3", "Model"))
     blocks.append(("table", ["quantity", "value"], [
         ["coordinates", str(model.n)],
@@ -69,9 +76,21 @@ def _config_blocks(case, config, out_dir, *, run_check, stem):
         ["degrees of freedom", str(lin.dof)],
         ["equilibrium residual", f"{eq.residual:.1e} ({eq.iterations} Newton iterations)"],
         ["eigensolver", f"{md.solver} ({md.solver_reason})"],
-        ["parameters", ", ".join(f"{k} = {_fmt(v, 5)}" for k, v in model.parameters.items()
-                                 if k in _SHOWN_PARAMS or not _SHOWN_PARAMS)],
     ]))
+    raw = getattr(case, "parameters", {}) or {}
+    prow, derived = [], []
+    for k, v in model.parameters.items():
+        u = units.get(k)
+        unit = "–" if u == "1" else (u or "not given in the case")
+        if isinstance(raw.get(k), str):
+            derived.append(f"{k} = {with_unit(_fmt(v, 6), u) if u else _fmt(v, 6)} "
+                           f"(`{raw[k]}`" + ("" if u else ", unit not given in the case") + ")")
+        else:
+            prow.append([k, _fmt(v, 6), unit])
+    if prow:
+        blocks.append(("table", ["parameter", "value", "unit"], prow))
+    if derived:
+        blocks.append(("p", "Derived parameters: " + "; ".join(derived) + "."))
     linear_case = isinstance(model, LinearCase)  # matrices only: no posture, reactions or drawing
     rep = (dict(posture=[], out_of_range=[], drivers=[], actuator=[], pins=[], constraints=[])
            if linear_case else reactions(model, eq))
@@ -114,35 +133,56 @@ def _config_blocks(case, config, out_dir, *, run_check, stem):
         carried = f"{r['label']} {', '.join(_fmt(x, 5) for x in value)} {r['unit']}".rstrip()
         rows.append([c["element"], ", ".join(_fmt(x, 6) for x in c["multipliers"]), carried])
     if rows:
-        blocks.append(("table", ["constraint", "multiplier λ", "reaction"], rows))
+        blocks.append(("table", ["constraint", "multiplier λ (in the constraint's own scaling)",
+                                 "reaction"], rows))
 
     blocks.append(("h3", f"Modes — verdict: {md.verdict}"))
     rows = []
     for k in range(len(md)):
         s = md.eigenvalues[k]
         margin = md.delta[k] - md.tolerance[k]
-        rows.append([str(k + 1), f"{s.real:.6g}", f"{s.imag:.6g}", _fmt(md.freq_hz[k], 6),
+        rows.append([str(k + 1), f"{s.real:.6g}", f"{s.imag:.6g}",
+                     _fmt(md.omega_n[k] / (2 * math.pi), 6), _fmt(abs(s.imag) / (2 * math.pi), 6),
                      _fmt(md.zeta[k], 4), _fmt(md.delta[k], 5), f"{margin:.4g}", md.stability[k],
                      md.kind[k], ", ".join(n for n, _ in md.dominant[k][:3])])
-    blocks.append(("table", ["#", "Re s [1/s]", "Im s [rad/s]", "f [Hz]", "ζ", "δ [1/s]",
-                             "margin δ − tol", "stability", "kind", "dominant"], rows))
+    blocks.append(("table", ["mode", "Re s [1/s]", "Im s [rad/s]", "ω_n/2π [Hz] (undamped)",
+                             "ω_d/2π [Hz] (damped)", "ζ [–]", "δ [1/s]", "margin δ − tol [1/s]",
+                             "stability", "kind", "dominant coordinates"], rows))
+    least = int(np.argmin(md.delta)) if len(md) else None
     min_margin = float(np.min(md.delta - md.tolerance)) if len(md) else math.nan
-    blocks.append(("p", f"Stability margin: the least-damped mode has δ = "
-                        f"{float(np.min(md.delta)):.5g} 1/s (ζ = {float(md.zeta[np.argmin(md.delta)]):.4g}); "
-                        f"δ − tol = {min_margin:.4g} (tol per mode: max(10 κ η, 1e-12 |s|))."))
-    labels = [f"mode {k + 1}: {md.freq_hz[k]:.4g} Hz, ζ = {md.zeta[k]:.3g}" for k in range(len(md))]
+    if least is not None:
+        blocks.append(("p", f"Stability margin: the least-damped mode is mode {least + 1} with "
+                            f"δ = {float(md.delta[least]):.5g} 1/s (ζ = {float(md.zeta[least]):.4g}); "
+                            f"δ − tol = {min_margin:.4g} 1/s (tol per mode: max(10 κ η, 1e-12 |s|))."))
+    labels = [_mode_label(k, md) for k in range(len(md))]
     if not linear_case:
-        draw = _spatial_draw() if model.dimension == 3 else plots.mechanism_modes
-        img = plots.save(draw(
-            model, eq.q, md.shapes, labels,
-            title=f"{tag}: equilibrium (black) and mode shapes (±, red/blue)"),
-            out_dir / f"{stem}_{tag}_shapes.png")
-        blocks.append(("img", img, f"{tag}: mechanism at equilibrium with each mode shape superposed"))
-    img = plots.save(plots.pole_map(md.eigenvalues, title=f"{tag}: pole map (numbers = mode)",
+        if model.dimension == 3:
+            fig = _spatial_draw()(model, eq.q, md.shapes, labels,
+                                  title=f"{tag}: equilibrium (black) and mode shapes (±, red/blue)")
+        else:
+            fig = plots.mechanism_modes(
+                eq.model if eq.model is not None else model, eq.q, md.shapes, labels,
+                eigenvalues=md.eigenvalues, kinds=list(md.kind),
+                title=f"{tag}: equilibrium (black) and mode shapes, rigid bodies kept rigid")
+        img = plots.save(fig, out_dir / f"{stem}_{tag}_shapes.png")
+        blocks.append(("img", img, f"{tag}: mechanism at equilibrium with every element (bodies, "
+                                   f"springs, sliders and their guides, torsional springs, loads) "
+                                   f"and each mode shape superposed: displaced along the mode and "
+                                   f"projected back onto the constraints Φ(q) = 0, so bodies stay "
+                                   f"rigid; a real (overdamped) mode is drawn as its decay"))
+    img = plots.save(plots.pole_map(md.eigenvalues, title=f"{tag}: pole map",
                                     stability=md.stability), out_dir / f"{stem}_{tag}_poles.png")
-    blocks.append(("img", img, f"{tag}: pole map"))
+    blocks.append(("img", img, f"{tag}: pole map over lines of constant ζ and circles of constant "
+                               f"ω_n; numbers are the modes of the table"))
     blocks += _check_blocks(a, run_check)
-    summary = {"config": tag, "dof": lin.dof, "verdict": md.verdict,
+    summary = {"config": tag, "dof": lin.dof, "verdict": md.verdict, "least": least,
+               "least_mode": None if least is None else {
+                   "mode": least + 1, "delta": float(md.delta[least]),
+                   "zeta": float(md.zeta[least]), "kind": md.kind[least],
+                   "fn": float(md.omega_n[least] / (2 * math.pi)),
+                   "fd": float(abs(md.eigenvalues[least].imag) / (2 * math.pi)),
+                   "margin": float(md.delta[least] - md.tolerance[least])},
+               "parameters": dict(model.parameters), "analysis": a,
                "least_delta": float(np.min(md.delta)) if len(md) else math.nan,
                "least_zeta": float(md.zeta[np.argmin(md.delta)]) if len(md) else math.nan,
                "freqs": [float(x) for x in md.freq_hz],
@@ -153,6 +193,20 @@ def _config_blocks(case, config, out_dir, *, run_check, stem):
 
 
 _SHOWN_PARAMS: set = set()
+
+
+def _mode_label(k, md):
+    """Panel title of mode k by its kind: damped frequency and ζ, the time constant of a real
+    mode, or rigid-body."""
+    s = complex(md.eigenvalues[k])
+    kind = md.kind[k]
+    if kind in ("overdamped", "divergence") and s.real != 0:
+        what = "overdamped, decays" if kind == "overdamped" else "DIVERGENCE, grows"
+        return f"mode {k + 1}: {what}, τ = 1/|s| = {1e3 / abs(s.real):.4g} ms"
+    if kind == "rigid-body":
+        return f"mode {k + 1}: rigid-body (s ≈ 0 within its tolerance)"
+    return (f"mode {k + 1}: ω_d/2π = {abs(s.imag) / (2 * math.pi):.4g} Hz, "
+            f"ζ = {float(md.zeta[k]):.3g}" + (" (FLUTTER)" if kind == "flutter" else ""))
 
 
 def _spatial_draw():
@@ -213,13 +267,14 @@ def _check_blocks(a, run_check):
                         f"rtol {tol['ode_rtol']:g}) and its modal coordinate fitted; tolerances: δ "
                         f"{tol['delta_rtol']:g} relative, ω {tol['omega_rtol']:g} relative. "
                         f"Result: {'all passed' if res.passed else 'FAILED for ' + str(res.failed)}."))
-    blocks.append(("table", ["#", "kind", "δ predicted", "δ measured", "err", "ω predicted",
-                             "ω measured", "err", "result"], rows))
+    blocks.append(("table", ["mode", "kind", "δ predicted [1/s]", "δ measured [1/s]",
+                             "δ rel. err. [–]", "ω predicted [rad/s]", "ω measured [rad/s]",
+                             "ω rel. err. [–]", "result"], rows))
     return blocks
 
 
 # ---------------------------------------------------------------------------------------------
-def _study_blocks(case, study, out_dir, stem, jobs):
+def _study_blocks(case, study, out_dir, stem, jobs, units):
     kind = "compare" if "compare" in study else "sweep"
     config = study.get("config")
     title = study.get("title", f"{kind} on {config}")
@@ -237,8 +292,9 @@ def _study_blocks(case, study, out_dir, stem, jobs):
     res = run_sweep(case, axes, config=config, jobs=jobs,
                     xtol_rel=float(study.get("xtol_rel", 1e-10)), curve_values=curve_values)
     sdir = out_dir / f"{stem}_{config}_{name}"
-    paths = write_outputs(res, sdir)
+    paths = write_outputs(res, sdir, units=units)
     xtol = res.tolerances["xtol"]
+    unit = units.get(name)
     direction = 1.0 if values[-1] >= values[0] else -1.0
     rows, crit = [], []
     for l, line in enumerate(res.lines):
@@ -247,22 +303,24 @@ def _study_blocks(case, study, out_dir, stem, jobs):
         first = bs[0] if bs else None
         rom = _rom_exit(case, config, line, name, values, res.points[l], xtol)
         failed = sum(1 for pt in res.points[l] if pt.get("error"))
-        label = ", ".join(f"{k} = {v:g}" for k, v in line.items()) or "–"
+        label = ", ".join(f"{k} = " + with_unit(f"{v:g}", units.get(k)) for k, v in line.items()) or "–"
         freq = "–" if first is None else f"{abs(first['eigenvalue'][1]) / (2 * math.pi):.5g}"
         band = ("–" if first is None or first["band"][0] == first["band"][1] else
                 f"{first['band'][0]:.10g} … {first['band'][1]:.10g}")
         rows.append([label,
-                     "stable over the range" if first is None else f"{first['value']:.10g}",
+                     "stable over the range" if first is None else with_unit(f"{first['value']:.10g}", unit),
                      "–" if first is None else first["kind"] + (
                          "" if first.get("event") == "crossing" else f" ({first['event']})"),
                      freq, band,
-                     "inside over the range" if rom is None else f"{rom['value']:.8g} ({rom['joint']})",
+                     "inside over the range" if rom is None else
+                     with_unit(f"{rom['value']:.8g}", unit) + f" ({rom['joint']})",
                      str(failed)])
         crit.append({"line": line, "critical": None if first is None else first["value"],
                      "kind": None if first is None else first["kind"], "rom": rom,
                      "failed": failed})
     n_fold = sum(1 for f in res.folds if f["type"] == "fold")
-    blocks.append(("p", f"{name} from {values[0]:g} to {values[-1]:g} ({len(values)} points per line) on "
+    blocks.append(("p", f"{name} from {values[0]:g} to {with_unit(f'{values[-1]:g}', unit)} "
+                        f"({len(values)} points per line) on "
                         f"{config}, each line followed by continuation from its first equilibrium "
                         f"(tangent predictor, pseudo-arclength through folds; {n_fold} fold(s) "
                         f"found); modes tracked by MAC; each boundary located where Re s = 0 of "
@@ -270,8 +328,10 @@ def _study_blocks(case, study, out_dir, stem, jobs):
                         f"collide) by Brent's method to xtol = {xtol:.3g}, with the band where "
                         f"the mode is critical within its tolerance beside it; range-of-motion exit "
                         f"by Brent's method on the smallest joint margin to the same xtol."))
-    blocks.append(("table", ["line", f"critical {name}", "instability", "frequency at onset [Hz]",
-                             "critical band", f"{name} where the posture leaves the range of motion",
+    u = f" [{unit}]" if unit and unit != "1" else ""
+    blocks.append(("table", ["line", f"critical {name}", "instability",
+                             "ω_d/2π at onset [Hz]", f"critical band{u}",
+                             f"{name} where the posture leaves the range of motion",
                              "failed points"], rows))
     curve_sum = []
     for c in res.curves:
@@ -281,11 +341,19 @@ def _study_blocks(case, study, out_dir, stem, jobs):
                             f"{c['along']} (two-parameter continuation: each point located again "
                             f"from the secant prediction of the last two; "
                             f"{len(pts)} of {len(c['points'])} points found):"))
-        blocks.append(("table", [c["along"], f"critical {name}", "test function"],
+        ua = units.get(c["along"])
+        blocks.append(("table", [c["along"] + (f" [{ua}]" if ua and ua != "1" else " [–]" if ua else ""),
+                                 f"critical {name}{u}", "test function"],
                        [[f"{p['p2']:.6g}", f"{p['value']:.10g}", p.get("test") or "–"] for p in pts]))
+    captions = {"root_locus": "root locus (one colour a mode, numbered as the mode tables at the "
+                              "first value; one line style a line)",
+                "modes_vs_parameter": "damped frequency ω_d/2π and damping δ of each mode",
+                "bifurcation": "bifurcation diagram (dashed where unstable)",
+                "stability_map": "stability map: spectral abscissa on the grid",
+                "stability_chart": "stability chart from the followed boundaries"}
     for p in paths:
         if p.suffix == ".png":
-            blocks.append(("img", p, f"{title}: {p.stem.replace('_', ' ')}"))
+            blocks.append(("img", p, f"{title}: {captions.get(p.stem, p.stem.replace('_', ' '))}"))
     return blocks, {"title": title, "parameter": name, "config": config, "critical": crit,
                     "curves": curve_sum}
 
@@ -364,23 +432,79 @@ def _mpq(lin):
 
 
 # ---------------------------------------------------------------------------------------------
-def build_report(case, *, configs=None, out_dir, run_check=True, jobs=None, studies=True):
+_LABEL = re.compile(r"\b[a-z_]+\[\d+\] '([^']*)'")
+
+
+def user_names(text: str) -> str:
+    """Element names as the user wrote them: ``forces[3] 'actuator'`` → ``actuator`` (the
+    internal ``table[index]`` labels of error messages do not belong in a report)."""
+    return _LABEL.sub(r"\1", text) if isinstance(text, str) else text
+
+
+def _clean(blocks):
+    out = []
+    for b in blocks:
+        if b[0] == "table":
+            out.append(("table", [user_names(h) for h in b[1]],
+                        [[user_names(str(x)) for x in r] for r in b[2]]))
+        elif b[0] == "img":
+            out.append(("img", b[1], user_names(b[2])))
+        elif b[0] == "toc":
+            out.append(b)
+        else:
+            out.append((b[0], user_names(b[1])))
+    return out
+
+
+def provenance(case) -> dict:
+    """mbseig version, date (UTC; ``SOURCE_DATE_EPOCH`` when set, for reproducible builds) and
+    the SHA-256 of the case file: what a reader needs to know which inputs made the report."""
+    try:
+        from importlib.metadata import version
+
+        ver = version("mbseig")
+    except Exception:  # noqa: BLE001 - not installed as a distribution (a source tree)
+        ver = "unknown"
+    epoch = os.environ.get("SOURCE_DATE_EPOCH")
+    try:
+        stamp = float(epoch) if epoch else time.time()
+    except ValueError:
+        stamp = time.time()
+    date = time.strftime("%Y-%m-%d", time.gmtime(stamp))
+    try:
+        digest = hashlib.sha256(Path(case.source).read_bytes()).hexdigest()
+    except (OSError, TypeError):
+        digest = "unavailable"
+    import numpy
+    import scipy
+
+    return {"mbseig": ver, "date": date, "case": Path(str(case.source)).name,
+            "sha256": digest, "numpy": numpy.__version__, "scipy": scipy.__version__}
+
+
+def build_report(case, *, configs=None, out_dir, run_check=True, jobs=None, studies=True,
+                 sensitivities=True):
     """Blocks of the report of ``case`` (a path or a parsed :class:`~mbseig.casefile.CaseSpec`,
-    read once) for ``configs`` (list of names; [None] for the base)."""
+    read once) for ``configs`` (list of names; [None] for the base): title, provenance, table
+    of contents, summary, comparison, one section a configuration, the studies."""
     case = as_spec(case)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     stem = case.name
     configs = configs or [None]
+    units = parameter_units(case)
     base = case.build(configs[0])
-    blocks = [("h1", f"Stability report: {stem}"),
-              ("p", base.description or ""),
-              ("p", f"Case file: `{Path(case.source).name}`. Configurations: "
-                    + ", ".join(c or "base" for c in configs) + ". Regenerate with `mbseig report "
-                    + f"cases/{Path(case.source).name}" + (" --all-configs" if len(configs) > 1 else "") + "`.")]
+    prov = provenance(case)
+    head = [("h1", f"Stability report: {stem}"),
+            ("p", base.description or ""),
+            ("p", f"Generated by mbseig {prov['mbseig']} on {prov['date']} (UTC) from "
+                  f"`{prov['case']}` (SHA-256 {prov['sha256'][:16]}…; numpy {prov['numpy']}, "
+                  f"scipy {prov['scipy']}). Configurations: "
+                  + ", ".join(c or "base" for c in configs) + ". Regenerate with `mbseig report "
+                  + f"cases/{prov['case']}" + (" --all-configs" if len(configs) > 1 else "") + "`.")]
     summaries, cfg_blocks = [], []
     for c in configs:
-        b, s = _config_blocks(case, c, out_dir, run_check=run_check, stem=stem)
+        b, s = _config_blocks(case, c, out_dir, run_check=run_check, stem=stem, units=units)
         cfg_blocks += b
         summaries.append(s)
     study_blocks, study_sums = [], []
@@ -388,23 +512,141 @@ def build_report(case, *, configs=None, out_dir, run_check=True, jobs=None, stud
         for st in getattr(base, "report", {}).get("studies", []):  # a linear case has no [report]
             if st.get("config") not in configs and not (len(configs) > 1):
                 continue
-            b, s = _study_blocks(case, st, out_dir, stem, jobs)
+            b, s = _study_blocks(case, st, out_dir, stem, jobs, units)
             study_blocks += b
             study_sums.append(s)
+    body = _summary(case, summaries, study_sums, units, sensitivities)
     if len(configs) > 1:
-        blocks += _comparison(summaries, study_sums)
-    return blocks + cfg_blocks + study_blocks
+        body += _comparison(summaries, study_sums, units)
+    body += cfg_blocks + study_blocks
+    toc = [("h2", "Contents"), ("toc", [(2, user_names(b[1])) for b in body if b[0] == "h2"])]
+    return _clean(head + toc + body)
 
 
-def _comparison(summaries, study_sums):
+def _margin_text(name, current, crit, unit, kind):
+    """``f: 0.786 N to flutter (f* = 1.786 N, +79 %)``."""
+    d = crit - current
+    rel = f", {100 * d / abs(current):+.0f} % of the present value" if current else ""
+    return (f"{name} = {with_unit(_fmt(current, 5), unit)} → {name}* = "
+            f"{with_unit(_fmt(crit, 6), unit)} ({kind}): margin {with_unit(f'{d:+.4g}', unit)}{rel}")
+
+
+def _summary(case, summaries, study_sums, units, sensitivities=True):
+    """The summary first: per configuration the verdict, the least-damped mode, the margins to
+    every boundary the studies found (with units) and, when :mod:`mbseig.studies.design` is
+    there, the parameter that moves the least stable mode most."""
+    rows = []
+    notes = []
+    for s in summaries:
+        lm = s["least_mode"]
+        if lm is None:
+            least = "–"
+        elif lm["fd"] > 0:
+            least = (f"mode {lm['mode']} ({lm['kind']}): ω_n/2π = {lm['fn']:.4g} Hz, "
+                     f"ω_d/2π = {lm['fd']:.4g} Hz, ζ = {lm['zeta']:.3g}, δ = {lm['delta']:.4g} 1/s")
+        else:
+            least = (f"mode {lm['mode']} ({lm['kind']}): ω_n/2π = {lm['fn']:.4g} Hz, "
+                     f"δ = {lm['delta']:.4g} 1/s")
+        margins = []
+        for st in study_sums:
+            if st.get("config") != s["config"] or "critical" not in st:
+                continue
+            name = st["parameter"]
+            unit = units.get(name)
+            current = s["parameters"].get(name)
+            own = [c for c in st["critical"]
+                   if all(s["parameters"].get(k) is not None and
+                          abs(float(s["parameters"][k]) - float(v)) <= 1e-12 * (1 + abs(float(v)))
+                          for k, v in c["line"].items())] or st["critical"]
+            for c in own:
+                where = ", ".join(f"{k} = " + with_unit(f"{v:g}", units.get(k))
+                                  for k, v in c["line"].items())
+                if c["critical"] is None:
+                    margins.append(f"{name}: no boundary in the swept range" + (f" ({where})" if where else ""))
+                elif current is not None and isinstance(current, (int, float)):
+                    margins.append(_margin_text(name, float(current), c["critical"], unit, c["kind"])
+                                   + (f" at {where}" if where and len(own) > 1 else ""))
+                else:
+                    margins.append(f"{name}* = {with_unit(_fmt(c['critical'], 6), unit)} ({c['kind']})")
+                if c.get("rom"):
+                    margins.append(f"{c['rom']['joint']} leaves its range of motion at {name} = "
+                                   + with_unit(_fmt(c["rom"]["value"], 6), unit))
+        rom = ("inside" if not s["out_of_range"] else "OUTSIDE for " + ", ".join(s["out_of_range"]))
+        rows.append([s["config"], f"**{s['verdict']}**" if s["verdict"] != "stable" else s["verdict"],
+                     least, rom, "; ".join(margins) or "no boundary study"])
+        sens = _sensitivity_sentence(case, s, units) if sensitivities else None
+        if sens:
+            notes.append(sens)
+    blocks = [("h2", "Summary"),
+              ("table", ["configuration", "verdict", "least-damped mode", "range of motion",
+                         "margins to the boundaries found (present value → critical value)"], rows)]
+    if notes:
+        blocks += [("p", n) for n in notes]
+    elif not sensitivities:
+        blocks.append(("p", "Eigenvalue sensitivities not computed (--no-sensitivities)."))
+    else:
+        blocks.append(("p", _SENSITIVITY_MISSING))
+    return blocks
+
+
+_SENSITIVITY_MISSING = ("Which parameter moves the least stable mode most: not computed "
+                        "(eigenvalue sensitivities are not available in this installation).")
+
+
+def _sensitivity_sentence(case, s, units):
+    """∂s/∂p of the least-damped mode for every parameter (mbseig.studies.design, when
+    present): the parameter that moves Re s most per relative change, with units."""
+    try:
+        from ..studies import design
+    except ImportError:
+        return None
+    fn = getattr(design, "eigen_sensitivities", None)
+    if fn is None or s["least"] is None:
+        return None
+    config = None if s["config"] == "base" else s["config"]
+    try:
+        sens = fn(case, config=config, analysis=s.get("analysis"))
+    except Exception as exc:  # noqa: BLE001 - an optional part of the summary
+        return f"{s['config']}: sensitivities not computed ({type(exc).__name__}: {exc})."
+    k = s["least"]
+    ranked = []
+    for p, ds in (sens or {}).items():
+        ds = np.asarray(ds)
+        if ds.ndim == 0 or k >= ds.size:
+            continue
+        value = s["parameters"].get(p)
+        if not isinstance(value, (int, float)) or not value or not np.isfinite(ds[k]):
+            continue  # a parameter at 0 (a load switched off) has no relative change
+        # the change of Re s for a 1 % change of p: |p| · ∂Re s/∂p / 100
+        per_pct = ds[k].real * abs(value) / 100
+        ranked.append((abs(per_pct), p, complex(ds[k]), value, per_pct))
+    if not ranked:
+        return None
+    ranked.sort(key=lambda r: -r[0])
+    parts = []
+    for _, p, d, value, per_pct in ranked[:3]:
+        unit = units.get(p)
+        per = f"1/s per {unit}" if unit and unit != "1" else "1/s"
+        effect = "destabilizes" if d.real > 0 else "stabilizes"
+        step = f"+1 % moves Re s by {per_pct:+.3g} 1/s"
+        parts.append(f"{p} (= {with_unit(_fmt(value, 5), unit)}; ∂Re s/∂{p} = {d.real:.4g} {per}; "
+                     f"{step}; increasing it {effect} the mode)")
+    return (f"{s['config']}: the parameters that move the least-damped mode (mode {k + 1}, "
+            f"Re s = {-s['least_mode']['delta']:.4g} 1/s) most, per relative change: "
+            + "; ".join(parts) + " (parameters at 0 left out).")
+
+
+def _comparison(summaries, study_sums, units):
     rows = []
     for s in summaries:
         crit = []
         for st in study_sums:
             if st.get("config") == s["config"] and "critical" in st:
                 for c in st["critical"]:
-                    where = ", ".join(f"{k} = {v:g}" for k, v in c["line"].items())
-                    val = "none in range" if c["critical"] is None else f"{c['critical']:.6g}"
+                    where = ", ".join(f"{k} = " + with_unit(f"{v:g}", units.get(k))
+                                      for k, v in c["line"].items())
+                    val = ("none in range" if c["critical"] is None else
+                           with_unit(f"{c['critical']:.6g}", units.get(st["parameter"])))
                     crit.append(f"{st['parameter']}* = {val}" + (f" ({where})" if where else ""))
         rows.append([s["config"], str(s["dof"]), s["verdict"], _fmt(s["least_delta"], 5),
                      _fmt(s["least_zeta"], 4), ", ".join(f"{f:.4g}" for f in s["freqs"]),
@@ -413,14 +655,14 @@ def _comparison(summaries, study_sums):
                      ", ".join(f"{t:.4g}" for t in s["actuator"]) or "–",
                      "; ".join(crit) or "–"])
     blocks = [("h2", "Comparison of the configurations"),
-              ("table", ["config", "DOF", "verdict", "least δ [1/s]", "its ζ", "frequencies [Hz]",
-                         "posture [deg]", "outside ROM", "actuator tension [N]",
-                         "critical parameters"], rows)]
-    blocks += _findings(study_sums)
+              ("table", ["config", "DOF", "verdict", "least δ [1/s]", "its ζ [–]",
+                         "ω_d/2π of the modes [Hz]", "posture [deg]", "outside ROM",
+                         "actuator tension [N]", "critical parameters"], rows)]
+    blocks += _findings(study_sums, units)
     return blocks
 
 
-def _findings(study_sums):
+def _findings(study_sums, units):
     """What the follower-load study says about damping (the destabilizing-damping paradox)."""
     out = []
     for st in study_sums:
@@ -429,7 +671,10 @@ def _findings(study_sums):
         if len(lines) < 2:
             continue
         by = sorted(lines, key=lambda c: -c["line"]["damping_scale"])
-        text = [f"{st['parameter']}* = {c['critical']:.6g} at damping scale "
+        u = units.get(st["parameter"])
+        def val(x, u=u):
+            return with_unit(f"{x:.6g}", u)
+        text = [f"{st['parameter']}* = {val(c['critical'])} at damping scale "
                 f"{c['line']['damping_scale']:g}" for c in by]
         msg = "Critical load against the damping scale: " + "; ".join(text) + ". "
         zero = next((c for c in by if c["line"]["damping_scale"] == 0), None)
@@ -440,13 +685,14 @@ def _findings(study_sums):
             if pos:
                 s_min, f_min = min(pos)
                 msg += (f"Followed continuously in the damping scale, the critical load is "
-                        f"{f_min:.6g} at the smallest scale {s_min:g}. ")
+                        f"{val(f_min)} at the smallest scale {s_min:g}. ")
                 small = small + [{"critical": f_min, "line": {"damping_scale": s_min}}]
         if zero is not None:
-            msg += f"The undamped flutter load (damping scale 0) is {zero['critical']:.6g}. "
+            msg += f"The undamped flutter load (damping scale 0) is {val(zero['critical'])}. "
             lim = min(small, key=lambda c: c["line"]["damping_scale"])["critical"] if small else None
             if lim is not None and lim < zero["critical"] * (1 - 1e-6):
-                msg += (f"As the damping tends to zero the critical load tends to about {lim:.5g}, "
+                msg += (f"As the damping tends to zero the critical load tends to about "
+                        f"{with_unit(f'{lim:.5g}', u)}, "
                         f"below the undamped value: the destabilizing effect of small damping on "
                         f"a follower-loaded (circulatory) system. A design that relies on the "
                         f"dampers for its margin loses it when they are small.")
@@ -459,16 +705,16 @@ def _findings(study_sums):
 
 # ---------------------------------------------------------------------------------------------
 def write_report(case, *, out_dir=None, configs=None, all_configs=False, run_check=True,
-                 jobs=None, studies=True):
+                 jobs=None, studies=True, sensitivities=True):
     """Write report.md and report.html (default directory reports/<case>); returns their paths.
 
     ``case`` is a path or a parsed :class:`~mbseig.casefile.CaseSpec`; it is read once."""
     case = as_spec(case)
-    if all_configs:
-        configs = sorted(case.configurations) or [None]
+    if all_configs:  # the base case first, then every named configuration
+        configs = [None] + sorted(case.configurations)
     out = Path(out_dir) if out_dir else Path("reports") / case.name
     blocks = build_report(case, configs=configs, out_dir=out, run_check=run_check, jobs=jobs,
-                          studies=studies)
+                          studies=studies, sensitivities=sensitivities)
     md = out / "report.md"
     md.write_text(render_markdown(blocks, out))
     page = out / "report.html"

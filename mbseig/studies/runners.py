@@ -19,6 +19,24 @@ from ..statics.linalg import blas_threads
 __all__ = ["Runner", "progress_bar", "blas_threads"]
 
 
+#: seconds to wait for a Dask scheduler before giving up with a one-line error
+CONNECT_TIMEOUT = 4.0
+
+
+def _connect(Client, address, timeout):
+    """A distributed.Client on ``address``, or one MbseigError line within ``timeout`` seconds
+    when the scheduler cannot be reached (the default would wait 30 s and raise a traceback)."""
+    try:
+        return Client(address, timeout=f"{timeout:g}s", set_as_default=False)
+    except (OSError, TimeoutError, ValueError, TypeError) as exc:
+        detail = " ".join(str(exc).split()) or type(exc).__name__
+        if len(detail) > 160:
+            detail = detail[:157] + "..."
+        raise MbseigError(f"cannot reach the Dask scheduler at {address!r} within "
+                          f"{timeout:g} s ({type(exc).__name__}: {detail})",
+                          element="--scheduler") from None
+
+
 def _capped(fn, n, args, kwargs):
     """fn(*args, **kwargs) with BLAS capped (module docstring); module level, so picklable."""
     with blas_threads(n):
@@ -28,11 +46,18 @@ def _capped(fn, n, args, kwargs):
 class Runner:
     """Runs a pure function over argument tuples: in-process, local processes or Dask."""
 
-    def __init__(self, *, jobs=None, scheduler=None, progress=None, blas_threads=1):
+    def __init__(self, *, jobs=None, scheduler=None, progress=None, blas_threads=1,
+                 connect_timeout=CONNECT_TIMEOUT):
         self.blas = blas_threads
         self.jobs = jobs if jobs is not None else (os.cpu_count() or 1)
         self.scheduler = scheduler
-        self.progress = progress
+        self.connect_timeout = connect_timeout
+        # progress: a callback (label, done, total), True for progress bars (tqdm), or None/False
+        self.progress = (progress_bar() if progress is True else
+                         None if progress is False or progress is None else progress)
+        if self.progress is not None and not callable(self.progress):
+            raise MbseigError(f"progress must be True, False, None or a callable "
+                              f"(label, done, total), got {progress!r}", element="progress")
         self.kind = "dask" if scheduler else ("serial" if self.jobs <= 1 else "processes")
         self._client = self._pool = None
 
@@ -43,7 +68,8 @@ class Runner:
             except ImportError:
                 raise MbseigError("--scheduler needs the optional extra: pip install 'mbseig[dask]'",
                                   element="--scheduler") from None
-            self._client = self.scheduler if not isinstance(self.scheduler, str) else Client(self.scheduler)
+            self._client = (self.scheduler if not isinstance(self.scheduler, str)
+                            else _connect(Client, self.scheduler, self.connect_timeout))
         elif self.kind == "processes":
             from concurrent.futures import ProcessPoolExecutor
 
@@ -92,12 +118,35 @@ class Runner:
         return results
 
 
-def progress_bar(stream=sys.stderr, width=30):
-    """A progress callback drawing ``label [#####.....] k/n`` on one line of ``stream``."""
+def progress_bar(stream=None, width=30):
+    """A progress callback ``(label, done, total)`` drawing one bar a stage (lines, boundaries,
+    curves) on ``stream`` (default stderr) with its rate and the time left, by tqdm; a plain
+    ``label [#####.....] k/n`` line when tqdm is not installed."""
+    stream = sys.stderr if stream is None else stream
+    try:
+        from tqdm import tqdm
+    except ImportError:  # tqdm is a dependency; keep a plain bar if it was removed
+        tqdm = None
+    bars = {}
+
     def show(label, done, total):
-        filled = int(width * done / total) if total else width
-        stream.write(f"\r{label:<10} [{'#' * filled}{'.' * (width - filled)}] {done}/{total}")
+        if tqdm is None:
+            filled = int(width * done / total) if total else width
+            stream.write(f"\r{label:<10} [{'#' * filled}{'.' * (width - filled)}] {done}/{total}")
+            if done >= total:
+                stream.write("\n")
+            stream.flush()
+            return
+        bar = bars.get(label)
+        if bar is None or bar.total != total:
+            if bar is not None:
+                bar.close()
+            bar = bars[label] = tqdm(total=total, desc=f"{label:<10}", file=stream,
+                                     unit="task", dynamic_ncols=True, leave=True,
+                                     bar_format="{desc} {percentage:3.0f}%|{bar}| {n_fmt}/{total_fmt} "
+                                                "[{elapsed}<{remaining}, {rate_fmt}]")
+        bar.update(done - bar.n)
         if done >= total:
-            stream.write("\n")
-        stream.flush()
+            bar.close()
+            bars.pop(label, None)
     return show

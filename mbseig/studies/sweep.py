@@ -213,6 +213,7 @@ class SweepResult:
     curves: list = field(default_factory=list)
     records: list = field(default_factory=list)
     diagram: dict = field(default_factory=dict)
+    units: dict = field(default_factory=dict)  # parameter → unit, for the plots' axis labels
 
     @property
     def axis(self):
@@ -242,6 +243,81 @@ class SweepResult:
                 continue
             keep.append(j)
         return keep
+
+    def mode_numbers(self, line=0) -> dict:
+        """Track → mode number along ``line``, numbered as the mode tables (``mbseig modes``)
+        at the line's first point where the track exists: listed tracks sorted by ω_n = |s|,
+        then by δ; tracks that appear later are numbered after them in order of appearance.
+        Every plot and table of the sweep uses these numbers."""
+        S = self.tracks[line]
+        listed = self.listed_tracks(S)
+        first = {}
+        for j in listed:
+            ok = np.flatnonzero(~np.isnan(S[:, j]))
+            if ok.size:
+                first[j] = int(ok[0])
+        k0 = min(first.values(), default=0)
+        at_start = sorted((j for j in first if first[j] == k0),
+                          key=lambda j: (abs(S[k0, j]), -S[k0, j].real, j))
+        later = sorted((j for j in first if first[j] != k0), key=lambda j: (first[j], abs(S[first[j], j]), j))
+        return {j: i + 1 for i, j in enumerate(at_start + later)}
+
+    def to_dataframe(self):
+        """The tracked eigenvalues as a long pandas DataFrame, one row per (line, point, mode):
+        the other axes' values, the swept parameter, ``mode`` (:meth:`mode_numbers`), ``track``,
+        ``re``, ``im``, ``delta`` [1/s], ``omega_n`` [rad/s], ``omega_d`` [rad/s], ``fn_hz``
+        (ω_n/2π), ``fd_hz`` (ω_d/2π), ``zeta``, ``stable`` (δ + tol ≥ 0), the point's
+        ``verdict`` and ``out_of_range``.  pandas is optional: it is imported here."""
+        try:
+            import pandas as pd
+        except ImportError:
+            raise MbseigError("SweepResult.to_dataframe needs pandas (pip install pandas)",
+                              element="to_dataframe") from None
+        others = [n for n, _ in self.axes[1:]]
+        rows = []
+        for l, line in enumerate(self.lines):
+            S, T = self.tracks[l], self.tolerances_track[l]
+            numbers = self.mode_numbers(l)
+            for k, v in enumerate(self.values):
+                pt = self.points[l][k]
+                for j in self.listed_tracks(S):
+                    s = S[k, j]
+                    if np.isnan(s):
+                        continue
+                    wn = abs(s)
+                    rows.append({**{n: float(line[n]) for n in others}, self.axis: float(v),
+                                 "mode": numbers.get(j), "track": int(j), "re": float(s.real),
+                                 "im": float(s.imag), "delta": float(-s.real),
+                                 "omega_n": float(wn), "omega_d": float(abs(s.imag)),
+                                 "fn_hz": float(wn / (2 * math.pi)),
+                                 "fd_hz": float(abs(s.imag) / (2 * math.pi)),
+                                 "zeta": float(-s.real / wn) if wn > 0 else 0.0,
+                                 "stable": bool(-s.real + T[k, j] >= 0),
+                                 "verdict": pt.get("verdict"),
+                                 "out_of_range": ", ".join(pt.get("out_of_range") or [])})
+        cols = others + [self.axis, "mode", "track", "re", "im", "delta", "omega_n", "omega_d",
+                         "fn_hz", "fd_hz", "zeta", "stable", "verdict", "out_of_range"]
+        return pd.DataFrame(rows, columns=cols)
+
+    def __repr__(self) -> str:
+        n_pts = sum(len(p) for p in self.points)
+        failed = sum(1 for line in self.points for pt in line if pt.get("error"))
+        axes = ", ".join(f"{n} {float(v[0]):g}…{float(v[-1]):g} ({len(v)})" for n, v in self.axes)
+        losses = [b for b in self.boundaries if b["stability"] == "loss"]
+        first = (f", first loss at {self.axis} = {min(b['value'] for b in losses):.6g}"
+                 if losses else "")
+        return (f"<SweepResult {Path(str(self.case)).stem}"
+                + (f" [{self.config}]" if self.config else "")
+                + f": {axes}; {n_pts} points ({failed} failed), {len(self.boundaries)} "
+                  f"boundaries{first}, {len(self.folds)} folds, {len(self.curves)} curves; "
+                  f"runner {self.runner}>")
+
+    __str__ = __repr__
+
+    def _repr_html_(self) -> str:
+        import html
+
+        return f"<pre>{html.escape(repr(self))}</pre>"
 
     def to_json(self) -> dict:
         lines = []
@@ -502,11 +578,16 @@ def _diagram(case, config, fixed, lines, axis0, values0, branches, name):
 
 
 # ---------------------------------------------------------------------------------------------
-def write_outputs(res: SweepResult, out_dir) -> list[Path]:
+def write_outputs(res: SweepResult, out_dir, *, units=None) -> list[Path]:
     """sweep.json, tracks.csv, boundaries.csv, root_locus.png, modes_vs_parameter.png,
     bifurcation.png (and branch.csv) when branches were followed, and, for two swept
     parameters, stability_map.png, with curves.csv and stability_chart.png when boundaries were
-    followed across the second.  Returns the written paths."""
+    followed across the second.  ``units`` ({parameter: unit}) labels the plots' axes.
+    Returns the written paths."""
+    if units:
+        import dataclasses
+
+        res = dataclasses.replace(res, units={**res.units, **units})
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = []
@@ -517,9 +598,11 @@ def write_outputs(res: SweepResult, out_dir) -> list[Path]:
     p = out / "tracks.csv"
     with p.open("w", newline="") as fh:
         w = csv.writer(fh, lineterminator="\n")
-        w.writerow(others + [res.axis, "track", "re", "im", "delta", "omega_n", "freq_hz", "zeta"])
+        w.writerow(others + [res.axis, "track", "re", "im", "delta", "omega_n", "freq_hz", "zeta",
+                             "mode"])
         for l, line in enumerate(res.lines):
             S = res.tracks[l]
+            numbers = res.mode_numbers(l)
             for j in res.listed_tracks(S):
                 for k, v in enumerate(res.values):
                     s = S[k, j]
@@ -529,7 +612,7 @@ def write_outputs(res: SweepResult, out_dir) -> list[Path]:
                     w.writerow([repr(float(line[n])) for n in others] + [
                         repr(float(v)), j, repr(float(s.real)), repr(float(s.imag)),
                         repr(float(-s.real)), repr(float(wn)), repr(float(abs(s.imag) / (2 * math.pi))),
-                        repr(float(-s.real / wn)) if wn > 0 else "0.0"])
+                        repr(float(-s.real / wn)) if wn > 0 else "0.0", numbers.get(j, "")])
     paths.append(p)
     p = out / "boundaries.csv"
     with p.open("w", newline="") as fh:
