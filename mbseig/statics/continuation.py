@@ -195,8 +195,17 @@ class Branch:
 
 
 # ---------------------------------------------------------------------------------------------
+SINGULAR_PIVOT = 100  # a pivot below SINGULAR_PIVOT·n·ε·max|pivot|: det A is numerically 0
+
+
 def _det_sign(A) -> int:
-    """Sign of det A (dense LU up to DENSE_LIMIT, sparse LU above); 0 when singular."""
+    """Sign of det A (dense LU up to DENSE_LIMIT, sparse LU above); 0 when A is singular or
+    numerically singular: a pivot below ``SINGULAR_PIVOT``·n·ε of the largest.  A zero-stiffness
+    direction that persists along a branch (the free spin of a link between two ball joints)
+    leaves a pivot of rounding size whose sign is noise; counting its flips as branch points
+    reported bifurcations where there are none.  Such points carry no sign, and the follower
+    records how many there were (``record["det_undecided"]``): a branch point crossed where the
+    sign is undecided is not detected."""
     import warnings
 
     A = sp.csc_matrix(A)
@@ -208,6 +217,8 @@ def _det_sign(A) -> int:
             except (ValueError, sla.LinAlgError):
                 return 0
             d = np.diag(lu)
+            if _numerically_singular(d):
+                return 0
             swaps = int(np.sum(piv != np.arange(piv.size)))
             sign = (-1) ** swaps * int(np.prod(np.sign(d)))
             return int(sign)
@@ -216,7 +227,16 @@ def _det_sign(A) -> int:
         except RuntimeError:
             return 0
         d = lu.U.diagonal()
+        if _numerically_singular(d):
+            return 0
         return int(np.prod(np.sign(d))) * _parity(lu.perm_r) * _parity(lu.perm_c)
+
+
+def _numerically_singular(pivots) -> bool:
+    a = np.abs(pivots)
+    top = float(np.max(a)) if a.size else 0.0
+    return not (top > 0 and np.isfinite(top)) or \
+        float(np.min(a)) <= SINGULAR_PIVOT * a.size * np.finfo(float).eps * top
 
 
 def _parity(perm) -> int:
@@ -595,7 +615,8 @@ def follow(fam, values, y0, *, stability=None, restart=None, switch=True, ds_max
                  "xtol_fold": xtol, "ds_max": ds_max,
                  "ds_min": DS_MIN, "reach": REACH, "back_arc": BACK_ARC, "easy": EASY,
                  "segments": segment + 1, "constraint_rows": int(fam.rows.size),
-                 "constraint_rows_dropped": int(fam.m - fam.rows.size)}
+                 "constraint_rows_dropped": int(fam.m - fam.rows.size),
+                 "det_undecided": int(sum(1 for b in br.points if b.det_B == 0))}
     return br
 
 
