@@ -24,20 +24,31 @@ contract in pyproject.toml is checked by the test suite):
 ``bench``           speed against accuracy
 ``cli``             one thin module per command
 ==================  ===========================================================================
+
+Names are imported on first use (PEP 562): ``import mbseig`` loads none of the stages, and each
+command loads only what it runs.
 """
 
-from .casefile import CaseSpec, load_case, read_case
-from .check import CheckResult, ModeCheck, check_modes
-from .eigen import QEPSolution, solve_qep
-from .errors import (CaseError, EquilibriumError, ExpressionError, MbseigError, NumericalError,
-                     ReportedWarning, SimulationError, SolverError)
-from .linear import LinearModel, linearize
-from .modal import Modes, modes
-from .model import LinearCase, Model
-from .statics import Equilibrium, equilibrium
-from .studies import analyze, run_sweep
+import importlib
 
 __version__ = "0.1.0"
+
+#: public name -> the module that defines it, imported on first use (PEP 562): ``import mbseig``
+#: costs nothing beyond the package itself, so ``mbseig modes`` loads only what it runs
+_LAZY = {
+    "load_case": "casefile", "read_case": "casefile", "CaseSpec": "casefile",
+    "equilibrium": "statics", "Equilibrium": "statics",
+    "linearize": "linear", "LinearModel": "linear",
+    "modes": "modal", "Modes": "modal",
+    "solve_qep": "eigen", "QEPSolution": "eigen",
+    "check_modes": "check", "CheckResult": "check", "ModeCheck": "check",
+    "analyze": "studies", "run_sweep": "studies",
+    "write_report": "report",
+    "LinearCase": "model", "Model": "model",
+    "MbseigError": "errors", "CaseError": "errors", "ExpressionError": "errors",
+    "EquilibriumError": "errors", "SolverError": "errors", "SimulationError": "errors",
+    "NumericalError": "errors", "ReportedWarning": "errors",
+}
 
 __all__ = [
     "load_case",
@@ -49,6 +60,7 @@ __all__ = [
     "check_modes",
     "analyze",
     "run_sweep",
+    "write_report",
     "CaseSpec",
     "LinearCase",
     "Model",
@@ -67,3 +79,16 @@ __all__ = [
     "NumericalError",
     "ReportedWarning",
 ]
+
+
+def __getattr__(name):
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value  # once imported, an ordinary attribute
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

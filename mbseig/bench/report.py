@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import plots
+from .peer import peer_lines
 
 __all__ = ["write_report"]
 
@@ -37,7 +38,12 @@ def _targets(res):
     if fl and co:
         ratio = co["time"] / fl["time"]
         out.append(("dense damped n = 1000, all modes with vectors: mbseig companion / geev floor",
-                    f"{ratio:.2f} ({co['time']:.2f} s / {fl['time']:.2f} s)", "≤ 1.2", ratio <= 1.2))
+                    f"{ratio:.2f} ({co['time']:.2f} s / {fl['time']:.2f} s)", "≤ 1.1", ratio <= 1.1))
+    for r in _rows(res, "structured"):
+        if r["n"] == 1000 and "floor_ratio" in r:
+            out.append((f"{r['method']} n = 1000, all modes with vectors / eigh(Q, M) with vectors",
+                        f"{r['floor_ratio']:.2f} ({r['time']:.3f} s / {r['floor_time']:.3f} s)", "≤ 1.15",
+                        r["floor_ratio"] <= 1.15))
     for r in _rows(res, "structured"):
         if r["n"] == 3000 and "speedup" in r:
             out.append((f"{r['method']} n = 3000 vs dense general path", f"{r['speedup']:.0f}× "
@@ -61,6 +67,32 @@ def _targets(res):
             out.append((f"growth of the {key} time, n = {a['n']:.0e} … {b['n']:.0e} "
                         f"(least-squares slope over {len(part)} sizes; end points alone n^{p2:.2f})",
                         f"n^{p:.2f}", "≤ n^1.15", p <= 1.15))
+    large = _rows(res, "large")
+    big = {r["method"]: r for r in large if r["n"] == 1_000_000}
+    for kind in ("partial-companion", "partial-slepc"):
+        if kind in big:
+            r = big[kind]
+            out.append((f"lowest 20 modes, 10⁶ coordinates, 10⁵ constraints, general damping ({kind}, "
+                        f"eigen stage)", f"{r['time']:.0f} s, {r['rss_mb'] / 1024:.2f} GB, "
+                        f"{r['ratio']:.1f}× the eigsh floor", "< 60 s, < 4 GB, ≤ 3×",
+                        r["time"] < 60 and r["rss_mb"] < 4096 and r["ratio"] <= 3))
+    sizes = sorted({r["n"] for r in large})
+    if len(sizes) >= 2:
+        for kind in ("partial-companion", "partial-slepc"):
+            pts = sorted((r["n"], r["time"]) for r in large if r["method"] == kind)
+            if len(pts) >= 2:
+                p = float(np.polyfit(np.log([a for a, _ in pts]), np.log([b for _, b in pts]), 1)[0])
+                out.append((f"growth of the general partial path ({kind}), n = {pts[0][0]:.0e} … "
+                            f"{pts[-1][0]:.0e}", f"n^{p:.2f}", "≤ n^1.15", p <= 1.15))
+    ip = [r for r in _rows(res, "sweeps") if r["method"] == "in-process"]
+    if ip:
+        out.append(("device sweep, points a second on one core (after the first)",
+                    f"{ip[0]['rate']:.1f}", "≥ 50", ip[0]["rate"] >= 50))
+    su = {r["method"]: r for r in _rows(res, "startup")}
+    for k, r in su.items():
+        if k.startswith("mbseig modes"):
+            out.append((f"start-up: `{k}` / `python -c \"import numpy, scipy.linalg\"`",
+                        f"{r['ratio']:.2f} ({r['time']:.2f} s)", "≤ 1.25", r["ratio"] <= 1.25))
     etas = [r.get("eta", math.nan) for r in res["rows"]
             if r["section"] in ("dense", "structured", "partial") and r["method"].startswith(("mbseig", "partial"))]
     etas = [e for e in etas if isinstance(e, float) and math.isfinite(e)]
@@ -131,10 +163,13 @@ def write_report(res, out_dir):
                   "vector is the conjugate of the right one, exactly, so κ costs nothing there."]
     st = _rows(res, "structured")
     if st:
-        L += ["", "## Structured fast paths against the dense general path", "",
-              "| path | n | time | general path | speed-up | error | η |", "|---|---|---|---|---|---|---|"]
+        L += ["", "## Structured fast paths against eigh(Q, M) and the dense general path", "",
+              "Floor: `scipy.linalg.eigh(Q, M)` with vectors on the same matrices, interleaved.", "",
+              "| path | n | time | eigh(Q, M) floor | / floor | general path | speed-up | error | η |",
+              "|---|---|---|---|---|---|---|---|---|"]
         for r in st:
-            L.append(f"| {r['method']} | {r['n']} | {_f(r['time'])} s | {_f(r.get('general_time'))} s | "
+            L.append(f"| {r['method']} | {r['n']} | {_f(r['time'])} s | {_f(r.get('floor_time'))} s | "
+                     f"{_f(r.get('floor_ratio'), '.2f')} | {_f(r.get('general_time'))} s | "
                      f"{_f(r.get('speedup'), '.0f')}× | {_f(r['error'], '.0e')} | {_f(r['eta'], '.0e')} |")
     part = _rows(res, "partial")
     if part:
@@ -148,6 +183,41 @@ def write_report(res, out_dir):
             L.append(f"| {r['solver']} | {r['n']:.0e} | {r['load']:.2f} | {r['equilibrium']:.2f} | "
                      f"{r['linearize']:.2f} | {r['modes']:.2f} | {r['total']:.2f} s | "
                      f"{r['rss_mb']:.0f} MB | {_f(r['error'], '.0e')} | {r['eta']:.0e} | {r['repeats']} |")
+    large = _rows(res, "large")
+    if large:
+        L += ["", "## Large constrained model, general damping (lowest 20 modes)", "",
+              "1-D chain of n masses m_i = 1 + 0.5 sin i, every 10th spring a rigid link (n/10 "
+              "constraint rows in the bordered pencil), grounded dashpots on every 7th mass plus βK: "
+              "non-proportional. Eigen stage only (the matrices are built directly), each solve in a "
+              "fresh process, interleaved with the floor: `eigsh` shift-invert at 0 on the undamped "
+              "bordered pencil (one `splu`). `partial-slepc` is the optional SLEPc backend (TOAR, "
+              "shift-and-invert, UMFPACK LU) in a worker process.", "",
+              "| path | n | constraints | time | / floor | peak RSS | η | coverage verified | runs |",
+              "|---|---|---|---|---|---|---|---|---|"]
+        for r in large:
+            L.append(f"| {r['method']} | {r['n']:.0e} | {r['m']} | {r['time']:.2f} s | {r['ratio']:.2f}× | "
+                     f"{r['rss_mb']:.0f} MB | {_f(r['eta'], '.0e')} | {_f(r.get('verified'), '')} | "
+                     f"{r['repeats']} |")
+        L += ["", "Peak RSS of `partial-slepc` is that of the mbseig process only; the worker's own peak "
+              "is reported in docs/scaling.md."]
+    su = _rows(res, "startup")
+    if su:
+        L += ["", "## Start-up", "", "Wall time of each command in a fresh process, interleaved, median.", "",
+              "| command | time | / floor | runs |", "|---|---|---|---|"]
+        for r in su:
+            L.append(f"| `{r['method']}` | {r['time']:.3f} s | {r['ratio']:.2f}× | {r['repeats']} |")
+    sw = _rows(res, "sweeps")
+    if sw:
+        L += ["", "## Sweeps of the hand device", "",
+              f"A 2-D sweep (k_a × c_a, {sw[0]['n']} points, continuation along each k_a line, one "
+              "task per line), after a warm-up run; Dask on a multi-process `LocalCluster` "
+              "(a real scheduler, one thread per worker).", "",
+              "| runner | workers | time | points/s | speed-up |", "|---|---|---|---|---|"]
+        for r in sw:
+            L.append(f"| {r['method']} | {r['workers']} | {r['time']:.2f} s | {r['rate']:.1f} | "
+                     f"{r['speedup']:.2f}× |")
+    if _rows(res, "peer") or res.get("peer_note"):
+        L.extend(peer_lines(_rows(res, "peer"), res.get("peer_note")))
     jac = _rows(res, "jacobians")
     if jac:
         L += ["", "## Jacobians of a 2-D spring network", "",

@@ -17,6 +17,14 @@ structured undamped / proportionally damped chains: eigh and proportional paths 
 partial    lowest 20 modes of the damped chain, 10⁴ … 10⁶ coordinates, whole pipeline (load,
            equilibrium, linearization, modes) in a fresh process each (peak memory), and the
            general (non-proportional) partial path.
+large      lowest 20 modes of a 1-D chain with n/10 rigid links (bordered pencil) and
+           non-proportional damping, 10⁴ … 10⁶ coordinates: the general partial path (and the
+           optional SLEPc backend) against the undamped eigsh shift-invert floor, fresh processes.
+startup    ``mbseig modes`` on the hand device against ``import numpy, scipy.linalg``.
+sweeps     device sweeps: points a second in-process, speed-up on local processes and on a
+           Dask LocalCluster (multi-process scheduler), 1 … cores.
+peer       EXUDYN's eigenvalues on a chain with non-proportional damping (mbseig.bench.peer),
+           when ``exudyn`` is installed.
 jacobians  analytic K of a 2-D spring network against forward and central differences and the
            complex step.
 constraint linearization with and without the constraint-force stiffness.
@@ -53,6 +61,7 @@ from ..statics import equilibrium
 from .cases import case_path
 from .failcases import run_all
 from .nlevp import bench_nlevp
+from .peer import bench_peer
 from .report import write_report
 
 __all__ = ["run_bench"]
@@ -170,13 +179,15 @@ def bench_structured(sizes, repeats, general_max, log):
         for damped, label in ((False, "eigh"), (True, "proportional")):
             M, C, K = chain_matrices(n, damped=damped)
             exact = chain_exact(n, damped=damped)
-            fns = {label: lambda: solve_qep(M, C, K)}
+            fns = {"floor": lambda: sla.eigh(K, M, check_finite=False), label: lambda: solve_qep(M, C, K)}
             if n <= general_max:
                 fns["general"] = lambda: solve_qep(M, C, K, solver="companion")
             t, out = _median_times(fns, repeats if n <= 1000 else 1)
             row = {"section": "structured", "method": f"mbseig {label}", "n": n, "time": t[label],
                    "error": rel_error(out[label].eigenvalues, exact),
                    "eta": float(out[label].backward_error.max()), "solver": out[label].solver}
+            row["floor_time"] = t["floor"]  # eigh(Q, M) with vectors, interleaved
+            row["floor_ratio"] = t[label] / t["floor"]
             if "general" in t:
                 row["general_time"] = t["general"]
                 row["speedup"] = t["general"] / t[label]
@@ -254,6 +265,161 @@ def bench_partial(sizes, repeats, general_max, threads, log, n_modes=20):
                 f"rss {med['rss_mb']:.0f} MB err {row['error']:.1e} η {row['eta']:.1e}")
     return rows
 
+
+# ---------------------------------------------------------------------------------------------
+def large_chain(n, every=10, k=1000.0, c_ground=1e-5, beta=2e-4):
+    """(M, P, Q, G) of the large constrained benchmark model: a 1-D chain of n masses
+    m_i = 1 + 0.5 sin i between walls, springs k, every ``every``-th spring a rigid link
+    (n/every constraint rows x_{i+1} − x_i = 0), grounded dashpots c on every 7th mass plus
+    stiffness-proportional damping βK: non-proportional, so the general path runs."""
+    import scipy.sparse as sp
+
+    i = np.arange(n)
+    K = sp.diags([2 * k * np.ones(n), -k * np.ones(n - 1), -k * np.ones(n - 1)], [0, 1, -1], format="csr")
+    cd = np.zeros(n)
+    cd[::7] = c_ground
+    C = (sp.diags(cd) + beta * K).tocsr()
+    M = sp.diags(1 + 0.5 * np.sin(i), format="csr")
+    a = np.arange(every - 1, n - 1, every)
+    r = np.arange(a.size)
+    G = sp.csr_matrix((np.r_[-np.ones(a.size), np.ones(a.size)], (np.r_[r, r], np.r_[a, a + 1])),
+                      shape=(a.size, n))
+    return M, C, K, G
+
+
+def _large_worker(kind, n, n_modes):
+    """Fresh process: one solve of the large constrained model, JSON on stdout (peak RSS)."""
+    import resource
+
+    import scipy.sparse.linalg as spla
+
+    from ..eigen import solve_partial
+    from ..eigen.partial import _bordered
+
+    t0 = time.perf_counter()
+    M, C, K, G = large_chain(n)
+    t1 = time.perf_counter()
+    out = {"kind": kind, "n": n, "m": G.shape[0], "build": t1 - t0}
+    if kind == "floor":  # undamped eigsh shift-invert at 0 on the same bordered pencil
+        Mb, _, Qb, _ = _bordered(M, C, K, G)
+        lu = spla.splu(Qb.tocsc())
+        op = spla.LinearOperator(Qb.shape, matvec=lu.solve, dtype=float)
+        w, _ = spla.eigsh(Qb, k=n_modes, M=Mb, sigma=0.0, OPinv=op)  # with vectors, as mbseig
+        out.update(eta=math.nan, omega_1=float(np.sqrt(np.min(np.abs(w)))))
+    else:
+        sol = solve_partial(M, C, K, G=G, n_modes=n_modes, solver=kind)
+        out.update(eta=float(np.max(sol.backward_error)), verified=bool(sol.coverage["verified"]),
+                   omega_1=float(np.min(np.abs(sol.eigenvalues))), slepc=sol.details.get("slepc"))
+    out.update(solve=time.perf_counter() - t1, rss_mb=_peak_rss_mb(resource))
+    print(json.dumps(out, default=_json_default))
+
+
+def bench_large(sizes, repeats, threads, log, n_modes=20, slepc=True):
+    """Lowest 20 modes of the large constrained model with non-proportional damping: the scipy
+    general path and the SLEPc backend (when installed) against the undamped eigsh floor, each
+    in a fresh process, interleaved per repeat (the ratio is of medians of the same run)."""
+    from ..eigen.slepc import slepc_available
+
+    kinds = ["floor", "partial-companion"] + (["partial-slepc"] if slepc and slepc_available() else [])
+    env = dict(os.environ)
+    if threads:
+        env.update({k: str(threads) for k in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")})
+    rows = []
+    for n in sizes:
+        runs = {k: [] for k in kinds}
+        for _ in range(repeats if n < 1_000_000 else 1):  # 10⁶: once (minutes a run)
+            for kind in kinds:
+                code = f"from mbseig.bench.run import _large_worker; _large_worker({kind!r}, {n}, {n_modes})"
+                p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+                if p.returncode != 0:
+                    log(f"large {kind} n={n} failed: {p.stderr.strip().splitlines()[-1:]}")
+                    continue
+                runs[kind].append(json.loads(p.stdout.strip().splitlines()[-1]))
+        if not runs["floor"]:
+            continue
+        floor = float(np.median([r["solve"] for r in runs["floor"]]))
+        for kind, rr in runs.items():
+            if not rr:
+                continue
+            t = float(np.median([r["solve"] for r in rr]))
+            row = {"section": "large", "method": kind, "n": n, "m": rr[-1]["m"], "time": t,
+                   "ratio": t / floor, "rss_mb": float(np.median([r["rss_mb"] for r in rr])),
+                   "eta": rr[-1]["eta"], "omega_1": rr[-1]["omega_1"], "repeats": len(rr),
+                   "verified": rr[-1].get("verified")}
+            rows.append(row)
+            log(f"large {kind:18s} n={n:8d} {t:8.2f} s  ({row['ratio']:.2f}x floor) rss {row['rss_mb']:.0f} MB "
+                f"η {row['eta']:.1e}")
+    return rows
+
+
+def bench_startup(repeats, log, case="hand_device"):
+    """Wall time of ``mbseig modes CASE`` against ``python -c "import numpy, scipy.linalg"``,
+    interleaved, medians (the start-up goal's ratio)."""
+    exe = Path(sys.executable).with_name("mbseig")
+    cli = [str(exe)] if exe.exists() else [sys.executable, "-m", "mbseig"]
+    cmds = {"import numpy, scipy.linalg (floor)": [sys.executable, "-c", "import numpy, scipy.linalg"],
+            "import mbseig": [sys.executable, "-c", "import mbseig"],
+            f"mbseig modes {case}": [*cli, "modes", str(case_path(case))]}
+    times = {k: [] for k in cmds}
+    for _ in range(repeats):
+        for k, c in cmds.items():
+            t = time.perf_counter()
+            subprocess.run(c, capture_output=True, check=True)
+            times[k].append(time.perf_counter() - t)
+    floor = float(np.median(times["import numpy, scipy.linalg (floor)"]))
+    rows = []
+    for k, v in times.items():
+        t = float(np.median(v))
+        rows.append({"section": "startup", "method": k, "n": 0, "time": t, "ratio": t / floor,
+                     "repeats": repeats})
+        log(f"startup {k:38s} {t:.3f} s  ({t / floor:.2f}x floor)")
+    return rows
+
+
+def bench_sweeps(lines, points, log, case="hand_device"):
+    """Device sweeps: points a second in-process (after the first line), and the speed-up of
+    ``lines`` lines of ``points`` points each (a 2-D sweep, one task per line) on local
+    processes and on a Dask ``LocalCluster`` (multi-process, a real scheduler), 1 … cores."""
+    from ..casefile import read_case
+    from ..studies import run_sweep
+
+    spec = read_case(case_path(case))
+    axes = [("k_a", np.linspace(800.0, 1200.0, points)), ("c_a", np.linspace(5.0, 9.0, lines))]
+    cores = os.cpu_count() or 1
+
+    def timed(**kw):
+        t = time.perf_counter()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            run_sweep(spec, axes, progress=False, curves=False, **kw)
+        return time.perf_counter() - t
+
+    rows = []
+    timed(jobs=1)  # warm: imports and caches, as "after the first" in the goal
+    base = timed(jobs=1)
+    total = lines * points
+    rows.append({"section": "sweeps", "method": "in-process", "n": total, "workers": 1, "time": base,
+                 "rate": total / base, "speedup": 1.0})
+    log(f"sweeps {total} points in-process: {base:.2f} s ({total / base:.1f} points/s)")
+    for w in range(2, cores + 1):
+        t = timed(jobs=w)
+        rows.append({"section": "sweeps", "method": "local processes", "n": total, "workers": w,
+                     "time": t, "rate": total / t, "speedup": base / t})
+        log(f"sweeps {total} points on {w} processes: {t:.2f} s (×{base / t:.2f})")
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        log("sweeps: dask.distributed not installed: Dask rows skipped")
+        return rows
+    for w in range(1, cores + 1):
+        with LocalCluster(n_workers=w, threads_per_worker=1, processes=True, dashboard_address=None) as cl, \
+                Client(cl) as client:
+            timed(scheduler=client)  # workers import mbseig once
+            t = timed(scheduler=client)
+        rows.append({"section": "sweeps", "method": "Dask LocalCluster", "n": total, "workers": w,
+                     "time": t, "rate": total / t, "speedup": base / t})
+        log(f"sweeps {total} points on a Dask LocalCluster of {w}: {t:.2f} s (×{base / t:.2f})")
+    return rows
 
 # ---------------------------------------------------------------------------------------------
 def _spring_net_case(n):
@@ -396,8 +562,8 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
     out_dir = Path(out_dir or "reports")
     out_dir.mkdir(parents=True, exist_ok=True)
     repeats = repeats or (1 if quick else 3)
-    all_sections = ("dense", "structured", "partial", "jacobians", "constraint", "timedomain", "failures",
-                    "nlevp")
+    all_sections = ("dense", "structured", "partial", "large", "startup", "peer", "sweeps",
+                    "jacobians", "constraint", "timedomain", "failures", "nlevp")
     sections = sections or all_sections
     cfg = {
         "quick": quick, "repeats": repeats, "threads": threads,
@@ -409,6 +575,10 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
         "partial_general_max": 3000 if quick else 100_000,
         "jacobian_sizes": [10] if quick else [10, 100],
         "left_n": 100 if quick else 1000,
+        "large_sizes": [2000] if quick else [10_000, 100_000, 1_000_000],
+        "startup_repeats": 1 if quick else 15,
+        "peer_sizes": [20] if quick else [50, 200, 500],
+        "sweep_grid": (2, 5) if quick else (6, 20),
     }
     res = {"config": cfg, "rows": [], "machine": _machine()}
     t_start = time.perf_counter()
@@ -420,6 +590,12 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
             res["left_vectors"] = bench_left_vectors(cfg["left_n"], repeats, log)
         if "structured" in sections:
             res["rows"] += bench_structured(cfg["structured_sizes"], repeats, cfg["general_max"], log)
+        if "peer" in sections:
+            rows, note = bench_peer(cfg["peer_sizes"], repeats, log)
+            res["rows"] += rows
+            res["peer_note"] = note
+        if "sweeps" in sections:
+            res["rows"] += bench_sweeps(*cfg["sweep_grid"], log)
         if "jacobians" in sections:
             with tempfile.TemporaryDirectory() as tmp:
                 res["rows"] += bench_jacobians(cfg["jacobian_sizes"], repeats, log, tmp)
@@ -437,6 +613,11 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
                                for c in run_all()]
     if "partial" in sections:  # fresh processes: BLAS threads set through the environment
         res["rows"] += bench_partial(cfg["partial_sizes"], repeats, cfg["partial_general_max"], threads, log)
+    if "large" in sections:
+        res["rows"] += bench_large(cfg["large_sizes"], 1 if quick else repeats, threads, log,
+                                   slepc=not quick)
+    if "startup" in sections:
+        res["rows"] += bench_startup(cfg["startup_repeats"], log)
     res["elapsed"] = time.perf_counter() - t_start
     (out_dir / "benchmarks.json").write_text(json.dumps(res, indent=1, default=_json_default))
     write_report(res, out_dir)

@@ -11,7 +11,7 @@ def register(sub):
     p.add_argument("--threads", type=int, default=1,
                    help="BLAS threads during the measurements (0: library default)")
     p.add_argument("--sections", nargs="+", default=None,
-                   choices=["dense", "structured", "partial", "jacobians", "constraint", "timedomain", "failures",
+                   choices=["dense", "structured", "partial", "large", "startup", "peer", "sweeps", "jacobians", "constraint", "timedomain", "failures",
                             "nlevp"],
                    help="run only these sections")
     p.set_defaults(run=run)

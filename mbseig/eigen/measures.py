@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from ..numerics import colnorm as _colnorm_fast
 
@@ -76,23 +75,69 @@ def unit_columns(X):
     return X / nrm
 
 
+def _sumsq(x):
+    """Σ|x|² of a flat array by one BLAS dot (no temporaries); ∞ or NaN when it overflows
+    (the callers then take the scaled path)."""
+    with np.errstate(over="ignore", invalid="ignore", under="ignore"):
+        return float(np.vdot(x, x).real) if np.iscomplexobj(x) else float(np.dot(x, x))
+
+
+# Σ|x|² by one dot is exact to rounding when it lands in [_SUMSQ_LO, _SUMSQ_HI]: nothing
+# overflowed, and squares that underflowed (|x| < 1.5e-154) add at most 1e8 · 2e-308 against
+# at least 1e-200, far below one rounding error (the dense paths stay below 1e8 entries)
+_SUMSQ_LO, _SUMSQ_HI = 1e-200, 1e300
+
+
 def fro(A) -> float:
     """Frobenius norm of a dense or sparse matrix, without overflow or underflow of the squares."""
     data = A.data if sp.issparse(A) else np.asarray(A)
     if data.size == 0:
         return 0.0
+    if not sp.issparse(A) and data.size <= 10**8:
+        flat = data.reshape(-1) if data.flags.c_contiguous or data.flags.f_contiguous else np.ravel(data)
+        ss = _sumsq(flat)
+        if _SUMSQ_LO <= ss <= _SUMSQ_HI:
+            return float(np.sqrt(ss))
     big = float(np.max(np.abs(data)))
     if big == 0.0:
         return 0.0
     if _SMALL < big < _BIG:
-        return float(spla.norm(A)) if sp.issparse(A) else float(np.linalg.norm(A))
+        if sp.issparse(A):
+            import scipy.sparse.linalg as spla  # only here: keeps it off the start-up path
+
+            return float(spla.norm(A))
+        return float(np.linalg.norm(A))
     return big * float(np.linalg.norm(np.ravel(data) / big))
+
+
+def _antisymmetric_sumsq(A, block=64):
+    """‖A − Aᵀ‖_F² of a dense square A by row slabs of the upper triangle (cache-friendly: no
+    strided n × n transpose); None when a partial sum leaves the safe range of :func:`_sumsq`."""
+    n = A.shape[0]
+    total = 0.0
+    for i in range(0, n, block):
+        j = min(i + block, n)
+        D = A[i:j, i:] - A[i:, i:j].T  # rows i..j, columns ≥ i
+        d = _sumsq(np.ascontiguousarray(D[:, : j - i]).reshape(-1))  # diagonal block: once
+        o = _sumsq(np.ascontiguousarray(D[:, j - i:]).reshape(-1))  # above it: mirrored below
+        total += d + 2.0 * o
+    if not np.isfinite(total) or total > _SUMSQ_HI:
+        return None
+    return total
 
 
 def is_symmetric(A, tol) -> bool:
     """‖A − Aᵀ‖_F ≤ tol ‖A‖_F (a zero matrix is symmetric)."""
     nA = fro(A)
-    return nA == 0 or fro(A - A.T) <= tol * nA
+    if nA == 0:
+        return True
+    # fast path when the threshold (tol‖A‖)² is far above what underflowed squares can add
+    if not sp.issparse(A) and A.ndim == 2 and A.shape[0] == A.shape[1] and \
+            nA * nA <= _SUMSQ_HI and (tol * nA) ** 2 >= 1e-190:
+        ss = _antisymmetric_sumsq(np.asarray(A))
+        if ss is not None:
+            return float(np.sqrt(ss)) <= tol * nA
+    return fro(A - A.T) <= tol * nA
 
 
 def rayleigh_fit(M, P, Q, tol, *, probes=None, seed=0):
@@ -104,6 +149,9 @@ def rayleigh_fit(M, P, Q, tol, *, probes=None, seed=0):
     if fro(P) == 0:
         return 0.0, 0.0
     if probes is None:
+        fit = _dense_fit(M, P, Q, tol)
+        if fit is not False:
+            return fit
         cols, b = [M.ravel(), Q.ravel()], P.ravel()
     else:
         V = np.random.default_rng(seed).standard_normal((M.shape[0], probes))
@@ -114,6 +162,57 @@ def rayleigh_fit(M, P, Q, tol, *, probes=None, seed=0):
         fits = bool(np.all(np.isfinite(coef))) and \
             np.linalg.norm(A @ coef - b) <= tol * np.linalg.norm(b)
     return (float(coef[0]), float(coef[1])) if fits else None
+
+
+def _dense_fit(M, P, Q, tol):
+    """The dense Rayleigh fit from six dot products of the flattened M, Q, P and one residual
+    pass (O(n²), no n² × 2 least-squares copy): (α, β), None when P is not αM + βQ to ``tol``,
+    or False when the magnitudes leave the range where single dot products are exact or M and Q
+    are nearly parallel (the caller then uses lstsq).  The residual ‖P − αM − βQ‖ that decides
+    is computed directly, never from the Gram matrix."""
+    from scipy.linalg.blas import daxpy
+
+    if any(X.dtype.kind == "c" for X in (M, P, Q)):
+        return False
+    a, q, b = (np.ascontiguousarray(X, dtype=float).reshape(-1) for X in (M, Q, P))
+    aa, qq, bb = _sumsq(a), _sumsq(q), _sumsq(b)
+    if not all(x == 0.0 or _SUMSQ_LO <= x <= _SUMSQ_HI for x in (aa, qq, bb)) or aa == 0.0:
+        return False
+    na = np.sqrt(aa)
+    r12 = float(np.dot(a, q)) / na  # Gram–Schmidt in inner products: q = r12 u1 + r22 u2
+    t1 = float(np.dot(a, b)) / na
+    w2 = qq - r12 * r12
+    if qq == 0.0:
+        alpha, beta = t1 / na, 0.0  # Q = 0: all on M, as lstsq's minimum-norm fit
+    elif w2 <= 1e-6 * qq:
+        return False  # M and Q nearly parallel: cancellation in w2, let lstsq decide
+    else:
+        r22 = np.sqrt(w2)
+        t2 = (float(np.dot(q, b)) - r12 * t1) / r22
+        beta = t2 / r22
+        alpha = (t1 - r12 * beta) / na
+    if not (np.isfinite(alpha) and np.isfinite(beta)):
+        return None
+    r = b.copy()
+    with np.errstate(all="ignore"):
+        r = daxpy(a, r, a=-alpha)
+        if beta != 0.0:
+            r = daxpy(q, r, a=-beta)
+        rn2 = _sumsq(r)
+    if not np.isfinite(rn2):
+        return None
+    return (float(alpha), float(beta)) if np.sqrt(rn2) <= tol * np.sqrt(bb) else None
+
+
+#: entries of one block of columns in the large-model measures (≈ 16 MB of complex numbers)
+COLUMN_BLOCK = 1 << 20
+
+
+def _column_blocks(X):
+    """Slices of X's columns with at most ``COLUMN_BLOCK`` entries each (at least one column)."""
+    k = X.shape[1] if X.ndim == 2 else 0
+    step = max(1, COLUMN_BLOCK // max(X.shape[0], 1))
+    return [slice(i, min(i + step, k)) for i in range(0, k, step)] or [slice(0, 0)]
 
 
 def _reversal(s):
@@ -154,7 +253,18 @@ def _weights(s, norms):
 def _residual(MX, PX, QX, s):
     """(s²M + sP + Q)X, or (M + tP + t²Q)X with t = 1/s where |s| > 1, per column."""
     cM, cP, cQ = _coefficients(s)
-    return MX * cM + PX * cP + QX * cQ
+    # MX·cM + PX·cP + QX·cQ in that order (bitwise the plain expression) with one temporary
+    acc = MX * cM
+    tmp = np.multiply(PX, cP, dtype=acc.dtype) if acc.dtype == np.result_type(PX, cP) else PX * cP
+    if tmp.dtype != acc.dtype:
+        return acc + tmp + QX * cQ
+    acc += tmp
+    res = np.result_type(QX, cQ)
+    if res != acc.dtype:
+        return acc + QX * cQ
+    np.multiply(QX, cQ, out=tmp)
+    acc += tmp
+    return acc
 
 
 def _derivative(MX, PX, s):
@@ -176,8 +286,11 @@ def backward_errors(ops, s, X, norms):
     A pair with zero residual has η = 0 even where the weights vanish (s = 0 with Q = 0).
     """
     M, P, Q = ops
-    MX, PX, QX = M @ X, P @ X, Q @ X
-    rn = colnorm(_residual(MX, PX, QX, s))
+    MX, PX = M @ X, P @ X
+    s = np.asarray(s)
+    rn = np.empty(X.shape[1])
+    for b in _column_blocks(X):  # QX and the residual one block of columns at a time
+        rn[b] = colnorm(_residual(MX[:, b], PX[:, b], Q @ X[:, b], s[b]))
     xn = colnorm(X)
     eta = np.where(xn > 0, _ratio(rn, _weights(s, norms) * xn), np.inf)  # x = 0: no eigenvector
     return eta, MX, PX
@@ -187,7 +300,9 @@ def conditions(s, X, Yc, MX, PX, norms):
     """κ per pair, with ``Yc`` the conjugated left vectors (yᴴ = Ycᵀ) and MX, PX the products."""
     s = np.asarray(s)
     num = _weights(s, norms) * colnorm(X) * colnorm(Yc)
-    den = np.abs(np.einsum("ij,ij->j", Yc, _derivative(MX, PX, s)))
+    den = np.empty(s.size)
+    for b in _column_blocks(X):
+        den[b] = np.abs(np.einsum("ij,ij->j", Yc[:, b], _derivative(MX[:, b], PX[:, b], s[b])))
     return _unreverse(_ratio(num, den), s, den)
 
 
@@ -198,8 +313,14 @@ def componentwise(ops, s, X, Yc, *, abs_ops=None):
     Yc : conjugated left vectors (yᴴ = Ycᵀ), or None for y = x̄ (symmetric M, P, Q).
     """
     M, P, Q = ops
-    aM, aP, aQ = abs_ops if abs_ops is not None else tuple(abs(A) for A in ops)
+    abs_ops = abs_ops if abs_ops is not None else tuple(abs(A) for A in ops)
     s = np.asarray(s)
+    blocks = _column_blocks(X)
+    if len(blocks) > 1:  # large models: a block of columns at a time (the measures are per column)
+        parts = [componentwise(ops, s[b], X[:, b], None if Yc is None else Yc[:, b], abs_ops=abs_ops)
+                 for b in blocks]
+        return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
+    aM, aP, aQ = abs_ops
     t, big = _reversal(s)
     a = np.abs(t)
     MX, PX, QX = M @ X, P @ X, Q @ X
@@ -224,8 +345,19 @@ def better_half(ops, s, X1, X2, norms):
     with real eigenvalues), so no imaginary part is cast away.
     """
     dtype = np.result_type(X1, X2)
+    same = X2 is X1
     X1 = np.ascontiguousarray(unit_columns(X1), dtype=dtype)
+    if same:  # one vector per pair (a path without companion halves)
+        eta, MX, PX = backward_errors(ops, s, X1, norms)
+        return X1, eta, MX, PX, 0
     X2 = np.ascontiguousarray(unit_columns(X2), dtype=dtype)
+    if len(_column_blocks(X1)) > 1:  # large: η of both halves first, products of the kept one only
+        e1, e2 = (backward_errors(ops, s, X, norms)[0] for X in (X1, X2))
+        take2 = e2 < e1
+        X1[:, take2] = X2[:, take2]
+        del X2
+        eta, MX, PX = backward_errors(ops, s, X1, norms)
+        return X1, eta, MX, PX, int(np.sum(take2))
     e1, MX1, PX1 = backward_errors(ops, s, X1, norms)
     e2, MX2, PX2 = backward_errors(ops, s, X2, norms)
     take2 = e2 < e1
@@ -260,6 +392,25 @@ def undamped_roots(w, alpha, beta):
     return np.concatenate([s1, s2])
 
 
+def _real_vector_residuals(MV, PV, QV, s):
+    """‖(s²M + sP + Q)v‖ per column (reversed where |s| > 1) for real MV, PV, QV: real
+    arithmetic with two reused n × k buffers (no complex temporaries)."""
+    cM, cP, cQ = _coefficients(s)
+    acc, tmp = np.empty_like(MV), np.empty_like(MV)
+    out = np.zeros(s.size)
+    for part in (np.real, np.imag):
+        a, b, c = part(cM), part(cP), part(cQ)
+        if not (np.any(a) or np.any(b) or np.any(c)):
+            continue
+        np.multiply(MV, a, out=acc)
+        np.multiply(PV, b, out=tmp)
+        acc += tmp
+        np.multiply(QV, c, out=tmp)
+        acc += tmp
+        out += np.einsum("ij,ij->j", acc, acc)
+    return np.sqrt(out)
+
+
 def undamped_pairs(M, P, Q, w, V, alpha, beta, norms):
     """s₊, s₋ of each undamped mode (ω², v) with s² + (α + βω²)s + ω² = 0; η and κ on the n real
     vectors (M, P, Q symmetric: y = x, κ = w(s)‖v‖²/|2s vᵀMv + vᵀPv|).
@@ -272,12 +423,13 @@ def undamped_pairs(M, P, Q, w, V, alpha, beta, norms):
     a, b = np.einsum("ij,ij->j", V, MV), np.einsum("ij,ij->j", V, PV)
     k = w.size
     rn = np.empty(2 * k)
-    for half in (slice(0, k), slice(k, 2 * k)):  # s₊ then s₋, both with the vectors V
-        cM, cP, cQ = _coefficients(s[half])  # real arithmetic: no complex n × k temporaries
-        Rr = MV * cM.real + PV * cP.real + QV * cQ.real
-        Ri = MV * cM.imag + PV * cP.imag + QV * cQ.imag
-        rn[half] = np.sqrt(np.einsum("ij,ij->j", Rr, Rr) + np.einsum("ij,ij->j", Ri, Ri))
-        del Rr, Ri
+    rn[:k] = _real_vector_residuals(MV, PV, QV, s[:k])
+    # s₋ = conj(s₊) exactly (oscillatory modes): T(s̄)v = conj(T(s)v) for real M, P, Q, v, so the
+    # residual norm is the same; only the other (real, overdamped) roots are evaluated again
+    other = np.flatnonzero(s[k:] != np.conj(s[:k]))
+    rn[k:] = rn[:k]
+    if other.size:
+        rn[k + other] = _real_vector_residuals(MV[:, other], PV[:, other], QV[:, other], s[k + other])
     eta = _ratio(rn, _weights(s, norms))
     dM, dP = _coefficients(s, derivative=True)
     den = np.abs(np.concatenate([a, a]) * dM + np.concatenate([b, b]) * dP)

@@ -220,10 +220,13 @@ def _companion_partial(Mb, Pb, Qb, k, sigma, scale, ncv, maxiter, tol, purify):
     nu, Z = nu[ok], Z[:, ok]
     nu_min = float(np.min(np.abs(nu))) if nu.size else np.inf
     if real_part or purify:  # (A − σB)⁻¹B once more: s from the Ritz vector, and purified
-        W = np.column_stack([op(Z[:, j]) for j in range(Z.shape[1])]) if Z.shape[1] else Z
+        W = np.empty(Z.shape, dtype=complex)  # filled column by column: no list of copies
+        for j in range(Z.shape[1]):
+            W[:, j] = op(Z[:, j])
         with np.errstate(divide="ignore", invalid="ignore"):
             mu = np.einsum("ij,ij->j", Z.conj(), W) / np.einsum("ij,ij->j", Z.conj(), Z)
         Z = W
+        del W
     else:
         mu = nu
     s = sig + 1.0 / mu
@@ -338,7 +341,9 @@ def solve_partial(M, P, Q, *, n_modes: int | None = None, target: float | None =
     dof = n - m  # finite eigenvalues: 2·dof (the multipliers' are infinite)
     run = dict(Mb=Mb, Pb=Pb, Qb=Qb, ncv=ncv, maxiter=maxiter, tol=arpack_tol, purify=m > 0,
                w_scale=w_scale, dof=dof, limit=(dof - 1 if symmetric_path else 2 * dof - 2))
-    if symmetric_path:
+    if name == "partial-slepc":
+        found = _slepc_search(run, want, omega_t, band)
+    elif symmetric_path:
         found = _symmetric_search(run, want, omega_t, band, max_modes)
     else:
         found = _companion_search(run, want, omega_t, band, max_modes)
@@ -358,10 +363,12 @@ def solve_partial(M, P, Q, *, n_modes: int | None = None, target: float | None =
         n_second = 0
     else:
         s, X1, X2 = found["s"], found["X1"], found["X2"]
-        X, eta, _, _, n_second = better_half((Mb, Pb, Qb), s, X1, X2, norms)
+        X, eta, MX, PX, n_second = better_half((Mb, Pb, Qb), s, X1, X2, norms)
+        del X1, X2, found["X1"], found["X2"]
         symmetric_all = all(is_symmetric(A, sym_tol) for A in (Mb, Pb, Qb))
         Yc = X if symmetric_all or not left else _left_vectors(Mb, Pb, Qb, s)
-        kappa = conditions(s, X, Yc, Mb @ X, Pb @ X, norms)
+        kappa = conditions(s, X, Yc, MX, PX, norms)
+        del MX, PX
     bad = ~(eta <= verify_tol)
     if np.any(bad):
         worst = ", ".join(f"{z.real:.6g}{z.imag:+.6g}j (η={e:.1e})" for z, e in zip(s[bad][:5], eta[bad][:5]))
@@ -378,6 +385,8 @@ def solve_partial(M, P, Q, *, n_modes: int | None = None, target: float | None =
     details = {**extras, "shifts": found["shifts"], "n_requested": want, "arpack_k": found["k"],
                "n_constraint_rows": m, "verify_tol": verify_tol, "second_half_vectors": n_second,
                "shift_offsets_tried": list(SHIFT_OFFSETS)}
+    if "slepc" in found:
+        details["slepc"] = found["slepc"]
     return QEPSolution(s, Xq, eta, kappa, name, reason, 0, norms, details, real_error,
                        left_vectors=(unit_columns(Yc[:n]) if m else Yc), partial=True,
                        n_dof=n - m, coverage=coverage, problem=(eta_c, kappa_c))
@@ -498,9 +507,12 @@ def _companion_search(run, want, omega_t, band, max_modes):
                                                    run["maxiter"], run["tol"], run["purify"])
         parts = [runs[(sg, k)] for sg in sigmas]
         discs = [p[3] for p in parts]
-        s = np.concatenate([p[0] for p in parts])
-        X1 = np.concatenate([p[1] for p in parts], axis=1)
-        X2 = np.concatenate([p[2] for p in parts], axis=1)
+        if len(parts) == 1:  # one shift (the lowest modes): no copies
+            s, X1, X2 = parts[0][:3]
+        else:
+            s = np.concatenate([p[0] for p in parts])
+            X1 = np.concatenate([p[1] for p in parts], axis=1)
+            X2 = np.concatenate([p[2] for p in parts], axis=1)
         if len(sigmas) > 1:
             keep = _dedupe(s, X1, 1e-9, scale)
             s, X1, X2 = s[keep], X1[:, keep], X2[:, keep]
@@ -523,21 +535,72 @@ def _companion_search(run, want, omega_t, band, max_modes):
             break
         k = min(2 * k, run["limit"])
     chosen = upper[idx]
-    s_out, x1, x2 = [], [], []
+    cols, conj = [], []
     for i in chosen:  # each kept mode with its conjugate partner (exact for real matrices)
-        s_out.append(s[i])
-        x1.append(X1[:, i])
-        x2.append(X2[:, i])
+        cols.append(i)
+        conj.append(False)
         if abs(s[i].imag) > tol[i]:
-            s_out.append(np.conj(s[i]))
-            x1.append(np.conj(X1[:, i]))
-            x2.append(np.conj(X2[:, i]))
-    nb = Mb.shape[0]
-    empty = np.zeros((nb, 0), complex)
-    return {"s": np.array(s_out, complex), "X1": np.column_stack(x1) if x1 else empty,
-            "X2": np.column_stack(x2) if x2 else empty, "k": k,
+            cols.append(i)
+            conj.append(True)
+    cols, conj = np.array(cols, int), np.array(conj, bool)
+    s_out = np.where(conj, np.conj(s[cols]), s[cols]) if cols.size else np.zeros(0, complex)
+
+    def gather(X):  # the kept columns, conjugated where they are the partners (one copy)
+        out = np.asarray(X)[:, cols].astype(complex)
+        out[:, conj] = out[:, conj].conj()
+        return out
+
+    X1o = gather(X1)
+    X2o = X1o if X2 is X1 else gather(X2)
+    del runs, parts, X1, X2
+    return {"s": np.asarray(s_out, complex), "X1": X1o, "X2": X2o, "k": k,
             "shifts": [c if c.imag else float(c.real) for c, _, _ in discs],
             "coverage": {"measure": "|s|", "omega_n": (lo, hi), "note": note, "verified": ok}}
+
+
+def _slepc_search(run, want, omega_t, band):
+    """The lowest modes from SLEPc (:mod:`mbseig.eigen.slepc`): TOAR with shift-and-invert at 0
+    on the same bordered pencil, selected and covered as :func:`_companion_search` does."""
+    from .slepc import slepc_solve
+
+    if band is not None or omega_t != 0.0:
+        raise SolverError("solver 'partial-slepc' computes the lowest modes (n_modes, target 0); "
+                          "for a band or a target use partial-companion")
+    Mb, Pb, Qb = run["Mb"], run["Pb"], run["Qb"]
+    scale = run["w_scale"]
+    nev = 2 * want + 1
+    while True:
+        if nev > run["limit"]:
+            raise SolverError(f"{want} modes asked of a problem with {run['dof']} degrees of "
+                              f"freedom: use the dense path")
+        s_all, X_all, info = slepc_solve(Mb, Pb, Qb, nev, 0.0, ncv=run["ncv"])
+        finite = np.isfinite(s_all) & (np.abs(s_all) < 1e150)
+        s_all, X_all = s_all[finite], X_all[:, finite]
+        reach = float(np.max(np.abs(s_all))) if s_all.size else 0.0
+        disc = (0.0 + 0.0j, 1.0 / reach if reach > 0 else np.inf, False)
+        tol = 1e-9 * np.maximum(np.abs(s_all), 1e-300)
+        upper = np.flatnonzero(s_all.imag >= -tol)
+        slot = _slots(s_all[upper], X_all[:, upper], _cluster_tol(scale))
+        first = np.flatnonzero(slot == np.arange(slot.size))
+        idx, d, note = _pick(np.abs(s_all[upper[first]]), want, 0.0, None, scale)
+        idx = np.flatnonzero(np.isin(slot, first[idx]))
+        lo, hi = 0.0, d
+        ok = first.size > want and _covered(_annulus_points(lo, hi), [disc])
+        if ok or nev >= run["limit"]:
+            break
+        nev = min(2 * nev, run["limit"])
+    chosen = upper[idx]
+    s_out, x = [], []
+    for i in chosen:  # each kept mode with its conjugate partner (exact for real matrices)
+        s_out.append(s_all[i])
+        x.append(X_all[:, i])
+        if abs(s_all[i].imag) > tol[i]:
+            s_out.append(np.conj(s_all[i]))
+            x.append(np.conj(X_all[:, i]))
+    X = np.column_stack(x) if x else np.zeros((Mb.shape[0], 0), complex)
+    return {"s": np.array(s_out, complex), "X1": X, "X2": X, "k": nev, "shifts": [0.0],
+            "coverage": {"measure": "|s|", "omega_n": (lo, hi), "note": note, "verified": ok},
+            "slepc": info}
 
 
 def _left_vectors(Mb, Pb, Qb, s, steps=3):
@@ -571,5 +634,6 @@ def _left_vectors(Mb, Pb, Qb, s, steps=3):
 
 for _name, _needs in (("partial-eigh", "P = 0, M and Q symmetric"),
                       ("partial-proportional", "P = αM + βQ with M and Q symmetric"),
-                      ("partial-companion", "nothing (any sparse M, P, Q)")):
+                      ("partial-companion", "nothing (any sparse M, P, Q)"),
+                      ("partial-slepc", "slepc4py (optional backend: SLEPc's TOAR, lowest modes)")):
     register(_name, partial=True, needs=_needs, driver=solve_partial)

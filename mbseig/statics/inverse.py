@@ -40,13 +40,19 @@ from ..model.driver import check_command
 __all__ = ["resolve_commands", "reuse_commands", "command_settings"]
 
 
-def resolve_commands(model, equilibrium, *, tol=1e-12, max_iter=30):
+def resolve_commands(model, equilibrium, *, tol=1e-12, max_iter=30, hint=None):
     """The model with every pending command (``model.commands``) resolved: commanded elements
     set, ``drivers`` holding one record per driver, ``q_init`` at the commanded posture.
 
     equilibrium(model, q_init=...) is the static solve (:func:`mbseig.statics.newton.solve_statics`).
+    hint : a resolved model of the same family (a neighbouring point of a sweep): its commanded
+        posture starts the first static solve and its free lengths the secant, so that a sweep
+        continues from the previous point instead of from the reference configuration.  The
+        result is the same to the tolerances (the secant still runs until the driver's effort
+        vanishes); a hint whose elements differ is ignored.
     """
     drivers = model.commands
+    hint = hint if hint is not None and _same_elements(model, hint) else None
 
     def make_model(forces, constraints, q_init=None):
         return dataclasses.replace(model, forces=tuple(forces), constraints=tuple(constraints),
@@ -55,7 +61,7 @@ def resolve_commands(model, equilibrium, *, tol=1e-12, max_iter=30):
     forces, constraints = list(model.forces), list(model.constraints)
     followers = {k for k, f in enumerate(forces)
                  if isinstance(getattr(f, "magnitude", None), (int, float))}
-    q_guess, records = None, []
+    q_guess, records = (None if hint is None else np.asarray(hint.q_init, float)), []
     for driver, targets in drivers:
         springs, locks = check_command(driver, targets, forces, constraints)
         lock_idx = {k for _, k, _ in locks}
@@ -89,6 +95,10 @@ def resolve_commands(model, equilibrium, *, tol=1e-12, max_iter=30):
             l_star = float(np.linalg.norm(spring.diff(eq.q)))
             a_l0, a_lam = l_star, lam0  # zero tension at q*: λ_d is the released effort
             b_l0 = l_star * (1.0 - 1e-3)
+            if hint is not None:  # the neighbour's free length: one or two secant steps from here
+                h = float(hint.forces[spring_k].free_length)
+                if np.isfinite(h) and h > 0 and abs(h - l_star) > 1e-9 * l_star:
+                    b_l0 = h
             eq_b, b_lam = solve(with_spring(b_l0), eq.q)
             it, scale = 1, max(abs(lam0), np.finfo(float).tiny)
             while abs(b_lam) > tol * scale:
@@ -116,6 +126,13 @@ def resolve_commands(model, equilibrium, *, tol=1e-12, max_iter=30):
         q_guess = eq.q
         records.append(rec)
     return dataclasses.replace(make_model(forces, constraints, q_guess), drivers=tuple(records))
+
+
+def _same_elements(model, other):
+    return (len(model.forces) == len(other.forces) and len(model.constraints) == len(other.constraints)
+            and [f.name for f in model.forces] == [f.name for f in other.forces]
+            and [c.name for c in model.constraints] == [c.name for c in other.constraints]
+            and np.shape(getattr(other, "q_init", None)) == np.shape(model.q_init))
 
 
 def reuse_commands(model, resolved):

@@ -26,7 +26,7 @@ import scipy.sparse.linalg as spla
 
 from ..errors import EquilibriumError
 from ..model.elements import DistanceConstraint
-from ..numerics import constraint_rank
+from ..numerics import blas_limit, constraint_rank
 
 __all__ = ["SMALL", "DENSE_LIMIT", "StepScales", "NewtonMatrix", "multipliers",
            "augmented", "blas_threads", "solve_bordered"]
@@ -40,16 +40,9 @@ def blas_threads(n):
     """A context capping BLAS at ``n`` threads while it is open (threadpoolctl, when installed;
     nothing when n is None).  The statics factorizes many small and middle-sized dense matrices,
     for which a second BLAS thread only adds synchronization, and on a busy machine far more:
-    a 200×200 solve measured 0.33 s with two OpenBLAS threads on a loaded 2-core machine."""
-    import contextlib
-
-    if n is None:
-        return contextlib.nullcontext()
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:
-        return contextlib.nullcontext()
-    return threadpool_limits(limits=n)
+    a 200×200 solve measured 0.33 s with two OpenBLAS threads on a loaded 2-core machine.
+    (:func:`mbseig.numerics.blas_limit`: one controller per process.)"""
+    return blas_limit(n)
 
 
 def _is_length(name: str) -> bool:

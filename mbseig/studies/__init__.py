@@ -11,9 +11,22 @@ A study reads its case once (:func:`mbseig.casefile.read_case`) and passes the p
 :class:`~mbseig.casefile.CaseSpec`, a picklable model factory, to its points.
 """
 
-from .pipeline import Analysis, analyze, analyze_model, modes_json
-from .refine import Refinement, refine_analysis
-from .sweep import SweepResult, parse_range, run_sweep, write_outputs
+import importlib
 
-__all__ = ["Analysis", "analyze", "analyze_model", "modes_json", "Refinement",
-           "refine_analysis", "SweepResult", "parse_range", "run_sweep", "write_outputs"]
+# PEP 562: `from ..studies import analyze` does not import the sweep machinery (plots,
+# boundaries, continuation) that `mbseig modes` never uses
+_LAZY = {"Analysis": "pipeline", "analyze": "pipeline", "analyze_model": "pipeline",
+         "modes_json": "pipeline", "Refinement": "refine", "refine_analysis": "refine",
+         "SweepResult": "sweep", "parse_range": "sweep", "run_sweep": "sweep",
+         "write_outputs": "sweep"}
+
+__all__ = list(_LAZY)
+
+
+def __getattr__(name):
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value

@@ -47,7 +47,7 @@ DIAGRAM_MODES_MAX = 60  # DOF up to which every branch point of the diagram gets
 
 def family_maker(spec, config, params, axis):
     """(make, state): make(p) is the model at axis = p with its commands resolved."""
-    state = {"first": None, "reuse": None, "checked": False}
+    state = {"first": None, "reuse": None, "checked": False, "last": None}
 
     def make(p):
         m = spec.build(config, **{**params, axis: float(p)})
@@ -57,7 +57,8 @@ def family_maker(spec, config, params, axis):
             r = reuse_commands(m, state["reuse"])
             if r is not None:
                 return r
-        r = resolve(m)
+        r = resolve(m, hint=state["last"])  # continue from the previous point's commands
+        state["last"] = r
         if state["first"] is None:
             state["first"] = (float(p), r)
         elif not state["checked"] and float(p) != state["first"][0]:

@@ -1,0 +1,149 @@
+"""The fast paths added for speed give the answers of the straightforward code they replace.
+
+References, each an independent computation in this file:
+- is_symmetric: ‖A − Aᵀ‖_F ≤ tol‖A‖_F with numpy's norm of the explicit difference;
+- fro: numpy's norm (ordinary magnitudes) and a scaled sum (entries near 1e±200);
+- rayleigh_fit (dense): numpy's lstsq on the n² × 2 system, residual checked directly; the fast
+  fit must accept every P lstsq accepts, and whatever it accepts must pass the residual test;
+- numerics.scatter: the meshgrid assembly it replaced, bitwise;
+- the column-blocked η, κ and componentwise measures: the same functions on one block (the
+  measures are per column, so blocking must not change a single bit);
+- the lazy package: every name of ``mbseig.__all__`` resolves to the object its module defines.
+"""
+
+import importlib
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+import mbseig
+from mbseig.eigen import measures
+from mbseig.numerics import blas_limit, coo_sum, scatter
+
+
+def _lstsq_fit(M, P, Q, tol):
+    A = np.column_stack([M.ravel(), Q.ravel()])
+    b = P.ravel()
+    coef = np.linalg.lstsq(A, b, rcond=None)[0]
+    return tuple(coef) if np.linalg.norm(A @ coef - b) <= tol * np.linalg.norm(b) else None
+
+
+def test_is_symmetric_and_fro_match_the_plain_formulas():
+    rng = np.random.default_rng(3)
+    for _ in range(150):
+        n = int(rng.integers(1, 140))  # across the 64-row slabs of the blocked test
+        A = rng.standard_normal((n, n)) * 10.0 ** int(rng.integers(-60, 60))
+        S = A + A.T
+        B = S.copy()
+        i, j = rng.integers(0, n, 2)
+        if i != j:
+            B[i, j] += 10.0 ** float(rng.uniform(-15, -11)) * np.abs(S).max()
+        for X in (A, S, B):
+            ref = np.linalg.norm(X - X.T) <= 1e-13 * np.linalg.norm(X)
+            assert measures.is_symmetric(X, 1e-13) == ref
+            assert measures.fro(X) == pytest.approx(np.linalg.norm(X), rel=1e-13)
+    big = np.full((3, 3), 1e200)  # squares overflow: the scaled path answers
+    assert measures.fro(big) == pytest.approx(3e200, rel=1e-14)
+    tiny = np.full((3, 3), 1e-200)  # squares underflow: likewise
+    assert measures.fro(tiny) == pytest.approx(3e-200, rel=1e-14)
+    assert measures.fro(np.zeros((4, 4))) == 0.0 and measures.is_symmetric(np.zeros((4, 4)), 1e-13)
+
+
+def test_dense_rayleigh_fit_never_misses_what_lstsq_finds():
+    rng = np.random.default_rng(5)
+    accepted = 0
+    for _ in range(300):
+        n = int(rng.integers(1, 25))
+        A = rng.standard_normal((n, n)) * 10.0 ** int(rng.integers(-40, 40))
+        K = A + A.T
+        M = np.diag(rng.uniform(0.5, 2.0, n))
+        a, b = rng.standard_normal(2) * 10.0 ** rng.integers(-4, 4, 2)
+        P = a * M + b * K
+        for P2 in (P, P + 1e-6 * np.linalg.norm(P) * np.eye(n)[::-1], rng.standard_normal((n, n))):
+            fast, ref = measures.rayleigh_fit(M, P2, K, 1e-12), _lstsq_fit(M, P2, K, 1e-12)
+            if ref is not None:
+                assert fast is not None
+            if fast is not None:
+                accepted += 1
+                assert np.linalg.norm(P2 - fast[0] * M - fast[1] * K) <= 1e-12 * np.linalg.norm(P2)
+    assert accepted >= 250  # the exact combinations (and the n = 1 perturbations) are found
+    # Q = 0 and Q ∥ M (the lstsq fallback) still fit
+    M = np.eye(4)
+    assert measures.rayleigh_fit(M, 0.3 * M, np.zeros((4, 4)), 1e-12) == pytest.approx((0.3, 0.0))
+    fit = measures.rayleigh_fit(M, 0.3 * M, 2.0 * M, 1e-12)
+    assert fit is not None and abs(fit[0] + 2.0 * fit[1] - 0.3) <= 1e-14
+
+
+def test_scatter_is_bitwise_the_meshgrid_assembly():
+    rng = np.random.default_rng(0)
+    for _ in range(100):
+        blocks = []
+        for _ in range(15):
+            r = rng.integers(0, 9, rng.integers(0, 4))
+            c = rng.integers(0, 9, rng.integers(1, 4))
+            blocks.append((r, c, rng.standard_normal((r.size, c.size))))
+        triplets = []
+        for r, c, v in blocks:
+            if v.size:
+                rr, cc = np.meshgrid(r, c, indexing="ij")
+                triplets.append((rr.ravel(), cc.ravel(), v.ravel()))
+        A, B = scatter(9, 9, blocks), coo_sum(9, 9, triplets)
+        assert np.array_equal(A.indptr, B.indptr) and np.array_equal(A.indices, B.indices)
+        assert np.array_equal(A.data, B.data)
+
+
+def test_column_blocks_change_no_bit(monkeypatch):
+    rng = np.random.default_rng(2)
+    n, k = 60, 9
+    M = sp.diags(rng.uniform(1, 2, n), format="csr")
+    K = sp.random(n, n, density=0.1, random_state=1, format="csr") * 100 + sp.eye(n) * 500
+    P = sp.random(n, n, density=0.05, random_state=2, format="csr")
+    s = rng.standard_normal(k) * 30 + 1j * rng.standard_normal(k) * 30
+    X = rng.standard_normal((n, k)) + 1j * rng.standard_normal((n, k))
+    Y = rng.standard_normal((n, k)) + 1j * rng.standard_normal((n, k))
+    X2 = rng.standard_normal((n, k)) + 1j * rng.standard_normal((n, k))
+    ops, norms = (M, P, K), (measures.fro(M), measures.fro(P), measures.fro(K))
+
+    def run():
+        eta, MX, PX = measures.backward_errors(ops, s, X, norms)
+        kap = measures.conditions(s, X, Y, MX, PX, norms)
+        ec, kc = measures.componentwise(ops, s, X, Y)
+        Xb, eb, _, _, n2 = measures.better_half(ops, s, X, X2, norms)
+        return eta, kap, ec, kc, Xb, eb, n2
+
+    one = run()
+    monkeypatch.setattr(measures, "COLUMN_BLOCK", 2 * n)  # two columns a block
+    assert len(measures._column_blocks(X)) == 5
+    blocked = run()
+    for a, b in zip(one, blocked):
+        assert np.array_equal(a, b)
+
+
+def test_lazy_package_exports_every_name():
+    for name in mbseig.__all__:
+        obj = getattr(mbseig, name)
+        assert obj is not None
+    for name, module in (("write_report", "mbseig.report"), ("check_modes", "mbseig.check"),
+                         ("run_sweep", "mbseig.studies"), ("modes", "mbseig.modal")):
+        assert getattr(mbseig, name) is getattr(importlib.import_module(module), name)
+    assert {"write_report", "check_modes", "run_sweep"} <= set(mbseig.__all__) <= set(dir(mbseig))
+    with pytest.raises(AttributeError):
+        mbseig.no_such_name  # noqa: B018
+
+
+def test_import_mbseig_loads_no_stage():
+    code = ("import sys, mbseig; bad = [m for m in ('scipy', 'mbseig.casefile', 'mbseig.eigen', "
+            "'matplotlib', 'control', 'dask') if m in sys.modules]; print(bad)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
+
+
+def test_blas_limit_is_a_context():
+    with blas_limit(1):
+        x = np.linalg.solve(np.eye(3) * 2.0, np.ones(3))
+    assert np.array_equal(x, np.full(3, 0.5))
+    with blas_limit(None):
+        pass
