@@ -23,9 +23,24 @@ import scipy.sparse as sp
 
 from .errors import MbseigError, NumericalError
 
-__all__ = ["scatter", "coo_sum", "dense", "constraint_rank", "null_space_basis", "colnorm",
+__all__ = ["LazyModule", "scatter", "coo_sum", "dense", "constraint_rank", "null_space_basis", "colnorm",
            "unit_columns", "jsonable", "nonfinite", "require_finite", "watched", "DOUBLE_RANGE",
            "blas_limit"]
+
+
+class LazyModule:
+    """A module imported at its first attribute access: ``spla = LazyModule(
+    "scipy.sparse.linalg")`` keeps the sparse solvers (≈ 80 ms of import) off the start-up of a
+    command that never factorizes a sparse matrix."""
+
+    def __init__(self, name):
+        self._name = name
+
+    def __getattr__(self, attr):
+        import importlib
+
+        return getattr(importlib.import_module(self._name), attr)
+
 
 DOUBLE_RANGE = "the double-precision range (2.2e-308 to 1.8e308)"
 # numpy's floating-point warnings (np.errstate "warn"): a number left the double range

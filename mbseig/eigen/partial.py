@@ -57,9 +57,9 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from ..errors import SolverError
+from ..numerics import LazyModule
 from .base import QEPSolution, partial_solvers, register, requested_path
 from .measures import (
     EPS,
@@ -75,6 +75,8 @@ from .measures import (
     undamped_roots,
     unit_columns,
 )
+
+spla = LazyModule("scipy.sparse.linalg")  # sparse solvers: imported at first use
 
 __all__ = ["solve_partial", "sparse_structure"]
 

@@ -46,12 +46,13 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from ..errors import EquilibriumError, MbseigError
-from ..numerics import constraint_rank
+from ..numerics import LazyModule, constraint_rank
 from .linalg import DENSE_LIMIT, SMALL, NewtonMatrix, StepScales, multipliers, solve_bordered
 from .newton import Memo, Stall, newton, settings_for
+
+spla = LazyModule("scipy.sparse.linalg")  # sparse solvers: imported at first use
 
 __all__ = ["Family", "BranchPoint", "Branch", "follow", "CORRECTOR_ITER", "FD_REL", "CTOL"]
 

@@ -22,11 +22,12 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from ..errors import EquilibriumError
 from ..model.elements import DistanceConstraint
-from ..numerics import blas_limit, constraint_rank
+from ..numerics import LazyModule, blas_limit, constraint_rank
+
+spla = LazyModule("scipy.sparse.linalg")  # sparse solvers: imported at first use
 
 __all__ = ["SMALL", "DENSE_LIMIT", "StepScales", "NewtonMatrix", "multipliers",
            "augmented", "blas_threads", "solve_bordered"]
