@@ -89,7 +89,11 @@ class Builder:
                 self.q_init += list(pos)
             self.point_index[pname] = idx
             self.point_pos[pname] = pos
-        _flexible().allocate(self, self.mesh)  # beam nodes, FE-body coordinates
+        flex = any(k in self.data for k in ("beams", "fe_bodies", "refinement"))
+        if flex:
+            _flexible().allocate(self, self.mesh)  # beam nodes, FE-body coordinates
+        else:
+            self.beam_specs, self.fe_specs = [], []
         if not self.q_init:
             raise CaseError("the model has no free coordinates (every point is fixed)", element="points")
         self.n = len(self.q_init)
@@ -160,8 +164,8 @@ class Builder:
             self.add_constraint(constraints, rod, f)
 
         mass_elements = []  # configuration-dependent masses (co-rotational beams)
-        flexible_record = _flexible().assemble(self, forces, constraints, mass_blocks, mass_elements,
-                                     g_const, gravity)
+        flexible_record = {} if not flex else _flexible().assemble(
+            self, forces, constraints, mass_blocks, mass_elements, g_const, gravity)
         self.gravity_force = g_const.copy() if gravity is not None else None  # masses, bodies, beams
 
         for item, label, names in expand("joints", self.data.get("joints", []), self.params):

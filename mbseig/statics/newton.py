@@ -344,7 +344,7 @@ def force_scale(model, q, rank_tol):
         K, _ = model.force_jacobians(q)
         Phi_q = model.phi_q(q)
         lam = multipliers(Phi_q, g, rank_tol, check=False)[0]
-        knorm = sp.linalg.norm(K, np.inf) if K.nnz else 0.0
+        knorm = float(abs(sp.csr_matrix(K)).sum(axis=1).max()) if K.nnz else 0.0  # ‖K‖_∞
         f = max(float(np.max(np.abs(g), initial=0.0)), knorm * model.length_scale,
                 float(np.max(np.abs(Phi_q.T @ lam), initial=0.0)))
     return f if np.isfinite(f) and f > 0 else 1.0

@@ -108,7 +108,6 @@ def _lm_step(Js, r, mu):
     """z = −Jsᵀ (Js Jsᵀ + μ I)⁻¹ r (dense up to 300 rows, sparse LU above)."""
     import scipy.linalg as sla
     import scipy.sparse as sp
-    import scipy.sparse.linalg as spla
 
     m = Js.shape[0]
     G = Js @ Js.T
@@ -122,6 +121,8 @@ def _lm_step(Js, r, mu):
                 except sla.LinAlgError:
                     w = sla.lstsq(A, r)[0]
             else:
+                import scipy.sparse.linalg as spla  # large models only: off the start-up path
+
                 w = spla.splu((G + mu * sp.identity(m)).tocsc()).solve(r)
         except (ValueError, RuntimeError, sla.LinAlgError):  # not finite, or singular
             return np.zeros(Js.shape[1])
@@ -135,7 +136,7 @@ def _stationary(model, q, phi, cscale, scales):
     r = phi / cscale
     Js = _scaled_jacobian(model, q, cscale, scales)
     grad = Js.T @ r
-    nJ = sp.linalg.norm(Js)
+    nJ = float(np.linalg.norm(sp.csr_matrix(Js).data))  # ‖Js‖_F
     return float(np.linalg.norm(grad)) <= STATIONARY * nJ * float(np.linalg.norm(r))
 
 
