@@ -89,6 +89,7 @@ class LinearModel:
     input_names: tuple = ()
     output_names: tuple = ()
     output_units: tuple = ()
+    input_units: tuple = ()
     angle_names: tuple = ()  # named angles of the case (mode shapes in angles)
     angle_rows: np.ndarray = None  # n_a × n: δθ = angle_rows δq
     independent: tuple = ()  # coordinates whose directions fix the null-space basis
@@ -291,6 +292,7 @@ def _signals(model, q0, N, G, rank, Md, Cd, Kd, Mr, Pr, Qr):
     return {"B": B, "C": C, "D": D, "input_names": in_names,
             "output_names": tuple(o.name for o in outputs),
             "output_units": tuple(o.unit for o in outputs),
+            "input_units": tuple(i.unit(model) for i in inputs),
             "angle_names": names, "angle_rows": rows}
 
 

@@ -418,3 +418,18 @@ def test_modes_repr_table_and_dataframe():
     assert isinstance(df, pd.DataFrame) and len(df) == 3
     np.testing.assert_allclose(df["freq_n_hz"], md.omega_n / (2 * np.pi))
     np.testing.assert_allclose(df["freq_hz"], md.omega_d / (2 * np.pi))
+
+
+def test_signal_units_label_the_bode_plot(tmp_path):
+    """Units of u and y as DESIGN.md §8 defines them: an actuator (spring-damper) input is a
+    force in N, a body-pair input a moment in N m, a body-pair angle output rad; the Bode
+    magnitude axis carries [rad/N]."""
+    from mbseig.studies.frf import bode_figure, frf
+
+    m = mbseig.load_case(CASE)
+    lin = mbseig.linearize(m, mbseig.equilibrium(m))
+    units = dict(zip(lin.input_names, lin.input_units))
+    assert units == {"actuator force": "N", "MCP torque": "N m"}
+    assert dict(zip(lin.output_names, lin.output_units))["MCP angle"] == "rad"
+    fig = bode_figure(frf(lin, "actuator force", "MCP angle", freq_hz=[1.0, 10.0]))
+    assert fig.axes[0].get_ylabel().endswith("[rad/N]")

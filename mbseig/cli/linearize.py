@@ -96,6 +96,7 @@ def run(args) -> int:
         "notes": output_notes(model, eq),
         "input_names": list(lin.input_names), "output_names": list(lin.output_names),
         "output_units": list(lin.output_units),
+        "input_units": list(lin.input_units),
     }
     if args.out:
         _write(Path(args.out), arrays, meta)

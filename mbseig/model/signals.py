@@ -73,6 +73,16 @@ class Input:
     frames: tuple = ()
     axis: np.ndarray = None
 
+    def unit(self, model) -> str:
+        """The unit of u: N m for a moment (a body-pair input or a torsional element's), N
+        otherwise."""
+        if self.kind in ("moment2", "moment3"):
+            return "N m"
+        if self.kind == "element":
+            el = find_element(model, self.element, "force", self.label)
+            return "N m" if isinstance(el, TorsionalSpringDamper) else "N"
+        return "N"
+
     def generalized_force(self, model, q) -> np.ndarray:
         """b(q) of the module docstring (n-vector, per unit of u)."""
         b = np.zeros(model.n)

@@ -130,7 +130,9 @@ def frf(lin, input_name, output_name, freq_hz=None) -> FRF:
                             f"choose other frequencies", element="--hz") from None
         resp[k] = (cq + s * cv) @ x + d
     j = list(lin.output_names).index(output_name)
-    units = (lin.output_units[j] if lin.output_units else "", "")
+    i = list(lin.input_names).index(input_name)
+    units = (lin.output_units[j] if lin.output_units else "",
+             lin.input_units[i] if lin.input_units else "")
     return FRF(input_name, output_name, freq_hz, resp, p, zeros(lin, input_name, output_name),
                dc_gain(lin, input_name, output_name), units)
 
@@ -157,7 +159,8 @@ def bode_figure(r: FRF):
     f = r.freq_hz
     plot = ax1.loglog if np.all(f > 0) else ax1.semilogy
     plot(f, np.where(mag > 0, mag, np.nan))
-    ax1.set_ylabel(f"|{r.output} / {r.input}|")
+    yu, uu = r.units
+    ax1.set_ylabel(f"|{r.output} / {r.input}|" + (f" [{yu}/{uu}]" if yu and uu else ""))
     ax1.grid(True, which="both", alpha=0.3)
     (ax2.semilogx if np.all(f > 0) else ax2.plot)(f, np.degrees(np.unwrap(np.angle(r.response))))
     ax2.set_ylabel("phase [deg]")
