@@ -48,7 +48,13 @@ import scipy.sparse as sp
 from .errors import CaseError
 from .model.linear_case import LinearCase
 from .model.signals import input_forces, output_rows
-from .numerics import DOUBLE_RANGE, null_space_basis, require_finite, watched
+from .numerics import (
+    DOUBLE_RANGE,
+    element_name,
+    null_space_basis,
+    require_finite,
+    watched,
+)
 from .statics import Equilibrium, solved
 
 __all__ = ["LinearModel", "linearize", "continuous_null_basis"]
@@ -318,13 +324,6 @@ def _multiplier_maps(model, G, rank, N, b, Md, Cd, Kd, Mr, Pr, Qr, out):
     return Lx, Lv, Lu
 
 
-def _short_name(label):
-    """'forces[3] 'MCP'' → 'MCP' (the element's own name), else the label."""
-    if label.endswith("'") and " '" in label:
-        return label[label.index(" '") + 2:-1]
-    return label
-
-
 def _named_angles(model, q0, outputs):
     """Names and full-coordinate rows of the case's named angles: report angles, torsional
     elements and angle outputs (first name wins)."""
@@ -347,7 +346,7 @@ def _named_angles(model, q0, outputs):
     for f in model.forces:
         if isinstance(f, TorsionalSpringDamper):
             W, g = f._parts(q0, np.zeros(model.n))[:2]
-            add(_short_name(f.name), f.idx, g @ W)
+            add(element_name(f.name), f.idx, g @ W)
     for o in outputs:
         if o.kind == "angle" and o.quantity == "angle":
             Jq = output_rows(model, o, q0)[0]

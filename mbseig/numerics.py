@@ -25,7 +25,31 @@ from .errors import MbseigError, NumericalError
 
 __all__ = ["LazyModule", "scatter", "coo_sum", "dense", "constraint_rank", "null_space_basis", "colnorm",
            "unit_columns", "jsonable", "nonfinite", "require_finite", "watched", "DOUBLE_RANGE",
-           "blas_limit"]
+           "blas_limit", "element_name", "user_names"]
+
+
+# an element's label as the reader makes it (casefile.fields.expand): ``forces[3] 'actuator'``,
+# the name as repr() quotes it, possibly followed by a part (`` (rigid length)``)
+_LABEL = re.compile(r"""\b[a-z_]+\[\d+\] ('(?:[^'\\]|\\.)*'|"(?:[^"\\]|\\.)*")""")
+
+
+def element_name(label, *, part=True) -> str:
+    """The name the user wrote for an element: ``forces[3] 'actuator'`` → ``actuator``;
+    ``bodies[1] 'middle' (rigid length)`` → ``middle (rigid length)`` (``part=False``:
+    ``middle``).  A label without a name is returned as it is."""
+    text = str(label)
+    m = _LABEL.search(text)
+    if m is None or m.start() != len(text) - len(text.lstrip()):
+        return text
+    name = m.group(1)[1:-1].replace("\\'", "'").replace('\\"', '"')
+    return name + text[m.end():].rstrip() if part else name
+
+
+def user_names(text):
+    """Every element label in ``text`` replaced by the user's name (reports, tables)."""
+    if not isinstance(text, str):
+        return text
+    return _LABEL.sub(lambda m: m.group(1)[1:-1].replace("\\'", "'").replace('\\"', '"'), text)
 
 
 class LazyModule:

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import CaseError
+from .numerics import element_name
 
 __all__ = ["root_locus", "modes_vs_parameter", "stability_map", "bifurcation_diagram",
            "stability_chart", "pole_map", "mechanism_modes", "plot_check", "speed_accuracy", "save"]
@@ -462,12 +463,6 @@ def _pairs_matching(model, aff, q0):
     return (names[a], names[b]) if E[a, b] <= 1e-9 * scale else None
 
 
-def _element_name(name):
-    """The element's name as the user wrote it: ``forces[3] 'actuator'`` → ``actuator``."""
-    m = re.fullmatch(r"\s*\w+\[\d+\]\s+'(.*)'(?:\s*\(.*\))?\s*", str(name))
-    return m.group(1) if m else str(name)
-
-
 def mechanism_layout(model, q0):
     """What a planar drawing shows, found from the model by duck typing: bodies (basic points and
     body markers), fixed points, springs and dampers between named points, rods, lines that
@@ -487,7 +482,7 @@ def mechanism_layout(model, q0):
             body_dirs[name] = pts
     for e in getattr(model, "forces", ()):
         kind = type(e).__name__
-        user = _element_name(getattr(e, "name", kind))
+        user = element_name(getattr(e, "name", kind), part=False)
         if hasattr(e, "diff") and hasattr(e, "stiffness"):
             ends = _pairs_matching(model, e.diff, q0)
             if ends:
@@ -501,7 +496,7 @@ def mechanism_layout(model, q0):
         elif hasattr(e, "stacked") and hasattr(e, "magnitude"):
             out["loads"].append({"name": user, "element": e})
     for c in getattr(model, "constraints", ()):
-        user = _element_name(getattr(c, "name", ""))
+        user = element_name(getattr(c, "name", ""), part=False)
         if hasattr(c, "diff") and hasattr(c, "length"):
             if any(user == b["name"] for b in out["bodies"]):
                 continue  # a body's rigid length: the body is drawn

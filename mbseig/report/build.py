@@ -23,7 +23,6 @@ from __future__ import annotations
 import hashlib
 import math
 import os
-import re
 import time
 from pathlib import Path
 
@@ -34,6 +33,7 @@ from ..check import check_modes
 from ..linear import linearize
 from ..modal import modes
 from ..model.linear_case import LinearCase
+from ..numerics import user_names
 from ..statics import equilibrium
 from ..statics.reactions import posture, reactions
 from ..studies import analyze, run_sweep, write_outputs
@@ -432,15 +432,6 @@ def _mpq(lin):
 
 
 # ---------------------------------------------------------------------------------------------
-_LABEL = re.compile(r"\b[a-z_]+\[\d+\] '([^']*)'")
-
-
-def user_names(text: str) -> str:
-    """Element names as the user wrote them: ``forces[3] 'actuator'`` → ``actuator`` (the
-    internal ``table[index]`` labels of error messages do not belong in a report)."""
-    return _LABEL.sub(r"\1", text) if isinstance(text, str) else text
-
-
 def _clean(blocks):
     out = []
     for b in blocks:

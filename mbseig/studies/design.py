@@ -38,12 +38,11 @@ is zero within rounding (a rigid-body mode's potential) gets an empty dict.
 
 from __future__ import annotations
 
-import re
-
 import numpy as np
 
 from ..errors import CaseError
 from ..linear import linearize
+from ..numerics import element_name
 from .pipeline import analyze, as_spec
 from .point import equilibrium_stage
 
@@ -144,13 +143,6 @@ def eigen_sensitivities(case_spec, *, config=None, params=None, analysis=None,
     return out
 
 
-def _short(label):
-    """``forces[3] 'MCP'`` → ``MCP``; ``bodies[1] 'middle' (rigid length)`` → ``middle (rigid
-    length)``; other labels unchanged."""
-    m = re.fullmatch(r"\w+\[\d+\] '(.*)'(.*)", label)
-    return m.group(1) + m.group(2) if m else label
-
-
 def _shares(parts):
     total = sum(parts.values())
     scale = sum(abs(v) for v in parts.values())
@@ -188,7 +180,7 @@ def modal_energy(model, eq, lin, modes_obj) -> list:
             continue
         K, _ = f.jacobians(q0, zero)
         if np.any(K != 0):
-            pot_parts.append((_short(f.name), f.idx, np.asarray(K)))
+            pot_parts.append((element_name(f.name), f.idx, np.asarray(K)))
     if model.n_constraints and lin.constraint_stiffness:
         G = model.phi_q(q0).toarray()
         lam_g = np.zeros(model.n_constraints)
@@ -203,7 +195,7 @@ def modal_energy(model, eq, lin, modes_obj) -> list:
             lam_c = (lam0 - lam_g)[off[k]:off[k + 1]]
             H = c.hess(q0, lam_c)
             if np.any(H != 0):
-                pot_parts.append((_short(c.name), c.idx, np.asarray(H)))
+                pot_parts.append((element_name(c.name), c.idx, np.asarray(H)))
     out = []
     shapes = lin.N @ modes_obj.vectors
     for k in range(len(modes_obj)):
