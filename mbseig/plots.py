@@ -206,7 +206,8 @@ def stability_map(res):
     ax = fig.subplots()
     x, y = res.axes[0][1], res.axes[1][1]
     A = res.abscissa_grid()  # (len(x), len(y))
-    lim = float(np.nanmax(np.abs(A))) or 1.0
+    finite = np.abs(A[np.isfinite(A)])  # every point failed: an empty map, not a crash
+    lim = (float(finite.max()) if finite.size else 0.0) or 1.0
     from matplotlib.colors import SymLogNorm
 
     thresh = max(lim * 1e-3, 1e-12)

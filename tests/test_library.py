@@ -118,4 +118,8 @@ def test_unreachable_scheduler_one_line_exit_2(sweep):
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("mbseig: ") and "Dask scheduler" in lines[0]
     assert "Traceback" not in out.stderr
-    assert elapsed < 10.0  # the connection timeout is 4 s (the library default would be 30 s)
+    # the connection timeout is 4 s (the message says so); the wall clock includes starting
+    # Python, mbseig and dask in the subprocess (≈ 5 s idle), so it is bounded loosely: the
+    # library's default timeout of 30 s would exceed 25 s on its own
+    assert "within 4 s" in lines[0]
+    assert elapsed < 25.0

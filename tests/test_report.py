@@ -5,9 +5,11 @@ The browser test needs Chromium and is skipped without it; the embedded-image ch
 
 import sys
 
+import numpy as np
 import pytest
 from conftest import CASES, ROOT
 
+import mbseig
 from mbseig.cli import main
 from mbseig.report import write_report
 
@@ -26,15 +28,10 @@ def test_report_sections_and_time_domain_check(tmp_path):
         assert heading in text
     assert "| MCP | 45 |" in text  # posture: the commanded angle (inverse statics)
     assert "all passed" in text  # every C1 mode confirmed by the nonlinear simulation
-    # the summary names the parameters that move the least-damped mode most (when the
-    # sensitivities of mbseig.studies.design are there), each with its unit
-    try:
-        import mbseig.studies.design  # noqa: F401
-    except ImportError:
-        assert "not available in this installation" in text
-    else:
-        assert "C1: the parameters that move the least-damped mode (mode 1" in text
-        assert "1/s per N/m" in text or "1/s per m" in text or "1/s per N s/m" in text
+    # the summary names the parameters that move the least-damped mode most, each with its
+    # unit: in C1 hand_length (m) moves it most (+1 % moves Re s by +0.61 1/s, the next 0.10)
+    assert "C1: the parameters that move the least-damped mode (mode 1" in text
+    assert "hand_length (= 0.19 m; ∂Re s/∂hand_length =" in text and "1/s per m" in text
     problems, n = check_report_html.check_embedded(page.read_text())
     assert problems == [] and n == 2  # mode shapes and pole map
 
@@ -58,7 +55,10 @@ def test_report_summary_names_units_provenance(tmp_path, monkeypatch):
     summary = text.split("## Summary")[1].split("## Comparison")[0]
     for cfg in ("base", "C1", "C2", "C3", "C4"):
         assert f"| {cfg} | stable |" in summary
-    assert "ω_n/2π =" in summary and "ω_d/2π =" in summary and "δ = 12.39 1/s" in summary
+    # the least-damped mode's δ, printed to 4 digits, is the one mbseig.analyze gives
+    delta = float(np.min(mbseig.analyze(CASES / "hand_device.toml", config="C1").modes.delta))
+    assert "ω_n/2π =" in summary and "ω_d/2π =" in summary
+    assert f"δ = {delta:.4g} 1/s" in summary
     assert re.search(r"\b(forces|joints|bodies)\[\d+\]", text) is None  # no internal labels
     assert "Inverse statics (MCP command)" in text and "| actuator | spring |" in text
     assert "| k_a | 1000 | N/m |" in text and "| damping_scale | 1 | – |" in text
@@ -110,3 +110,13 @@ def test_report_on_a_linear_case(tmp_path):
     assert "### Modes — verdict: critical" in text  # closed form: gyroscopically stable, δ = 0
     assert "### Equilibrium" not in text and "_shapes.png" not in text
     assert "_poles.png" in text and html_path.exists()
+
+
+def test_comment_units_are_not_read_from_prose():
+    """A parameter's unit is the comment's leading unit words: "# N s/m actuator damping" is
+    N s/m, "# m, each rod" is m, but "# A factor for the load" is prose (A is not amperes)."""
+    from mbseig.report.units import _comment_units
+
+    text = ("[parameters]\nk = 1.0  # A factor for the load\nc = 1.0  # N s/m actuator damping\n"
+            "L = 0.1  # m, each rod\nf = 0.0  # N     fingertip force\nt = 1.0  # s\n")
+    assert _comment_units(text) == {"c": "N s/m", "L": "m", "f": "N", "t": "s"}

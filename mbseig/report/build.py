@@ -30,6 +30,7 @@ import numpy as np
 
 from .. import plots
 from ..check import check_modes
+from ..errors import MbseigError
 from ..linear import linearize
 from ..modal import modes
 from ..model.linear_case import LinearCase
@@ -190,9 +191,6 @@ def _config_blocks(case, config, out_dir, *, run_check, stem, units):
                "out_of_range": rep["out_of_range"],
                "actuator": [r["tension"] for r in rep["actuator"]]}
     return blocks, summary
-
-
-_SHOWN_PARAMS: set = set()
 
 
 def _mode_label(k, md):
@@ -450,11 +448,11 @@ def _clean(blocks):
 def provenance(case) -> dict:
     """mbseig version, date (UTC; ``SOURCE_DATE_EPOCH`` when set, for reproducible builds) and
     the SHA-256 of the case file: what a reader needs to know which inputs made the report."""
-    try:
-        from importlib.metadata import version
+    from importlib.metadata import PackageNotFoundError, version
 
+    try:
         ver = version("mbseig")
-    except Exception:  # noqa: BLE001 - not installed as a distribution (a source tree)
+    except PackageNotFoundError:  # not installed as a distribution (a source tree)
         ver = "unknown"
     epoch = os.environ.get("SOURCE_DATE_EPOCH")
     try:
@@ -575,29 +573,20 @@ def _summary(case, summaries, study_sums, units, sensitivities=True):
         blocks += [("p", n) for n in notes]
     elif not sensitivities:
         blocks.append(("p", "Eigenvalue sensitivities not computed (--no-sensitivities)."))
-    else:
-        blocks.append(("p", _SENSITIVITY_MISSING))
     return blocks
 
 
-_SENSITIVITY_MISSING = ("Which parameter moves the least stable mode most: not computed "
-                        "(eigenvalue sensitivities are not available in this installation).")
-
-
 def _sensitivity_sentence(case, s, units):
-    """∂s/∂p of the least-damped mode for every parameter (mbseig.studies.design, when
-    present): the parameter that moves Re s most per relative change, with units."""
-    try:
-        from ..studies import design
-    except ImportError:
-        return None
-    fn = getattr(design, "eigen_sensitivities", None)
-    if fn is None or s["least"] is None:
+    """∂s/∂p of the least-damped mode for every parameter (mbseig.studies.design): the
+    parameter that moves Re s most per relative change, with units."""
+    from ..studies.design import eigen_sensitivities
+
+    if s["least"] is None:
         return None
     config = None if s["config"] == "base" else s["config"]
     try:
-        sens = fn(case, config=config, analysis=s.get("analysis"))
-    except Exception as exc:  # noqa: BLE001 - an optional part of the summary
+        sens = eigen_sensitivities(case, config=config, analysis=s.get("analysis"))
+    except MbseigError as exc:  # e.g. a model kept sparse: said in the report, not hidden
         return f"{s['config']}: sensitivities not computed ({type(exc).__name__}: {exc})."
     k = s["least"]
     ranked = []

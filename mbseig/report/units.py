@@ -64,14 +64,23 @@ def _comment_units(text: str) -> dict:
         m = re.match(r"^\s*([A-Za-z_]\w*)\s*=\s*[^#]*#\s*(.*)$", line)
         if not m:
             continue
-        words = []
-        for tok in re.split(r"\s+", m.group(2).strip()):
+        comment = m.group(2).strip()
+        words, ended = [], False
+        for tok in re.split(r"\s+", comment):
             end = tok[-1:] in ",;"
             if not _is_unit_token(tok):
                 break
             words.append(tok.strip(",;"))
             if end:
+                ended = True
                 break
+        # one letter then prose after a single space ("A factor for the load", "g is ...")
+        # is an English word, not a unit; a unit stands alone, before a comma or semicolon,
+        # or before two spaces ("N     fingertip force")
+        rest = comment[len(words[0]):] if words else ""
+        if (len(words) == 1 and len(words[0]) == 1 and not ended and rest
+                and re.match(r" \S", rest)):
+            words = []
         if words:
             out[m.group(1)] = " ".join(words)
     return out

@@ -118,25 +118,15 @@ class Runner:
         return results
 
 
-def progress_bar(stream=None, width=30):
-    """A progress callback ``(label, done, total)`` drawing one bar a stage (lines, boundaries,
-    curves) on ``stream`` (default stderr) with its rate and the time left, by tqdm; a plain
-    ``label [#####.....] k/n`` line when tqdm is not installed."""
+def progress_bar(stream=None):
+    """A progress callback ``(label, done, total)`` drawing one tqdm bar a stage (lines,
+    boundaries, curves) on ``stream`` (default stderr) with its rate and the time left."""
+    from tqdm import tqdm
+
     stream = sys.stderr if stream is None else stream
-    try:
-        from tqdm import tqdm
-    except ImportError:  # tqdm is a dependency; keep a plain bar if it was removed
-        tqdm = None
     bars = {}
 
     def show(label, done, total):
-        if tqdm is None:
-            filled = int(width * done / total) if total else width
-            stream.write(f"\r{label:<10} [{'#' * filled}{'.' * (width - filled)}] {done}/{total}")
-            if done >= total:
-                stream.write("\n")
-            stream.flush()
-            return
         bar = bars.get(label)
         if bar is None or bar.total != total:
             if bar is not None:
