@@ -42,7 +42,7 @@ _LAZY = {
     "modes": "modal", "Modes": "modal",
     "solve_qep": "eigen", "QEPSolution": "eigen",
     "check_modes": "check", "CheckResult": "check", "ModeCheck": "check",
-    "analyze": "studies", "run_sweep": "studies",
+    "analyze": "studies", "run_sweep": "studies", "SweepResult": "studies",
     "write_report": "report",
     "LinearCase": "model", "Model": "model",
     "MbseigError": "errors", "CaseError": "errors", "ExpressionError": "errors",
@@ -50,35 +50,7 @@ _LAZY = {
     "NumericalError": "errors", "ReportedWarning": "errors",
 }
 
-__all__ = [
-    "load_case",
-    "read_case",
-    "equilibrium",
-    "linearize",
-    "modes",
-    "solve_qep",
-    "check_modes",
-    "analyze",
-    "run_sweep",
-    "write_report",
-    "CaseSpec",
-    "LinearCase",
-    "Model",
-    "Equilibrium",
-    "LinearModel",
-    "Modes",
-    "QEPSolution",
-    "CheckResult",
-    "ModeCheck",
-    "MbseigError",
-    "CaseError",
-    "ExpressionError",
-    "EquilibriumError",
-    "SolverError",
-    "SimulationError",
-    "NumericalError",
-    "ReportedWarning",
-]
+__all__ = list(_LAZY)
 
 
 def __getattr__(name):

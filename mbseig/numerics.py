@@ -12,6 +12,7 @@
 
 from __future__ import annotations
 
+import ast
 import contextlib
 import math
 import re
@@ -41,7 +42,7 @@ def element_name(label, *, part=True) -> str:
     m = _LABEL.search(text)
     if m is None or m.start() != len(text) - len(text.lstrip()):
         return text
-    name = m.group(1)[1:-1].replace("\\'", "'").replace('\\"', '"')
+    name = _unquote(m)
     return name + text[m.end():].rstrip() if part else name
 
 
@@ -49,7 +50,12 @@ def user_names(text):
     """Every element label in ``text`` replaced by the user's name (reports, tables)."""
     if not isinstance(text, str):
         return text
-    return _LABEL.sub(lambda m: m.group(1)[1:-1].replace("\\'", "'").replace('\\"', '"'), text)
+    return _LABEL.sub(_unquote, text)
+
+
+def _unquote(match) -> str:
+    """The name inside a label's repr() quotes (escapes undone exactly: the reader wrote it)."""
+    return ast.literal_eval(match.group(1))
 
 
 class LazyModule:

@@ -189,9 +189,11 @@ class Builder:
         if "report" in self.data:
             report = parse_report(self.data["report"], self)
 
-        from .signals import read_signals  # only cases with [[inputs]]/[[outputs]] need it
+        inputs, outputs = (), ()
+        if "inputs" in self.data or "outputs" in self.data:
+            from .signals import read_signals  # only cases with signals need the reader
 
-        inputs, outputs = read_signals(self, forces, constraints)
+            inputs, outputs = read_signals(self, forces, constraints)
         commands = tuple((d, self._driver_targets(names, f)) for d, names, f in self.drivers)
         for driver, targets in commands:  # checked now; resolved by mbseig.equilibrium
             check_command(driver, targets, forces, constraints)

@@ -102,10 +102,10 @@ def fro(A) -> float:
     if big == 0.0:
         return 0.0
     if _SMALL < big < _BIG:
-        if sp.issparse(A):
-            import scipy.sparse.linalg as spla  # only here: keeps it off the start-up path
-
-            return float(spla.norm(A))
+        if sp.issparse(A):  # duplicates summed first: their squares do not add
+            B = A.tocsr(copy=True)
+            B.sum_duplicates()
+            return float(np.linalg.norm(B.data))
         return float(np.linalg.norm(A))
     return big * float(np.linalg.norm(np.ravel(data) / big))
 

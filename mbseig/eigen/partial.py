@@ -576,9 +576,13 @@ def _slepc_search(run, want, omega_t, band):
             raise SolverError(f"{want} modes asked of a problem with {run['dof']} degrees of "
                               f"freedom: use the dense path")
         s_all, X_all, info = slepc_solve(Mb, Pb, Qb, nev, 0.0, ncv=run["ncv"])
-        finite = np.isfinite(s_all) & (np.abs(s_all) < 1e150)
-        s_all, X_all = s_all[finite], X_all[:, finite]
-        reach = float(np.max(np.abs(s_all))) if s_all.size else 0.0
+        if not (np.all(np.isfinite(s_all)) and np.all(np.isfinite(X_all))):
+            raise SolverError("partial-slepc returned non-finite eigenpairs (is T(0) = Q "
+                              "singular? a rigid-body mode: use partial-companion)")
+        # SLEPc guarantees the nev nearest to the target; pairs it converged beyond them are
+        # not, so the disc |s| ≤ reach that is known complete ends at the nev-th
+        reach = (float(np.sort(np.abs(s_all))[min(nev, s_all.size) - 1]) if s_all.size
+                 else 0.0)
         disc = (0.0 + 0.0j, 1.0 / reach if reach > 0 else np.inf, False)
         tol = 1e-9 * np.maximum(np.abs(s_all), 1e-300)
         upper = np.flatnonzero(s_all.imag >= -tol)

@@ -95,10 +95,15 @@ def slepc_solve(Mb, Pb, Qb, nev, target=0.0, *, tol=1e-14, maxit=1000, ncv=None,
                            text=True)
         if p.returncode != 0 or not os.path.exists(path_out):
             last = (p.stderr.strip().splitlines() or ["no message"])[-1]
-            raise SolverError(f"partial-slepc: the SLEPc worker failed ({last})")
-        with np.load(path_out) as out:
-            s, X = out["s"], out["X"]
-            info = {k: out[k].item() for k in ("its", "nconv", "setup", "solve", "reason", "factor")}
+            raise SolverError(f"partial-slepc: the SLEPc worker failed (exit {p.returncode}: "
+                              f"{last})")
+        try:
+            with np.load(path_out) as out:
+                s, X = out["s"], out["X"]
+                info = {k: out[k].item()
+                        for k in ("its", "nconv", "setup", "solve", "reason", "factor")}
+        except (OSError, ValueError, KeyError) as exc:
+            raise SolverError(f"partial-slepc: the worker's result is unreadable ({exc})") from None
     if info["reason"] < 0:
         raise SolverError(f"partial-slepc: SLEPc did not converge (reason {info['reason']}, "
                           f"{info['nconv']} of {nev} pairs after {info['its']} restarts)")

@@ -81,4 +81,8 @@ def main(path_in, path_out):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1], sys.argv[2])
+    try:
+        main(sys.argv[1], sys.argv[2])
+    except Exception as exc:  # one line for the parent's SolverError (PETSc errors included)
+        print(" ".join(f"{type(exc).__name__}: {exc}".split())[:400], file=sys.stderr)
+        sys.exit(2)
