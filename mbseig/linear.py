@@ -148,20 +148,6 @@ class LinearModel:
                               outputs=list(self.output_names), states=states)
         return control.ss(A, B, C, D)
 
-    def transfer(self, s, input_name, output_name):
-        """Y(s)/U(s) of one input and one output from the second-order form,
-        (C_q + s C_v)(M s² + P s + Q)⁻¹ B + D, for an array of complex s (no M⁻¹ formed)."""
-        i = _index(self.input_names, input_name, "input")
-        j = _index(self.output_names, output_name, "output")
-        n = self.dof
-        Cq, Cv = self.C[j, :n], self.C[j, n:]
-        b = self.B[:, i]
-        out = []
-        for z in np.atleast_1d(s):
-            x = np.linalg.solve(self.M * z * z + self.P * z + self.Q, b)
-            out.append((Cq + z * Cv) @ x + self.D[j, i])
-        return np.array(out)
-
 
 def linearize(model, eq: Equilibrium, *, rank_tol: float | None = None,
               constraint_stiffness: bool = True, sparse: bool | None = None,
@@ -252,24 +238,29 @@ def continuous_null_basis(Phi_q, n, rank_tol, names=None, reference=None):
         _, _, piv = sla.qr(Z.T, mode="economic", pivoting=True)
         sel = np.sort(piv[:d])
     else:
-        sel = np.array([names.index(r) if isinstance(r, str) else int(r) for r in reference])
+        sel = []
+        for r in reference:
+            if isinstance(r, str) and r in names:
+                sel.append(names.index(r))
+            elif isinstance(r, (int, np.integer)) and not isinstance(r, bool) \
+                    and 0 <= int(r) < len(names):
+                sel.append(int(r))
+            else:
+                raise CaseError(f"unknown coordinate {r!r} in the reference of the null-space "
+                                f"basis", element="linearization")
+        sel = np.array(sel, dtype=np.intp)
         if sel.size != d:
             raise CaseError(f"reference names {sel.size} coordinates for a null space of "
                             f"dimension {d}", element="linearization")
     A = Z[sel, :].T  # Zᵀ E
     U, sv, Vt = np.linalg.svd(A)
+    if reference is not None and sv[-1] <= 1e-8:
+        raise CaseError("the reference coordinates do not fix the null space (repeated, or a "
+                        "direction the constraints forbid): N would be arbitrary",
+                        element="linearization")
     N = Z @ (U @ Vt)
     # N is the polar factor of Π E: independent of the SVD's choice of Z (up to rounding)
     return N, rank, tuple(names[i] for i in sel), float(sv[-1])
-
-
-def _index(names, name, what):
-    try:
-        return list(names).index(name)
-    except ValueError:
-        known = ", ".join(names) or "none"
-        raise CaseError(f"unknown {what} {name!r} (known: {known})",
-                        element=f"--{what}") from None
 
 
 def _signals(model, q0, N, G, rank, Md, Cd, Kd, Mr, Pr, Qr):

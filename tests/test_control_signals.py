@@ -242,3 +242,41 @@ def test_statespace_without_signals_keeps_the_old_form():
     sys = lin.to_statespace()
     assert sys.ninputs == lin.dof and sys.noutputs == 2 * lin.dof
     assert isinstance(sys, control.StateSpace)
+
+
+def test_zero_length_spring_output_and_bad_reference_are_refused():
+    """A spring sitting at zero length has no line of action and no derivative of its length:
+    a length output on it is refused naming the element (was a floating-point error naming
+    neither).  A null-space reference naming an unknown coordinate is refused in one line
+    (was a Python ValueError)."""
+    text = """
+schema_version = 1
+dimension = 2
+[[points]]
+name = "O"
+position = [0.0, 0.0]
+fixed = true
+[[points]]
+name = "P"
+position = [0.0, 0.0]
+[[masses]]
+point = "P"
+mass = 1.0
+[[forces]]
+type = "spring"
+name = "s"
+points = ["O", "P"]
+stiffness = 10.0
+free_length = 0.0
+[[outputs]]
+name = "y"
+quantity = "length"
+element = "s"
+"""
+    model = _build(text)
+    eq = mbseig.equilibrium(model)
+    with pytest.raises(CaseError, match="zero length at the equilibrium"):
+        mbseig.linearize(model, eq)
+    m = mbseig.load_case(CASES / "four_bar.toml")
+    with pytest.raises(CaseError, match="unknown coordinate 'nope'"):
+        mbseig.linearize(m, mbseig.equilibrium(m), reference=["nope"])

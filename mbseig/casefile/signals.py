@@ -21,7 +21,7 @@ import numpy as np
 
 from ..model.elements import FollowerForce, SpringDamper, TorsionalSpringDamper
 from ..model.signals import OUTPUT_QUANTITIES, Input, Output
-from .fields import Fields, expand
+from .fields import Fields, expand, template
 
 __all__ = ["read_signals", "UNIT_TOL"]
 
@@ -120,7 +120,7 @@ def _inputs(builder, forces):
                 if not isinstance(pair, list) or len(pair) != 2 or not all(
                         isinstance(b, str) for b in pair):
                     raise f.error('bodies must be [body1, body2]; use "ground" for the fixed frame')
-                frames = tuple(builder.frame(f, b) for b in pair)
+                frames = tuple(builder.frame(f, template(b, f.names, f)) for b in pair)
             axis = _unit(f, "axis", 3)
             f.done()
             yield Input(name, "moment3", label, frames=frames, axis=axis)

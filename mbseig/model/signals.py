@@ -111,11 +111,7 @@ def _element_direction(el, q, label):
         d = el.diff(q)
         if d.size == 1:
             return -D[0]
-        length = float(np.linalg.norm(d))
-        if length == 0.0:
-            raise CaseError("the element has zero length at the equilibrium: its line of "
-                            "action is undefined", element=label)
-        return -(D.T @ (d / length))
+        return -(D.T @ _line(el, d, label)[1])
     if isinstance(el, TorsionalSpringDamper):  # planar and spatial (same _parts contract)
         W, g = el._parts(q, np.zeros_like(q))[:2]
         return -(W.T @ g)
@@ -184,15 +180,24 @@ def input_forces(model, q) -> np.ndarray:
     return np.column_stack([i.generalized_force(model, q) for i in inputs])
 
 
-def _spring_parts(el, q, qd):
+def _line(el, d, label):
+    """(length, unit direction) of a spring-damper's line; at zero length the line (and the
+    derivative of the length) is undefined, so an input or output on it is refused."""
+    length = float(np.linalg.norm(d))
+    if length == 0.0:
+        raise CaseError(f"{el.name} has zero length at the equilibrium: its line of action "
+                        f"(and the derivative of its length) is undefined", element=label)
+    return length, d / length
+
+
+def _spring_parts(el, q, qd, label=None):
     D = el.diff.C
     d = el.diff(q)
     if d.size == 1:
         e = np.ones(1)
         length = float(d[0])
     else:
-        length = float(np.linalg.norm(d))
-        e = d / length
+        length, e = _line(el, d, label or el.name)
     grad = e @ D  # ∂l/∂q[idx]
     rate = float(grad @ qd[el.idx])
     return length, rate, grad
