@@ -64,17 +64,28 @@ def combine(terms, *, stack: bool = False) -> Affine:
 
     The result acts on the union of the terms' coordinate indices.
     """
-    idx = np.unique(np.concatenate([t[1].idx for t in terms])) if terms else np.zeros(0, np.intp)
-    pos = {int(k): i for i, k in enumerate(idx)}
-    blocks_C, blocks_d = [], []
+    if not terms:
+        idx = np.zeros(0, np.intp)
+        return Affine(idx, np.zeros((0, 0)), np.zeros(0))
+    idx = np.unique(np.concatenate([t[1].idx for t in terms]))
+    parts = []
     for factor, aff in terms:
-        factor = np.asarray(factor, dtype=float)
-        F = factor * np.eye(aff.dim) if factor.ndim == 0 else factor
-        C = np.zeros((F.shape[0], idx.size))
-        cols = [pos[int(k)] for k in aff.idx]
-        C[:, cols] = F @ aff.C
-        blocks_C.append(C)
-        blocks_d.append(F @ aff.d)
+        if np.ndim(factor) == 0:
+            f = float(factor)
+            parts.append((aff, f * aff.C, f * aff.d))
+        else:
+            F = np.asarray(factor, dtype=float)
+            parts.append((aff, F @ aff.C, F @ aff.d))
     if stack:
-        return Affine(idx, np.vstack(blocks_C), np.concatenate(blocks_d))
-    return Affine(idx, sum(blocks_C), sum(blocks_d))
+        rows = sum(Cb.shape[0] for _, Cb, _ in parts)
+        C, r = np.zeros((rows, idx.size)), 0
+        for aff, Cb, _ in parts:
+            C[r:r + Cb.shape[0], np.searchsorted(idx, aff.idx)] = Cb
+            r += Cb.shape[0]
+        return Affine(idx, C, np.concatenate([db for _, _, db in parts]))
+    C = np.zeros((parts[0][1].shape[0], idx.size))
+    d = np.zeros(parts[0][2].shape[0])
+    for aff, Cb, db in parts:
+        C[:, np.searchsorted(idx, aff.idx)] += Cb
+        d += db
+    return Affine(idx, C, d)

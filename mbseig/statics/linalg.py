@@ -25,7 +25,7 @@ import scipy.sparse as sp
 
 from ..errors import EquilibriumError
 from ..model.elements import DistanceConstraint
-from ..numerics import LazyModule, blas_limit, constraint_rank
+from ..numerics import LazyModule, blas_limit, constraint_rank, coo_sum, saddle
 
 spla = LazyModule("scipy.sparse.linalg")  # sparse solvers: imported at first use
 
@@ -74,8 +74,8 @@ class StepScales:
                 r += C.shape[0]
         self.dims = model.dimension if hasattr(model, "dimension") else 1
         if r:
-            self.D = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                                   shape=(r, model.n))
+            self.D = coo_sum(r, model.n, [(np.concatenate(rows), np.concatenate(cols),
+                                           np.concatenate(vals))])
             self.inv_len = np.array(inv_len)
         else:
             self.D = None
@@ -109,7 +109,7 @@ def augmented(model, q, lam):
     Phi_q = model.phi_q(q)
     if model.n_constraints:
         H = model.constraint_hessian(q, lam)
-        A = sp.bmat([[K + H, Phi_q.T], [Phi_q, None]], format="csr")
+        A = saddle(K + H, Phi_q)
     else:
         A = K.tocsr()
     return A, Phi_q
@@ -132,13 +132,13 @@ class NewtonMatrix:
 
     def __init__(self, A, *, what="Newton matrix", weights=None):
         self.weights = weights  # metric of the unknowns in which solutions are made least
-        self.A = sp.csr_matrix(A)
+        self.A = A if isinstance(A, sp.csr_matrix) else sp.csr_matrix(A)
         N = self.A.shape[0]
         self.d = _equilibrate(self.A)
-        As = sp.diags(self.d) @ self.A @ sp.diags(self.d)
         self.kind = "svd"
         self.lu = None
         if N > SMALL:
+            As = sp.diags(self.d) @ self.A @ sp.diags(self.d)
             with np.errstate(all="ignore"):
                 try:
                     self.lu = spla.splu(As.tocsc())
@@ -151,7 +151,8 @@ class NewtonMatrix:
                     f"model above the dense limit of {DENSE_LIMIT})", element="equilibrium")
         if self.lu is None:
             with np.errstate(all="ignore"):
-                U, s, Vt = sla.svd(As.toarray(), full_matrices=False, lapack_driver="gesdd")
+                As = self.d[:, None] * self.A.toarray() * self.d[None, :]
+                U, s, Vt = sla.svd(As, full_matrices=False, lapack_driver="gesdd")
             keep = s > RCOND * (s[0] if s.size else 0.0)
             self.U, self.s, self.Vt, self.keep = U[:, keep], s[keep], Vt[keep], keep
             self.null = self.d[:, None] * Vt[~keep].T  # null A = D · null(DAD)

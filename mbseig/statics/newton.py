@@ -344,7 +344,9 @@ def force_scale(model, q, rank_tol):
         K, _ = model.force_jacobians(q)
         Phi_q = model.phi_q(q)
         lam = multipliers(Phi_q, g, rank_tol, check=False)[0]
-        knorm = float(abs(sp.csr_matrix(K)).sum(axis=1).max()) if K.nnz else 0.0  # ‖K‖_∞
+        K = K if isinstance(K, sp.csr_matrix) else sp.csr_matrix(K)
+        knorm = (float(np.max(np.add.reduceat(np.abs(K.data), K.indptr[:-1][np.diff(K.indptr) > 0])))
+                 if K.nnz else 0.0)  # ‖K‖_∞ (row sums of the nonempty rows)
         f = max(float(np.max(np.abs(g), initial=0.0)), knorm * model.length_scale,
                 float(np.max(np.abs(Phi_q.T @ lam), initial=0.0)))
     return f if np.isfinite(f) and f > 0 else 1.0
@@ -402,16 +404,18 @@ class Memo:
                          lambda: self._model.constraint_hessian(q, lam))
 
 
-def finish(model, q, s, *, iterations, correction, method, path, lam=None):
-    """The Equilibrium record at a converged q: least-squares λ, rank, residuals, reactions."""
+def finish(model, q, s, *, iterations, correction, method, path, lam=None, memo=None):
+    """The Equilibrium record at a converged q: least-squares λ, rank, residuals, reactions.
+    memo: the :class:`Memo` of ``model`` the solve used (its evaluations at q are reused)."""
     n, m = model.n, model.n_constraints
-    Phi_q = model.phi_q(q)
-    g = model.generalized_force(q)
+    ev = model if memo is None else memo
+    Phi_q = ev.phi_q(q)
+    g = ev.generalized_force(q)
     lam_ls, rank, rank_method = multipliers(Phi_q, g, s.rank_tol, check=True)
     lam = lam_ls if lam is None else lam
     r1 = g - Phi_q.T @ lam
     fr = float(np.max(np.abs(r1), initial=0.0)) / s.force_scale
-    cr = constraint_residual(model, q, model.constraint_scales())[1]
+    cr = constraint_residual(ev, q, model.constraint_scales())[1]
     redundant = _redundant_rows(model, Phi_q, rank) if n + m <= DENSE_LIMIT else []
     reactions, k = [], 0
     for c in model.constraints:

@@ -63,6 +63,6 @@ def _equilibrium(model, *, tol, xtol, floor_tol, max_iter, rank_tol, q_init, con
                  "newton_matrix_condition": sol.cond})
     iterations = path.get("total_iterations", sol.iterations)
     return finish(real, sol.q, s, iterations=iterations, correction=sol.correction,
-                  method=method, path=path)
+                  method=method, path=path, memo=model)
 
 
