@@ -94,16 +94,18 @@ def _equilibrium_api(model, *, tol, max_iter, rank_tol, q_init, xtol, floor_tol,
         raise exc.located(file=getattr(model, "source", None)) from None
 
 
-def resolve(model, *, tol: float = 1e-12, max_iter: int = 50, rank_tol: float = 1e-10, hint=None):
+def resolve(model, *, tol: float = 1e-12, max_iter: int = 50, rank_tol: float = 1e-10, hint=None,
+            cache=None):
     """``model`` with its inverse-statics commands resolved (:mod:`~mbseig.statics.inverse`),
     without solving its final equilibrium; the model itself when it has none.  ``hint``: a
-    resolved neighbour of the same family to start from (:func:`resolve_commands`)."""
+    resolved neighbour of the same family to start from; ``cache``: a dict kept across one
+    family's calls (:func:`resolve_commands`)."""
     if not getattr(model, "commands", ()):
         return model
     opts = {"tol": tol, "max_iter": max_iter, "rank_tol": rank_tol}
     try:
         return resolve_commands(model, lambda m, q_init: solve_statics(m, q_init=q_init, **opts),
-                                hint=hint)
+                                hint=hint, cache=cache)
     except MbseigError as exc:
         raise exc.located(file=getattr(model, "source", None)) from None
 

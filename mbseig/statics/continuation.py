@@ -12,7 +12,14 @@ J = −∂R/∂y is the Newton matrix of :mod:`~mbseig.statics.newton`, R_p = �
 difference with step ``FD_REL``·p_scale (p_scale: the span of the sweep).
 
 Tangent: J ẏ = R_p ṗ, normalized so that ‖ẏ_q‖²_W + (ṗ/p_scale)² = 1 in the model's scales
-(W = diag 1/ℓ², multipliers weightless), oriented along the previous tangent.
+(W = diag 1/ℓ², multipliers weightless), oriented along the previous tangent.  At a grid point
+reached directly from the previous one, R_p is the difference to the previous point's model
+(:meth:`Family.Rp_back`, no model built at p + h: in a sweep whose parameter enters inverse
+statics, a build costs a resolve of the commands); it serves the predictor and the sense of p.
+When the sense of p or the sign of det J differs from the previous point's (a fold or branch
+point between them), or det J has no sign, both tangents are recomputed with the forward
+difference and the events are decided on those (``record["tangents_by_difference"]`` counts
+the points that kept the difference tangent).
 
 Step: while the branch moves towards the next grid value p_g, the equilibrium at p_g from the
 tangent predictor bent through the previous point (second order, :func:`_predict`): plain Newton
@@ -48,7 +55,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from ..errors import EquilibriumError, MbseigError
-from ..numerics import LazyModule, constraint_rank
+from ..numerics import LazyModule, constraint_rank, saddle
 from .linalg import DENSE_LIMIT, SMALL, NewtonMatrix, StepScales, multipliers, solve_bordered
 from .newton import Memo, Stall, newton, settings_for
 
@@ -149,11 +156,19 @@ class Family:
                 return K.tocsr()
             Phi_q = model.phi_q(q)[self.rows]
             H = model.constraint_hessian(q, self.lam_full(y))
-            return sp.bmat([[K + H, Phi_q.T], [Phi_q, None]], format="csr")
+            return saddle(K + H, Phi_q)
 
     def _Rp(self, y, p):
         h = FD_REL * self.p_scale
         return (self.R(y, p + h) - self.R(y, p)) / h
+
+    def Rp_back(self, y, p, p_prev):
+        """∂R/∂p by the difference to the previous point's parameter, whose model is built
+        already: (R(y, p) − R(y, p_prev)) / (p − p_prev), accurate to O(p − p_prev).  Used for
+        the tangent at a grid point reached directly (the predictor of the next one and the
+        sense of p); an exact tangent replaces it wherever the sense of p or the sign of det J
+        changes (folds, branch points)."""
+        return (self.R(y, p) - self.R(y, p_prev)) / (p - p_prev)
 
     def weights(self):
         """W of z = (q, λ, p): 1/ℓ² on q, 0 on λ, 1/p_scale² on p."""
@@ -266,11 +281,12 @@ def _bordered(fam, y, p, t, w):
     return A, rp, B
 
 
-def tangent(fam, y, p, *, prev=None, direction=1.0):
-    """The unit tangent (ẏ, ṗ) at (y, p) (module docstring); None when it cannot be formed."""
+def tangent(fam, y, p, *, prev=None, direction=1.0, rp=None):
+    """The unit tangent (ẏ, ṗ) at (y, p) (module docstring); None when it cannot be formed.
+    rp: ∂R/∂p when known (:meth:`Family.Rp_back`), else the forward difference."""
     w = fam.weights()
     A = fam.J(y, p)
-    rp = fam.Rp(y, p)
+    rp = fam.Rp(y, p) if rp is None else rp
     try:
         NM = NewtonMatrix(A, weights=w[:-1])
         a, e = NM.solve(rp)
@@ -490,8 +506,8 @@ def follow(fam, values, y0, *, stability=None, restart=None, switch=True, ds_max
     br.points.append(cur)
     br.grid[0] = cur
     k_next, ds, steps, back = 1, spacing, 0, 0
-    accepted = rejected = 0
-    land = True
+    accepted = rejected = approx = 0
+    land, t_exact = True, True
     fold_z = None  # the last fold: where a jump past it starts from
     last_B = cur.det_B
     z_prev, t_prev, ds_prev = z, t, 0.0
@@ -510,6 +526,7 @@ def follow(fam, values, y0, *, stability=None, restart=None, switch=True, ds_max
             if state is None:
                 break
             (z, t, cur), segment, k_next = state
+            t_exact = True
             z_prev, t_prev, ds_prev, ds, back, last_B, fold_z = _fresh(z, t, cur, spacing)
             continue
         steps += 1
@@ -532,14 +549,34 @@ def follow(fam, values, y0, *, stability=None, restart=None, switch=True, ds_max
             pending_jump = ds < DS_MIN * max(spacing, 1.0)
             continue
         new_z, its, ds_used, landed = new
-        t_new = tangent(fam, new_z[:-1], new_z[-1], prev=t)
+        t_new = None
+        if landed and new_z[-1] != z[-1]:  # ∂R/∂p from the previous point's model (no build)
+            t_new = tangent(fam, new_z[:-1], new_z[-1], prev=t,
+                            rp=fam.Rp_back(new_z[:-1], new_z[-1], z[-1]))
+            if t_new is not None:
+                newp = _point(fam, new_z, t_new, "grid", segment, its)
+                if not (newp.det_J and newp.det_J == cur.det_J and t[-1] * t_new[-1] > 0):
+                    t_new = None  # a sign changed: decided on the exact tangents below
+                else:
+                    approx += 1
         if t_new is None:
-            rejected += 1
-            ds *= 0.5
-            continue
+            if not t_exact:  # the exact tangent at the start of the step
+                t_z = tangent(fam, z[:-1], z[-1], prev=t)
+                if t_z is not None:
+                    t = cur.tangent = t_z
+                    if cur.det_J and abs(t[-1]) > 1e-12:  # its det B from the exact ṗ
+                        cur.det_B = last_B = cur.det_J * int(np.sign(t[-1]))
+                t_exact = True
+            t_new = tangent(fam, new_z[:-1], new_z[-1], prev=t)
+            newp = None
+            if t_new is None:
+                rejected += 1
+                ds *= 0.5
+                continue
         if landed and t[-1] * t_new[-1] < 0:  # the landing passed a fold: step along the arc
             land, ds = False, abs(ds_used)
             continue
+        t_exact_new = newp is None
         land = True
         accepted += 1
         # folds: ṗ changes sign
@@ -556,7 +593,8 @@ def follow(fam, values, y0, *, stability=None, restart=None, switch=True, ds_max
             except MbseigError:
                 br.events.append({"type": "fold", "p": float(0.5 * (z[-1] + new_z[-1])),
                                   "segment": segment, "located": False})
-        newp = _point(fam, new_z, t_new, "grid" if landed else "step", segment, its)
+        if newp is None:
+            newp = _point(fam, new_z, t_new, "grid" if landed else "step", segment, its)
         # branch points: det B changes sign (B singular on a point itself: judged at the next).
         # Not at a fold: where Φ_q loses rank (a kinematic fold, a dead point) det J has a
         # double zero and det B changes sign there instead
@@ -574,6 +612,7 @@ def follow(fam, values, y0, *, stability=None, restart=None, switch=True, ds_max
                     if sw is not None:
                         ev["switched"] = True
                         (z, t, cur), segment = sw, segment + 1
+                        t_exact = True
                         br.points.append(cur)
                         z_prev, t_prev, ds_prev, ds, back, last_B, fold_z = _fresh(z, t, cur,
                                                                                    spacing)
@@ -602,7 +641,7 @@ def follow(fam, values, y0, *, stability=None, restart=None, switch=True, ds_max
                 k_next += 1
         br.points.append(newp)
         z_prev, t_prev, ds_prev = z, t, ds_used
-        z, t, cur = new_z, t_new, newp
+        z, t, cur, t_exact = new_z, t_new, newp, t_exact_new
         last_B = cur.det_B or last_B
         back = back + abs(ds_used) if t[-1] * dirn < 0 else 0.0
         out_of_range = (z[-1] - values[0]) * dirn < -0.5 * spacing * fam.p_scale
@@ -617,7 +656,8 @@ def follow(fam, values, y0, *, stability=None, restart=None, switch=True, ds_max
                  "ds_min": DS_MIN, "reach": REACH, "back_arc": BACK_ARC, "easy": EASY,
                  "segments": segment + 1, "constraint_rows": int(fam.rows.size),
                  "constraint_rows_dropped": int(fam.m - fam.rows.size),
-                 "det_undecided": int(sum(1 for b in br.points if b.det_B == 0))}
+                 "det_undecided": int(sum(1 for b in br.points if b.det_B == 0)),
+                 "tangents_by_difference": approx}
     return br
 
 

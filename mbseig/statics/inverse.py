@@ -31,6 +31,7 @@ iterations, and is kept on ``Model.drivers`` for reports.
 from __future__ import annotations
 
 import dataclasses
+import pickle
 
 import numpy as np
 
@@ -40,7 +41,7 @@ from ..model.driver import check_command
 __all__ = ["resolve_commands", "reuse_commands", "command_settings"]
 
 
-def resolve_commands(model, equilibrium, *, tol=1e-12, max_iter=30, hint=None):
+def resolve_commands(model, equilibrium, *, tol=1e-12, max_iter=30, hint=None, cache=None):
     """The model with every pending command (``model.commands``) resolved: commanded elements
     set, ``drivers`` holding one record per driver, ``q_init`` at the commanded posture.
 
@@ -50,6 +51,11 @@ def resolve_commands(model, equilibrium, *, tol=1e-12, max_iter=30, hint=None):
         continues from the previous point instead of from the reference configuration.  The
         result is the same to the tolerances (the secant still runs until the driver's effort
         vanishes); a hint whose elements differ is ignored.
+    cache : a dict kept across the calls of one family (a sweep line): the pre-solve of the
+        released device is keyed by the exact content of its model (pickled elements and
+        constant forces) and reused when a later model's released device is identical — the
+        swept parameter enters only the commanded element (an actuator stiffness) — since a
+        solve of the same model from its own equilibrium returns that equilibrium.
     """
     drivers = model.commands
     hint = hint if hint is not None and _same_elements(model, hint) else None
@@ -79,7 +85,21 @@ def resolve_commands(model, equilibrium, *, tol=1e-12, max_iter=30, hint=None):
 
         spring_k = springs[0][1] if springs else None
         released = [f for k, f in enumerate(forces) if k != spring_k and k not in followers]
-        eq, lam0 = solve(released, q_guess)
+        key = None
+        if cache is not None:
+            try:
+                key = pickle.dumps((driver.name, released, pre_constraints, model.g_const,
+                                    model.length_scale, model.coordinate_names))
+            except (pickle.PicklingError, TypeError, AttributeError):
+                key = None
+        if key is not None and key in cache:
+            eq, lam0 = cache[key]
+        else:
+            eq, lam0 = solve(released, q_guess)
+            if key is not None:
+                if len(cache) >= 4:
+                    cache.pop(next(iter(cache)))
+                cache[key] = (eq, lam0)
         rec = {"driver": driver.name, "angle_target": driver.angle_target,
                "effort": -lam0, "effort_unit": "N m (torque in the driver's sense)",
                "iterations": 0, "tol": tol, "sets": [],

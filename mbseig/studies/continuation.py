@@ -35,7 +35,7 @@ from ..model.linear_case import LinearCase
 from ..statics import equilibrium, examine, resolve
 from ..statics.continuation import CTOL, Family, follow
 from ..statics.inverse import command_settings, reuse_commands
-from ..statics.newton import finish, settings_for
+from ..statics.newton import Memo, finish, settings_for
 from ..statics.solve import solve_statics
 from ..statics.reactions import posture
 from ..statics.stiffness import static_stability
@@ -47,7 +47,7 @@ DIAGRAM_MODES_MAX = 60  # DOF up to which every branch point of the diagram gets
 
 def family_maker(spec, config, params, axis):
     """(make, state): make(p) is the model at axis = p with its commands resolved."""
-    state = {"first": None, "reuse": None, "checked": False, "last": None}
+    state = {"first": None, "reuse": None, "checked": False, "last": None, "presolve": {}}
 
     def make(p):
         m = spec.build(config, **{**params, axis: float(p)})
@@ -57,7 +57,7 @@ def family_maker(spec, config, params, axis):
             r = reuse_commands(m, state["reuse"])
             if r is not None:
                 return r
-        r = resolve(m, hint=state["last"])  # continue from the previous point's commands
+        r = resolve(m, hint=state["last"], cache=state["presolve"])  # from the previous point
         state["last"] = r
         if state["first"] is None:
             state["first"] = (float(p), r)
@@ -139,11 +139,12 @@ def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rto
             model = fam.model(v)
             if bp is not None:  # converged by the continuation's corrector: the record only
                 q = bp.y[:fam.n]
-                st = settings_for(model, q, tol=1e-12, xtol=None, floor_tol=1e-8, max_iter=50,
+                memo = Memo(model)  # g, Φ_q at q evaluated once for the scale and the record
+                st = settings_for(memo, q, tol=1e-12, xtol=None, floor_tol=1e-8, max_iter=50,
                                   rank_tol=1e-10)
                 eq = finish(model, q, st, iterations=bp.iterations, correction=CTOL,
                             method="continuation", path={"start": "branch", "kind": bp.kind,
-                                                         "segment": bp.segment})
+                                                         "segment": bp.segment}, memo=memo)
                 how = "continuation"
             else:
                 eq = equilibrium(model, offer_stable=False, self_stress="report")
@@ -176,6 +177,11 @@ def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rto
                     and branch.points[j].segment == bp.segment), None)
         if prev is not None and prev == nxt and grid_verdict.get(id(bp)) is None:
             grid_verdict[id(bp)] = prev
+    # a grid point's static verdict was judged by examine() on the same equilibrium; with
+    # every constraint row followed, its multipliers are the same (unique), so it is reused
+    grid_static = ({id(bp): points[k].get("static") for k, bp in enumerate(branch.grid)
+                    if bp is not None and points[k].get("static") in ("stable", "unstable", "neutral")}
+                   if fam.rows.size == fam.m else {})
     for bp in branch.points:
         model = fam.model(bp.p)
         q = bp.y[:fam.n]
@@ -183,10 +189,12 @@ def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rto
         rec = {"p": bp.p, "kind": bp.kind, "segment": bp.segment,
                "q": [float(x) for x in q] if fam.n <= 500 else None,
                "angles": _angles(model, q), "pdot": bp.pdot}
-        try:
-            rec["static"] = static_verdict(model, q, lam)
-        except (MbseigError, ValueError, np.linalg.LinAlgError):
-            rec["static"] = None
+        rec["static"] = grid_static.get(id(bp))
+        if rec["static"] is None:
+            try:
+                rec["static"] = static_verdict(model, q, lam)
+            except (MbseigError, ValueError, np.linalg.LinAlgError):
+                rec["static"] = None
         rec["verdict"] = grid_verdict.get(id(bp))
         if rec["verdict"] is None and fam.n - fam.rows.size <= DIAGRAM_MODES_MAX:
             try:
