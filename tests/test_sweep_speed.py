@@ -87,3 +87,21 @@ def test_presolve_reused_sets_the_actuator_as_a_fresh_resolve():
         fresh = command_settings(resolve(spec.build(None, k_a=k_a)))
         assert np.allclose(fast, fresh, rtol=1e-10, atol=0)
     assert len(state["presolve"]) == 1  # the released device does not depend on k_a: one pre-solve
+
+
+def test_newton_start_of_inverse_statics(monkeypatch):
+    """The free length from Newton's step on the driver's effort equals the secant's (the
+    reference: the same resolve with the Newton start disabled) to 1e-10 relative, both ending
+    at |λ_d| ≤ 1e-12 |λ_d,0|; on the device the driver holds the actuator's end points, so λ_d
+    is affine in l0 and one solve with the spring ends the iteration."""
+    import mbseig.statics.inverse as inv
+
+    spec = read_case(CASES / "hand_device.toml")
+    newton = resolve(spec.build(None)).drivers[0]
+    monkeypatch.setattr(inv, "_newton_free_length", lambda *a: None)
+    secant = resolve(spec.build(None)).drivers[0]
+    assert newton["iterations"] == 1 < secant["iterations"]
+    a, b = newton["sets"][0]["free_length"], secant["sets"][0]["free_length"]
+    assert abs(a - b) <= 1e-10 * abs(b)
+    for rec in (newton, secant):
+        assert abs(rec["residual_effort"]) <= 1e-12 * abs(rec["effort"])

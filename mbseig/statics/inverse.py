@@ -37,6 +37,7 @@ import numpy as np
 
 from ..errors import EquilibriumError
 from ..model.driver import check_command
+from .linalg import NewtonMatrix, augmented
 
 __all__ = ["resolve_commands", "reuse_commands", "command_settings"]
 
@@ -114,11 +115,14 @@ def resolve_commands(model, equilibrium, *, tol=1e-12, max_iter=30, hint=None, c
             spring = forces[spring_k]
             l_star = float(np.linalg.norm(spring.diff(eq.q)))
             a_l0, a_lam = l_star, lam0  # zero tension at q*: λ_d is the released effort
-            b_l0 = l_star * (1.0 - 1e-3)
-            if hint is not None:  # the neighbour's free length: one or two secant steps from here
-                h = float(hint.forces[spring_k].free_length)
-                if np.isfinite(h) and h > 0 and abs(h - l_star) > 1e-9 * l_star:
-                    b_l0 = h
+            b_l0 = _newton_free_length(make_model, with_spring, pre_constraints, eq, row, l_star,
+                                       lam0)
+            if b_l0 is None:
+                b_l0 = l_star * (1.0 - 1e-3)
+                if hint is not None:  # the neighbour's free length: a secant step or two from here
+                    h = float(hint.forces[spring_k].free_length)
+                    if np.isfinite(h) and h > 0 and abs(h - l_star) > 1e-9 * l_star:
+                        b_l0 = h
             eq_b, b_lam = solve(with_spring(b_l0), eq.q)
             it, scale = 1, max(abs(lam0), np.finfo(float).tiny)
             while abs(b_lam) > tol * scale:
@@ -146,6 +150,33 @@ def resolve_commands(model, equilibrium, *, tol=1e-12, max_iter=30, hint=None, c
         q_guess = eq.q
         records.append(rec)
     return dataclasses.replace(make_model(forces, constraints, q_guess), drivers=tuple(records))
+
+
+def _newton_free_length(make_model, with_spring, pre_constraints, eq, row, l_star, lam0):
+    """The free length from Newton's step on the driver's effort λ_d(l0) at the released
+    equilibrium (q*, λ*), where the spring at l0 = l* has no tension and λ_d = λ_0:
+    l0 = l* − λ_0 / (dλ_d/dl0).  The slope from the Newton matrix of the device with the spring
+    (its stiffness at zero tension), A [dq; dλ] = [∂g/∂l0; 0], ∂g/∂l0 by a difference of the
+    spring's force (affine in l0, so exact to rounding).  When the driver holds the spring's end
+    points λ_d is affine in l0 and this is its root: the first solve with the spring then ends
+    the iteration.  None (the secant starts as before) when the matrix is singular or the slope
+    is not usable."""
+    m_star = make_model(with_spring(l_star), pre_constraints)
+    h = 1e-3 * l_star
+    m_h = make_model(with_spring(l_star + h), pre_constraints)
+    try:
+        with np.errstate(all="ignore"):
+            g_l = (m_h.generalized_force(eq.q) - m_star.generalized_force(eq.q)) / h
+            A, _ = augmented(m_star, eq.q, eq.lam)
+            x, e = NewtonMatrix(A).solve(np.concatenate([g_l, np.zeros(A.shape[0] - g_l.size)]))
+    except (EquilibriumError, ArithmeticError, ValueError):
+        return None
+    slope = float(x[m_star.n + row])
+    if (not np.isfinite(slope) or slope == 0.0
+            or float(np.linalg.norm(e)) > 1e-8 * float(np.linalg.norm(g_l))):
+        return None
+    l0 = l_star - lam0 / slope
+    return l0 if np.isfinite(l0) and l0 > 0 else None
 
 
 def _same_elements(model, other):
