@@ -54,7 +54,7 @@ class Affine:
         """A point whose coordinates are q[indices] (indices < 0 mark fixed components)."""
         indices = np.asarray(indices, dtype=np.intp)
         free = indices >= 0
-        C = np.eye(indices.size)[:, free]
+        C = np.eye(indices.size)[:, free] if not free.all() else np.eye(indices.size)
         d = np.zeros(indices.size) if fixed_values is None else np.where(free, 0.0, fixed_values)
         return Affine(indices[free], C, d)
 
@@ -67,7 +67,7 @@ def combine(terms, *, stack: bool = False) -> Affine:
     if not terms:
         idx = np.zeros(0, np.intp)
         return Affine(idx, np.zeros((0, 0)), np.zeros(0))
-    idx = np.unique(np.concatenate([t[1].idx for t in terms]))
+    idx = np.array(sorted({int(k) for t in terms for k in t[1].idx}), dtype=np.intp)
     parts = []
     for factor, aff in terms:
         if np.ndim(factor) == 0:

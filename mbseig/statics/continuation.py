@@ -70,6 +70,8 @@ FD_REL = 1e-7  # forward-difference step of ∂R/∂p, relative to p_scale
 CTOL = 1e-11  # corrector converged: correction below CTOL in the model's scales (and p_scale)
 DS_MIN = 1e-9  # smallest step (normalized arclength) before a segment is given up
 DS_MAX = 0.1  # largest step (normalized arclength: at least ten steps over the swept range)
+CHORD = 1e-5  # a corrector reuses its Newton matrix after a correction below this (model
+# scales): the next step is then a chord step, contracting by ≈ CHORD, ample below CTOL
 REACH = 0.25  # a grid point's corrector may end this far from its predictor (× the step)
 BACK_ARC = 0.3  # arclength followed along a branch that turned back, before jumping forward
 
@@ -322,9 +324,12 @@ def _correct_fixed(fam, y, p, reach):
     n = fam.n
     w = fam.weights()[:-1]
     y0, yk, last, its = y, y, np.inf, 0
+    NM = None
     for it in range(1, CORRECTOR_ITER + 1):
         try:
-            dy = NewtonMatrix(fam.J(yk, p), weights=w).solve(fam.R(yk, p))[0]
+            if NM is None or last > CHORD:  # the chord (last matrix) once corrections are small
+                NM = NewtonMatrix(fam.J(yk, p), weights=w)
+            dy = NM.solve(fam.R(yk, p))[0]
         except (EquilibriumError, ArithmeticError, ValueError):
             break
         size = fam.scales.size(dy[:n])
