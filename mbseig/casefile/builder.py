@@ -67,6 +67,8 @@ class Builder:
         self.element_body: dict[str, str] = {}  # attach / follower element label → body
         self.point_forces: dict[str, tuple] = {}  # name of a constant `force` → (point, vector)
         self.mass_parts: list = []  # (name, idx, block) of every body and mass (modal energy)
+        self._affine: dict[str, Affine] = {}  # point maps, made once a build (affine_of)
+        self._dirs: dict[tuple, Affine] = {}  # body directions, made once a build (body_dir)
 
     # -- points ------------------------------------------------------------------------
     def build(self):
@@ -248,7 +250,11 @@ class Builder:
         return pname
 
     def affine_of(self, pname):
-        return Affine.select(self.point_index[pname], self.point_pos[pname])
+        """The point's map (one object per point and build: elements share it read-only)."""
+        aff = self._affine.get(pname)
+        if aff is None:
+            aff = self._affine[pname] = Affine.select(self.point_index[pname], self.point_pos[pname])
+        return aff
 
     def point_ref(self, f, key):
         """A basic point name, a body marker 'body.marker', or {body = ..., local = [x, y]}."""
@@ -279,9 +285,14 @@ class Builder:
         return body_point(self.affine_of(pi), self.affine_of(pj), local, b["length"])
 
     def body_dir(self, bname, local=(1.0, 0.0)):
-        b = self.bodies[bname]
-        pi, pj = b["points"]
-        return body_direction(self.affine_of(pi), self.affine_of(pj), local, b["length"])
+        key = (bname, float(local[0]), float(local[1]))
+        aff = self._dirs.get(key)
+        if aff is None:
+            b = self.bodies[bname]
+            pi, pj = b["points"]
+            aff = self._dirs[key] = body_direction(self.affine_of(pi), self.affine_of(pj), local,
+                                                   b["length"])
+        return aff
 
     def two_points(self, f):
         pts = f.raw("points")
