@@ -151,7 +151,7 @@ class LinearModel:
 
 def linearize(model, eq: Equilibrium, *, rank_tol: float | None = None,
               constraint_stiffness: bool = True, sparse: bool | None = None,
-              reference=None) -> LinearModel:
+              reference=None, signals: bool = True) -> LinearModel:
     """Linear model about ``eq`` (see module docstring).
 
     rank_tol : relative singular-value threshold for null Φ_q (default: the one the equilibrium
@@ -164,6 +164,8 @@ def linearize(model, eq: Equilibrium, *, rank_tol: float | None = None,
         coordinates).  Without constraints N is the sparse identity; with constraints no
         null-space basis is formed: M, P, Q stay in full coordinates and ``constraint_jacobian``
         holds Φ_q(q₀) for the bordered pencil of :mod:`mbseig.eigen.partial` (N is None).
+    signals : form B, C, D and the named angles (False: M, P, Q and N only, B, C, D left None —
+        for the points of a sweep, which use the modes alone).
 
     The model linearized is the one ``eq`` belongs to (:func:`mbseig.statics.solved`): with
     inverse-statics commands resolved, the actuator settings found by the equilibrium.
@@ -173,12 +175,12 @@ def linearize(model, eq: Equilibrium, *, rank_tol: float | None = None,
     require_finite("linearization", "the equilibrium is not finite", q0=eq.q, lam0=eq.lam)
     cause = LINEAR_CASE_CAUSE if isinstance(model, LinearCase) else CAUSE
     with watched("linearization", cause):
-        lin = _linearize(model, eq, rank_tol, constraint_stiffness, sparse, reference)
+        lin = _linearize(model, eq, rank_tol, constraint_stiffness, sparse, reference, signals)
     require_finite("linearization", cause, M=lin.M, P=lin.P, Q=lin.Q, N=lin.N)
     return lin
 
 
-def _linearize(model, eq, rank_tol, constraint_stiffness, sparse, reference=None):
+def _linearize(model, eq, rank_tol, constraint_stiffness, sparse, reference=None, signals=True):
     model = solved(model, eq)
     if rank_tol is None:
         rank_tol = float(eq.tolerances.get("rank_tol", 1e-10))
@@ -209,7 +211,7 @@ def _linearize(model, eq, rank_tol, constraint_stiffness, sparse, reference=None
         Mr, Pr, Qr = Md, Cd, Kd
     else:
         Mr, Pr, Qr = (N.T @ A @ N for A in (Md, Cd, Kd))
-    io = _signals(model, q0, N, G, rank, Md, Cd, Kd, Mr, Pr, Qr)
+    io = _signals(model, q0, N, G, rank, Md, Cd, Kd, Mr, Pr, Qr) if signals else {}
     tol = {"rank_tol": rank_tol}
     if sigma is not None:
         tol["basis_min_cosine"] = sigma  # σ_min(Eᵀ Π E)^(1/2): how well E fixes N

@@ -72,7 +72,7 @@ def family_maker(spec, config, params, axis):
 
 def modal_point(model, eq, params, *, safety, stability_rtol):
     """The sweep's record of one point: all eigenpairs, their tolerances, the verdict."""
-    lin = linearize(model, eq)
+    lin = linearize(model, eq, signals=False)  # a sweep point uses the modes alone
     if lin.M.shape[0] == 0:  # no degree of freedom (a driven mechanism): no modes
         s, X, tol, verdict, solver = (np.zeros(0, complex), np.zeros((model.n, 0), complex),
                                       np.zeros(0), "stable", "none (no degree of freedom)")
