@@ -275,25 +275,15 @@ def _arithmetic_errors(stage, cause):
 _BLAS_CONTROLLER = []  # one threadpoolctl controller per process, made on first use
 
 
-BLAS_SERIAL_SIZE = 64  # order up to which OpenBLAS itself runs level-2/3 BLAS and its LU on
-# one thread (its thresholds: gemv below m·n = 9216, gemm below m·n·k = 262144, getrf below
-# m·n = 10000), so capping the threads there needs no controller
-
-
-def blas_limit(n, size=None):
+def blas_limit(n):
     """A context capping BLAS at ``n`` threads while it is open (threadpoolctl, when installed;
     nothing when n is None).  The controller that finds the BLAS libraries is made once per
     process, so entering the context costs ≈ 0.2 ms instead of the 1–5 ms of a fresh
     ``threadpool_limits``: cheap enough around every small dense solve, where a second BLAS
     thread only adds synchronization (a 3 × 3 triangular solve measured 5–8 ms with two OpenBLAS
-    threads on a loaded 2-core machine, 0.2 ms with one).  ``size``: the order of the problem
-    inside; up to ``BLAS_SERIAL_SIZE`` the controller is not made for it (≈ 10 ms of a small
-    command's start-up, finding the BLAS libraries) — the cap is applied only when a
-    controller exists already."""
+    threads on a loaded 2-core machine, 0.2 ms with one)."""
     if n is None:
         return contextlib.nullcontext()
-    if size is not None and size <= BLAS_SERIAL_SIZE and not _BLAS_CONTROLLER:
-        return contextlib.nullcontext()  # OpenBLAS runs these on one thread by itself
     if not _BLAS_CONTROLLER:
         try:
             from threadpoolctl import ThreadpoolController

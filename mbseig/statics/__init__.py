@@ -70,8 +70,7 @@ def equilibrium(model, *, tol: float = 1e-12, max_iter: int = 50, rank_tol: floa
     """
     from .linalg import blas_threads
 
-    size = getattr(model, "n", 0) + getattr(model, "n_constraints", 0) + 1  # + a driver row
-    with blas_threads(blas, size):
+    with blas_threads(blas):
         return _equilibrium_api(model, tol=tol, max_iter=max_iter, rank_tol=rank_tol,
                                 q_init=q_init, xtol=xtol, floor_tol=floor_tol,
                                 continuation=continuation, offer_stable=offer_stable,

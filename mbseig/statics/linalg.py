@@ -37,13 +37,13 @@ DENSE_LIMIT = 4000  # size up to which a singular sparse factor falls back to th
 RCOND = 1e-14  # singular values below RCOND·σ_max of the equilibrated matrix count as zero
 
 
-def blas_threads(n, size=None):
+def blas_threads(n):
     """A context capping BLAS at ``n`` threads while it is open (threadpoolctl, when installed;
     nothing when n is None).  The statics factorizes many small and middle-sized dense matrices,
     for which a second BLAS thread only adds synchronization, and on a busy machine far more:
     a 200×200 solve measured 0.33 s with two OpenBLAS threads on a loaded 2-core machine.
     (:func:`mbseig.numerics.blas_limit`: one controller per process.)"""
-    return blas_limit(n, size)
+    return blas_limit(n)
 
 
 def _is_length(name: str) -> bool:
