@@ -522,7 +522,7 @@ def solve_qep(M, P, Q, *, solver: str = "auto", sym_tol: float = 1e-13,
                            norms0, n_dof=0, complex_problem=complex_problem)
     # small problems on one BLAS thread: a second one only adds synchronization there (and on a
     # loaded machine milliseconds per call, more than the whole solve of a few coordinates)
-    with blas_limit(1 if n <= SMALL_BLAS else None, 2 * n):  # 2n: the companion pencil
+    with blas_limit(1 if n <= SMALL_BLAS else None):
         if name == "qz":
             check_regular(M, P, Q, norms)
         sol = _IMPL[name](M, P, Q, opts, name, reason, norms)
