@@ -323,7 +323,7 @@ def _nullity(sol, mean, spread, scale, max_order=2000):
     to ``max_order`` (0 otherwise).  The computed eigenvectors of a derogatory defective
     eigenvalue need not span its eigenspace; T's singular values do."""
     prob = sol.problem
-    if prob is None or len(prob) != 4:
+    if not (isinstance(prob, tuple) and len(prob) == 4):  # a partial path's: no dense pencil
         return 0
     M, P, Q, gamma = prob
     if M.shape[0] > max_order:
@@ -545,7 +545,7 @@ def tolerances(sol, *, safety=10.0, stability_rtol=1e-12, stability_atol=0.0, ra
     b = _bounds(sol, safety=safety, stability_rtol=stability_rtol, stability_atol=stability_atol,
                 rank_tol=rank_tol)
     prob = sol.problem
-    if prob is not None and len(prob) == 4:  # the zero-pair floor, as modes() applies it
+    if isinstance(prob, tuple) and len(prob) == 4:  # the zero-pair floor, as modes() applies it
         Ms, Ps, Qs, gamma = prob
         nQs = float(np.linalg.norm(Qs.tocsr().data) if sp.issparse(Qs) else np.linalg.norm(Qs))
         b = _zero_pair_floor(b, sol, Ms, Ps, safety, nQ=nQs, gamma=float(gamma))

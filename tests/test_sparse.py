@@ -63,12 +63,15 @@ def _dense_listing(M, C, K):
     return d
 
 
-def test_partial_companion_against_dense():
+@pytest.mark.parametrize("solver, path", [("partial-companion", "partial-companion"),
+                                          ("auto", "partial-projected")])
+def test_partial_companion_against_dense(solver, path):
     """General damping: the 6 lowest modes agree with the dense companion path (rtol 1e-9),
-    condition numbers too (symmetric matrices: y = x̄ on both paths, rtol 1e-6)."""
+    condition numbers too (symmetric matrices: y = x̄ on both paths, rtol 1e-6); ``auto``
+    takes the projected path for the lowest modes of symmetric M, P, Q."""
     M, C, K = _nonproportional(150)
-    md = mbseig.modes(M, C, K, n_modes=6)
-    assert md.solver == "partial-companion"
+    md = mbseig.modes(M, C, K, n_modes=6, solver=solver)
+    assert md.solver == path
     d = _dense_listing(M, C, K)
     np.testing.assert_allclose(md.eigenvalues, d.eigenvalues[:6], rtol=1e-9)
     np.testing.assert_allclose(md.condition, d.condition[:6], rtol=1e-6)
@@ -169,7 +172,7 @@ def test_bordered_pencil_equals_null_space_reduction(tmp_path):
 def test_no_convergence_is_an_error():
     M, C, K = _nonproportional(400)
     with pytest.raises(SolverError, match="did not converge"):
-        mbseig.modes(M, C, K, n_modes=10, maxiter=2)
+        mbseig.modes(M, C, K, n_modes=10, maxiter=2, solver="partial-companion")
 
 
 def test_bad_requests():

@@ -69,7 +69,7 @@ def _targets(res):
                         f"n^{p:.2f}", "≤ n^1.15", p <= 1.15))
     large = _rows(res, "large")
     big = {r["method"]: r for r in large if r["n"] == 1_000_000}
-    for kind in ("partial-companion", "partial-slepc"):
+    for kind in ("partial-projected", "partial-companion", "partial-slepc"):
         if kind in big:
             r = big[kind]
             out.append((f"lowest 20 modes, 10⁶ coordinates, 10⁵ constraints, general damping ({kind}, "
@@ -78,7 +78,7 @@ def _targets(res):
                         r["time"] < 60 and r["rss_mb"] < 4096 and r["ratio"] <= 3))
     sizes = sorted({r["n"] for r in large})
     if len(sizes) >= 2:
-        for kind in ("partial-companion", "partial-slepc"):
+        for kind in ("partial-projected", "partial-companion", "partial-slepc"):
             pts = sorted((r["n"], r["time"]) for r in large if r["method"] == kind)
             if len(pts) >= 2:
                 p = float(np.polyfit(np.log([a for a, _ in pts]), np.log([b for _, b in pts]), 1)[0])

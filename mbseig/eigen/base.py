@@ -50,7 +50,8 @@ class QEPSolution:
     coverage : partial paths: what the computed set is known to contain (dict, see
         :func:`mbseig.eigen.solve_partial`); None for a dense path (everything).
     problem : (M, P, Q, γ) the pairs refer to (scaled copies where ``details["scaled"]``: s = γ μ),
-        kept for :meth:`componentwise`; or the precomputed (η_c, κ_c) of a partial path.
+        kept for :meth:`componentwise`; or the precomputed (η_c, κ_c), or a callable idx ↦
+        (η_c, κ_c) of a partial path (formed on demand).
     """
 
     eigenvalues: np.ndarray
@@ -76,6 +77,8 @@ class QEPSolution:
         idx = np.arange(self.eigenvalues.size) if idx is None else np.asarray(idx)
         if self.problem is None or idx.size == 0:
             return np.full(idx.size, np.inf), np.full(idx.size, np.inf)
+        if callable(self.problem):  # a partial path's measures, formed on demand
+            return self.problem(idx)
         if len(self.problem) == 2:  # precomputed by the path
             return self.problem[0][idx], self.problem[1][idx]
         M, P, Q, gamma = self.problem
