@@ -370,11 +370,19 @@ def bench_startup(repeats, log, case="hand_device"):
     cmds = {"import numpy, scipy.linalg (floor)": [sys.executable, "-c", "import numpy, scipy.linalg"],
             "import mbseig": [sys.executable, "-c", "import mbseig"],
             f"mbseig modes {case}": [*cli, "modes", str(case_path(case))]}
+    # as Python runs by default, from cached bytecode: a PYTHONDONTWRITEBYTECODE in the
+    # environment (set on some CI machines) would make every run compile mbseig's modules
+    # anew (≈ 60 ms here) while numpy and scipy load theirs from the install; one untimed
+    # round writes the cache, as the first run after `pip install -e .` does (a plain
+    # `pip install .` compiles at install time)
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    for c in cmds.values():
+        subprocess.run(c, capture_output=True, check=True, env=env)
     times = {k: [] for k in cmds}
     for _ in range(repeats):
         for k, c in cmds.items():
             t = time.perf_counter()
-            subprocess.run(c, capture_output=True, check=True)
+            subprocess.run(c, capture_output=True, check=True, env=env)
             times[k].append(time.perf_counter() - t)
     floor = float(np.median(times["import numpy, scipy.linalg (floor)"]))
     rows = []
