@@ -421,6 +421,17 @@ def bench_sweeps(lines, points, log, case="hand_device"):
     rows.append({"section": "sweeps", "method": "in-process", "n": total, "workers": 1, "time": base,
                  "rate": total / base, "speedup": 1.0})
     log(f"sweeps {total} points in-process: {base:.2f} s ({total / base:.1f} points/s)")
+    # the device's load study (C4: tendon load f × damping), whose inverse-statics command
+    # the swept parameters do not enter (settings reused): the rate without re-solving it
+    load_axes = [("f", np.linspace(0.0, 1.5, points)), ("c_a", np.linspace(5.0, 9.0, lines))]
+    t = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        run_sweep(spec, load_axes, config="C4", progress=False, curves=False, jobs=1)
+    t = time.perf_counter() - t
+    rows.append({"section": "sweeps", "method": "in-process, C4 load f × c_a (command reused)",
+                 "n": total, "workers": 1, "time": t, "rate": total / t, "speedup": base / t})
+    log(f"sweeps {total} points in-process, C4 load sweep: {t:.2f} s ({total / t:.1f} points/s)")
     for w in range(2, cores + 1):
         t = timed(jobs=w)
         rows.append({"section": "sweeps", "method": "local processes", "n": total, "workers": w,
