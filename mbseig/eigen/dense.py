@@ -42,12 +42,31 @@ import scipy.sparse as sp
 
 from ..errors import SolverError
 from ..numerics import blas_limit
-from .base import SOLVERS, QEPSolution, SingularPencilError, dense_solvers, register, requested_path
-from .measures import EPS, backward_errors, better_half, componentwise, conditions, fro
-from .measures import is_symmetric, proportional_real_error, rayleigh_fit, undamped_pairs
-from .measures import pow2_scale, unit_columns
+from .base import (
+    SOLVERS,
+    QEPSolution,
+    SingularPencilError,
+    dense_solvers,
+    register,
+    requested_path,
+)
+from .measures import (
+    EPS,
+    backward_errors,
+    better_half,
+    colnorm,
+    componentwise,
+    conditions,
+    fro,
+    is_symmetric,
+    pow2_scale,
+    proportional_real_error,
+    rayleigh_fit,
+    undamped_pairs,
+    unit_columns,
+)
 
-__all__ = ["solve_qep", "choose_solver", "problem_scaling"]
+__all__ = ["choose_solver", "problem_scaling", "solve_qep"]
 
 #: cond(M) above which a positive definite M is not mass-normalized (companion, eigh paths)
 COMPANION_COND = 1e5
@@ -129,10 +148,10 @@ def choose_solver(M, P, Q, *, sym_tol=1e-13, rayleigh_tol=1e-12, memo=None,
         if not np.any(P):
             return "eigh", "P = 0, M and Q symmetric, M positive definite", {}
         if sym("P", P):
-            ab = rayleigh_fit(M, P, Q, rayleigh_tol)
+            ab = rayleigh_fit(M, P, Q, rayleigh_tol, residual=True)
             if ab is not None:
                 return ("proportional", f"P = {ab[0]:.6g} M + {ab[1]:.6g} Q (Rayleigh damping)",
-                        {"alpha": ab[0], "beta": ab[1]})
+                        {"alpha": ab[0], "beta": ab[1], "fit_residual": ab[2]})
     what = "complex M, P, Q: " if complex_problem else ""
     if pd and cond <= companion_cond:
         return "companion", f"{what}M symmetric positive definite: mass-normalized companion", {}
@@ -190,29 +209,58 @@ def _fast_operand(A, density=0.05):
     return A
 
 
-def _undamped_eigh(M, Q):
-    """(ω², V) of Q v = ω² M v, M-orthonormal V; a diagonal M is scaled out (standard eigh)."""
-    Qs = 0.5 * (Q + Q.T)
-    if _diagonal_positive(M):
-        l = np.sqrt(np.diagonal(M))
-        w, U = sla.eigh(Qs / np.outer(l, l), check_finite=False)
-        return w, U / l[:, None]
-    return sla.eigh(Qs, 0.5 * (M + M.T), check_finite=False)
+def _undamped_eigh(M, Q, m=None):
+    """(ω², V) of Q v = ω² M v, V with unit columns in C order; M = diag(m) when ``m`` is given
+    (then scaled out: a standard eigenproblem).  LAPACK's divide and conquer (``syevd`` /
+    ``sygvd``, the driver of ``eigh(Q, M)``) on a symmetrized copy that it may overwrite."""
+    Qs = np.add(Q, Q.T)
+    Qs *= 0.5
+    if m is not None:
+        l = np.sqrt(m)
+        if np.any(l != 1.0):
+            Qs /= l[:, None]
+            Qs /= l[None, :]
+        w, U = sla.eigh(Qs, driver="evd", overwrite_a=True, check_finite=False)
+        V = np.divide(U, l[:, None], order="C")
+    else:
+        Ms = np.add(M, M.T)
+        Ms *= 0.5
+        w, U = sla.eigh(Qs, Ms, driver="gvd", overwrite_a=True, overwrite_b=True,
+                        check_finite=False)
+        V = np.ascontiguousarray(U)
+    V /= colnorm(V)
+    return w, V
+
+
+def _times(A, V):
+    """A @ V for a dense A (as CSR when sparse enough: :func:`_fast_operand`) and C-ordered V."""
+    return _fast_operand(A) @ V
 
 
 def _structured(M, P, Q, opts, name, reason, norms):
-    """eigh and proportional: real undamped modes, checks in real arithmetic (y = x)."""
+    """eigh and proportional: real undamped modes (ω², v), both roots s of each from
+    s² + (α + βω²)s + ω² = 0; η and κ of both from the one real residual r = Qv − ω²Mv per mode
+    and the deviation ‖P − αM − βQ‖_F of the fit (:func:`~mbseig.eigen.measures.undamped_pairs`:
+    an exact identity, no complex T(s)v formed; P is never multiplied)."""
     alpha, beta = opts.get("alpha", 0.0), opts.get("beta", 0.0)
-    w, V = _lapack(_undamped_eigh, M, Q)
-    ops = tuple(_fast_operand(A) for A in (M, P, Q))
-    s, X, eta, kappa = undamped_pairs(*ops, w, V, alpha, beta, norms)
+    fit = opts.get("fit_residual")
+    if fit is None:  # not from choose_solver's fit: ‖E‖_F directly (E = P for P = 0)
+        fit = fro(P - alpha * M - beta * Q) if (alpha or beta) else fro(P)
+    m = np.diagonal(M).copy() if _diagonal_positive(M) else None
+    w, V = _lapack(_undamped_eigh, M, Q, m)
+    MV = V * m[:, None] if m is not None else _times(M, V)
+    R = _times(Q, V)
+    R -= MV * w  # r = Qv − ω²Mv per column
+    a, vr = np.einsum("ij,ij->j", V, MV), np.einsum("ij,ij->j", V, R)
+    s, eta, kappa = undamped_pairs(w, colnorm(MV), colnorm(R), a, vr, alpha, beta, fit, norms)
+    X = np.concatenate([V, V], axis=1)
     real_error = None
     if name == "proportional":
-        fit = np.linalg.norm(P - alpha * M - beta * Q)
         real_error = proportional_real_error(s, kappa, eta, norms, alpha, beta, fit)
     return QEPSolution(s, X, eta, kappa, name, reason, 0, norms,
-                       {"second_half_vectors": 0, "left_vectors": False}, real_error,
-                       left_vectors=X)
+                       {"second_half_vectors": 0, "left_vectors": False, "alpha": alpha,
+                        "beta": beta, "fit_residual": fit},
+                       real_error, left_vectors=X)
 
 
 def _solve_eigh(M, P, Q, opts, name, reason, norms):
@@ -420,7 +468,7 @@ def check_regular(M, P, Q, norms, *, tol=None, seed=20240):
     """
     n = M.shape[0]
     tol = 100 * n * EPS if tol is None else tol
-    nM, nP, nQ = norms
+    nM, _, nQ = norms
     gamma = np.sqrt(nQ / nM) if nM > 0 and nQ > 0 else 1.0
     rng = np.random.default_rng(seed)
     T = None
@@ -544,7 +592,7 @@ def solve_qep(M, P, Q, *, solver: str = "auto", sym_tol: float = 1e-13,
     keep = np.isfinite(s)  # |s| beyond the double range: an infinite eigenvalue to precision
     if not np.all(keep):
         details["beyond_range"] = int(np.sum(~keep))
-        pick = lambda a: a[..., keep] if a is not None else None  # noqa: E731
+        pick = lambda a: a[..., keep] if a is not None else None
         sol = replace(sol, vectors=sol.vectors[:, keep], backward_error=sol.backward_error[keep],
                       left_vectors=pick(sol.left_vectors), n_infinite=sol.n_infinite + int(np.sum(~keep)))
         s, condition, real_error = s[keep], condition[keep], pick(real_error)

@@ -22,6 +22,27 @@ zeros (an exact zero eigenvalue of a coordinate without stiffness has κ_c = 0).
 For |s| > 1 every quantity is evaluated on the reversed polynomial (t = 1/s:
 M + tP + t²Q, the same ratios divided by |s|²), so |s| up to the overflow threshold gives finite
 η and κ: no |s|² is ever formed.
+
+Undamped and proportional pairs (:func:`undamped_pairs`).  With a real unit v and ω² = w from
+the undamped problem, its residual r = Qv − wMv, and P = αM + βQ + E (E the deviation of the
+Rayleigh fit; E = 0 and α = β = 0 when P = 0), every root s of s² + (α + βw)s + w = 0 has,
+exactly::
+
+    (s²M + sP + Q)v = ρ(s) Mv + (1 + βs) r + s Ev,    ρ(s) = s² + (α + βw)s + w
+
+so that, with ‖Ev‖ ≤ ‖E‖_F,
+
+    η ≤ (|ρ(s)| ‖Mv‖ + |1 + βs| ‖r‖ + |s| ‖E‖_F) / w(s)
+
+and, as vᵀPv = (α + βw)vᵀMv + β vᵀr + vᵀEv,
+
+    κ ≤ w(s) / (|(2s + α + βw) vᵀMv + β vᵀr| − ‖E‖_F).
+
+|ρ(s)| of the computed s is evaluated in extended precision and increased by the rounding bound
+of that evaluation; r, Mv, vᵀMv, vᵀr are the only quantities that involve the matrices: one
+real residual per mode, for both roots, no complex n-vector.  ρ is at the rounding level of s,
+so η is |1 + βs|‖r‖/w(s) plus terms of order ε and ‖E‖/‖P‖: the directly evaluated η of the
+same pair (tests/test_proportional_fast.py) up to the rounding of either evaluation.
 """
 
 from __future__ import annotations
@@ -31,9 +52,22 @@ import scipy.sparse as sp
 
 from ..numerics import colnorm as _colnorm_fast
 
-__all__ = ["EPS", "colnorm", "unit_columns", "pow2_scale", "fro", "is_symmetric", "rayleigh_fit", "backward_errors", "conditions",
-           "componentwise", "better_half", "undamped_roots", "undamped_pairs",
-           "proportional_real_error"]
+__all__ = [
+    "EPS",
+    "backward_errors",
+    "better_half",
+    "colnorm",
+    "componentwise",
+    "conditions",
+    "fro",
+    "is_symmetric",
+    "pow2_scale",
+    "proportional_real_error",
+    "rayleigh_fit",
+    "undamped_pairs",
+    "undamped_roots",
+    "unit_columns",
+]
 
 EPS = np.finfo(float).eps
 _BIG, _SMALL = 1e150, 1e-150  # beyond these, norms are computed on a scaled copy
@@ -140,18 +174,22 @@ def is_symmetric(A, tol) -> bool:
     return fro(A - A.T) <= tol * nA
 
 
-def rayleigh_fit(M, P, Q, tol, *, probes=None, seed=0):
+def rayleigh_fit(M, P, Q, tol, *, probes=None, seed=0, residual=False):
     """(α, β) with P = αM + βQ to relative accuracy ``tol``, or None.
 
     Dense matrices are fitted entry by entry; with ``probes`` = k the fit uses the products with
-    k random vectors instead (sparse matrices, never densified).
+    k random vectors instead (sparse matrices, never densified).  ``residual`` (dense only):
+    return (α, β, ‖P − αM − βQ‖_F) with the residual norm the fit was judged by, computed
+    directly from the entries (the dense proportional path bounds its backward errors with it).
     """
+    if residual and probes is not None:
+        raise ValueError("rayleigh_fit: residual=True needs the dense (entrywise) fit")
     if fro(P) == 0:
-        return 0.0, 0.0
+        return (0.0, 0.0, 0.0) if residual else (0.0, 0.0)
     if probes is None:
         fit = _dense_fit(M, P, Q, tol)
         if fit is not False:
-            return fit
+            return fit if (fit is None or residual) else fit[:2]
         cols, b = [M.ravel(), Q.ravel()], P.ravel()
     else:
         V = np.random.default_rng(seed).standard_normal((M.shape[0], probes))
@@ -159,14 +197,17 @@ def rayleigh_fit(M, P, Q, tol, *, probes=None, seed=0):
     A = np.column_stack(cols)
     with np.errstate(all="ignore"):  # entries near the range limits: judged by finiteness below
         coef, *_ = np.linalg.lstsq(A, b, rcond=None)
-        fits = bool(np.all(np.isfinite(coef))) and \
-            np.linalg.norm(A @ coef - b) <= tol * np.linalg.norm(b)
-    return (float(coef[0]), float(coef[1])) if fits else None
+        rn = float(np.linalg.norm(A @ coef - b))
+        fits = bool(np.all(np.isfinite(coef))) and rn <= tol * np.linalg.norm(b)
+    if not fits:
+        return None
+    return (float(coef[0]), float(coef[1])) + ((rn,) if residual else ())
 
 
 def _dense_fit(M, P, Q, tol):
     """The dense Rayleigh fit from six dot products of the flattened M, Q, P and one residual
-    pass (O(n²), no n² × 2 least-squares copy): (α, β), None when P is not αM + βQ to ``tol``,
+    pass (O(n²), no n² × 2 least-squares copy): (α, β, ‖P − αM − βQ‖_F), None when P is not
+    αM + βQ to ``tol``,
     or False when the magnitudes leave the range where single dot products are exact or M and Q
     are nearly parallel (the caller then uses lstsq).  The residual ‖P − αM − βQ‖ that decides
     is computed directly, never from the Gram matrix."""
@@ -201,7 +242,8 @@ def _dense_fit(M, P, Q, tol):
         rn2 = _sumsq(r)
     if not np.isfinite(rn2):
         return None
-    return (float(alpha), float(beta)) if np.sqrt(rn2) <= tol * np.sqrt(bb) else None
+    rn = float(np.sqrt(rn2))
+    return (float(alpha), float(beta), rn) if rn <= tol * np.sqrt(bb) else None
 
 
 #: entries of one block of columns in the large-model measures (≈ 16 MB of complex numbers)
@@ -392,49 +434,41 @@ def undamped_roots(w, alpha, beta):
     return np.concatenate([s1, s2])
 
 
-def _real_vector_residuals(MV, PV, QV, s):
-    """‖(s²M + sP + Q)v‖ per column (reversed where |s| > 1) for real MV, PV, QV: real
-    arithmetic with two reused n × k buffers (no complex temporaries)."""
-    cM, cP, cQ = _coefficients(s)
-    acc, tmp = np.empty_like(MV), np.empty_like(MV)
-    out = np.zeros(s.size)
-    for part in (np.real, np.imag):
-        a, b, c = part(cM), part(cP), part(cQ)
-        if not (np.any(a) or np.any(b) or np.any(c)):
-            continue
-        np.multiply(MV, a, out=acc)
-        np.multiply(PV, b, out=tmp)
-        acc += tmp
-        np.multiply(QV, c, out=tmp)
-        acc += tmp
-        out += np.einsum("ij,ij->j", acc, acc)
-    return np.sqrt(out)
+_LD = np.longdouble
+_EPS_LD = float(np.finfo(np.longdouble).eps)
 
 
-def undamped_pairs(M, P, Q, w, V, alpha, beta, norms):
-    """s₊, s₋ of each undamped mode (ω², v) with s² + (α + βω²)s + ω² = 0; η and κ on the n real
-    vectors (M, P, Q symmetric: y = x, κ = w(s)‖v‖²/|2s vᵀMv + vᵀPv|).
+def undamped_pairs(w, mv_norm, r_norm, a, vr, alpha, beta, fit_residual, norms):
+    """s₊, s₋ of each undamped mode (ω² = w, unit real v) with s² + (α + βω²)s + ω² = 0, and
+    η and κ of both, from the real residual r = Qv − ω²Mv of the undamped pair (module doc,
+    "Undamped and proportional pairs"): no complex T(s)v is formed.
 
-    Returns (s, X, η, κ) with s = [s₊, s₋] and X = [V, V] (real, unit columns).
+    mv_norm, r_norm : ‖Mv‖, ‖r‖ per mode; a : vᵀMv; vr : vᵀr; fit_residual : ‖E‖_F of
+    E = P − αM − βQ (0 for P = 0).  Returns (s, η, κ), s = [s₊, s₋], y = x = v for κ.
+    The scalar algebra runs in extended precision (np.longdouble where the platform has it),
+    which also keeps |s|² w(s) free of overflow.
     """
     s = undamped_roots(w, alpha, beta)
-    V = V / colnorm(V)
-    MV, PV, QV = M @ V, P @ V, Q @ V
-    a, b = np.einsum("ij,ij->j", V, MV), np.einsum("ij,ij->j", V, PV)
-    k = w.size
-    rn = np.empty(2 * k)
-    rn[:k] = _real_vector_residuals(MV, PV, QV, s[:k])
-    # s₋ = conj(s₊) exactly (oscillatory modes): T(s̄)v = conj(T(s)v) for real M, P, Q, v, so the
-    # residual norm is the same; only the other (real, overdamped) roots are evaluated again
-    other = np.flatnonzero(s[k:] != np.conj(s[:k]))
-    rn[k:] = rn[:k]
-    if other.size:
-        rn[k + other] = _real_vector_residuals(MV[:, other], PV[:, other], QV[:, other], s[k + other])
-    eta = _ratio(rn, _weights(s, norms))
-    dM, dP = _coefficients(s, derivative=True)
-    den = np.abs(np.concatenate([a, a]) * dM + np.concatenate([b, b]) * dP)
-    kappa = _unreverse(_ratio(_weights(s, norms), den), s, den)
-    return s, np.concatenate([V, V], axis=1), eta, kappa
+    twice = lambda x: np.tile(np.asarray(x, dtype=_LD), 2)  # s₊ and s₋ share v
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore", under="ignore"):
+        S = s.astype(np.clongdouble)
+        W = twice(w)
+        al, be, fit = _LD(alpha), _LD(beta), _LD(fit_residual)
+        c = al + be * W
+        rho = (S * S + c * S) + W  # s's own residual in its quadratic: rounding level
+        A = np.abs(S)
+        rho_bound = np.abs(rho) + 8 * _EPS_LD * (A * A + (abs(al) + abs(be) * np.abs(W)) * A
+                                                 + np.abs(W))  # + the rounding of ρ itself
+        num = rho_bound * twice(mv_norm) + np.abs(1 + be * S) * twice(r_norm) + A * fit
+        nM, nP, nQ = (_LD(x) for x in norms)
+        weight = A * A * nM + A * nP + nQ
+        eta = np.where(weight > 0, num / np.where(weight > 0, weight, 1),
+                       np.where(num == 0, 0, np.inf))
+        # vᵀ(2sM + P)v = (2s + α + βω²) vᵀMv + β vᵀr + vᵀEv, |vᵀEv| ≤ ‖E‖_F: the smallest it
+        # can be, so that κ is never understated by the fit
+        den = np.abs((2 * S + c) * twice(a) + be * twice(vr)) - fit
+        kappa = np.where(den > 0, weight / np.where(den > 0, den, 1), np.inf)
+        return s, eta.astype(float), kappa.astype(float)
 
 
 def proportional_real_error(s, kappa, eta, norms, alpha, beta, fit_residual):
