@@ -383,7 +383,8 @@ def solve_partial(M, P, Q, *, n_modes: int | None = None, target: float | None =
         from .projected import projected_search
 
         run["kit"] = SimpleNamespace(ShiftLU=_ShiftLU, undamped_partial=_undamped_partial,
-                                     slots=_slots, pick=_pick, cluster_tol=_cluster_tol)
+                                     slots=_slots, pick=_pick, cluster_tol=_cluster_tol,
+                                     with_partners=_with_partners)
         why = None
         try:
             found = projected_search(run, want, verify_tol=verify_tol)
@@ -510,6 +511,21 @@ class _Componentwise:
             return eta_c, kappa_c
         where = np.searchsorted(cols, self.pos[np.asarray(idx)])
         return eta_c[where], kappa_c[where]
+
+
+def _with_partners(chosen, s, tol):
+    """(columns, conjugated?, eigenvalues): each kept mode of the upper half-plane followed by
+    its conjugate partner where |Im s| exceeds its tolerance (exact for real matrices)."""
+    cols, conj = [], []
+    for i in chosen:
+        cols.append(i)
+        conj.append(False)
+        if abs(s[i].imag) > tol[i]:
+            cols.append(i)
+            conj.append(True)
+    cols, conj = np.array(cols, int), np.array(conj, bool)
+    s_out = np.where(conj, np.conj(s[cols]), s[cols]) if cols.size else np.zeros(0, complex)
+    return cols, conj, s_out
 
 
 def _expand(Xu, pos, partner):
@@ -662,16 +678,7 @@ def _companion_search(run, want, omega_t, band, max_modes):
                 raise SolverError(f"band {band!r} holds more than max_modes = {max_modes} modes")
             break
         k = min(2 * k, run["limit"])
-    chosen = upper[idx]
-    cols, conj = [], []
-    for i in chosen:  # each kept mode with its conjugate partner (exact for real matrices)
-        cols.append(i)
-        conj.append(False)
-        if abs(s[i].imag) > tol[i]:
-            cols.append(i)
-            conj.append(True)
-    cols, conj = np.array(cols, int), np.array(conj, bool)
-    s_out = np.where(conj, np.conj(s[cols]), s[cols]) if cols.size else np.zeros(0, complex)
+    cols, conj, s_out = _with_partners(upper[idx], s, tol)
 
     def gather(X):  # the kept columns, conjugated where they are the partners (one copy)
         out = np.asarray(X)[:, cols].astype(complex)
@@ -721,16 +728,9 @@ def _slepc_search(run, want, omega_t, band):
         if ok or nev >= run["limit"]:
             break
         nev = min(2 * nev, run["limit"])
-    chosen = upper[idx]
-    s_out, x = [], []
-    for i in chosen:  # each kept mode with its conjugate partner (exact for real matrices)
-        s_out.append(s_all[i])
-        x.append(X_all[:, i])
-        if abs(s_all[i].imag) > tol[i]:
-            s_out.append(np.conj(s_all[i]))
-            x.append(np.conj(X_all[:, i]))
-    X = np.column_stack(x) if x else np.zeros((Mb.shape[0], 0), complex)
-    return {"s": np.array(s_out, complex), "X1": X, "X2": X, "k": nev, "shifts": [0.0],
+    cols, conj, s_out = _with_partners(upper[idx], s_all, tol)
+    X = _expand(np.asarray(X_all, complex), cols, conj)
+    return {"s": s_out, "X1": X, "X2": X, "k": nev, "shifts": [0.0],
             "coverage": {"measure": "|s|", "omega_n": (lo, hi), "note": note, "verified": ok},
             "slepc": info}
 

@@ -305,16 +305,7 @@ def projected_search(run, want, *, verify_tol, max_iter=MAX_ITER):
     first = np.flatnonzero(slot == np.arange(slot.size))
     idx, d, note = kit.pick(np.abs(s[upper[first]]), want, 0.0, None, scale)
     idx = np.flatnonzero(np.isin(slot, first[idx]))
-    chosen = upper[idx]
-    cols, conj = [], []
-    for i in chosen:
-        cols.append(i)
-        conj.append(False)
-        if abs(s[i].imag) > tol[i]:
-            cols.append(i)
-            conj.append(True)
-    cols, conj = np.array(cols, int), np.array(conj, bool)
-    s_out = np.where(conj, np.conj(s[cols]), s[cols])
+    cols, conj, s_out = kit.with_partners(upper[idx], s, tol)
 
     X = np.empty((U.shape[0], cols.size), complex, order="F")  # column by column: no copies
     for j, (i, cj) in enumerate(zip(cols, conj)):
