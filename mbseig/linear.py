@@ -191,10 +191,11 @@ def _linearize(model, eq, rank_tol, constraint_stiffness, sparse, reference=None
                            B=np.zeros((model.n, 0)), C=np.zeros((0, 2 * model.n)),
                            D=np.zeros((0, 0)), independent=tuple(model.coordinate_names))
     q0, lam0 = eq.q, eq.lam
-    K, C = model.force_jacobians(q0)
+    use_sparse = model.n > SPARSE_MIN if sparse is None else sparse
+    K, C = model.force_jacobians(q0, dense=not use_sparse)  # (dense: no CSR round trip)
     if constraint_stiffness and model.n_constraints:
-        K = K + model.constraint_hessian(q0, lam0)
-    if model.n > SPARSE_MIN if sparse is None else sparse:
+        K = K + model.constraint_hessian(q0, lam0, dense=not use_sparse)
+    if use_sparse:
         G = model.phi_q(q0) if model.n_constraints else None
         N = sp.identity(model.n, format="csr") if G is None else None
         return LinearModel(
@@ -203,10 +204,10 @@ def _linearize(model, eq, rank_tol, constraint_stiffness, sparse, reference=None
             rank=eq.rank, n_constraints=model.n_constraints,
             constraint_stiffness=constraint_stiffness,
             tolerances={"rank_tol": rank_tol, "sparse": True}, constraint_jacobian=G)
-    G = model.phi_q(q0)
+    G = model.phi_q(q0, dense=True)
     N, rank, independent, sigma = continuous_null_basis(G, model.n, rank_tol, model.coordinate_names,
                                                         reference)
-    Md, Cd, Kd = (A.toarray() for A in (model.mass_matrix(q0), C, K))
+    Md, Cd, Kd = model.mass_matrix(q0).toarray(), C, K
     if model.n_constraints == 0:
         Mr, Pr, Qr = Md, Cd, Kd
     else:

@@ -77,8 +77,23 @@ DOUBLE_RANGE = "the double-precision range (2.2e-308 to 1.8e308)"
 _FLOAT_WARNING = re.compile(r"(overflow|divide by zero|invalid value) encountered")
 
 
-def scatter(n_rows, n_cols, blocks):
-    """Sum of dense local blocks (row indices, column indices, values) into a CSR matrix."""
+DENSE_ASSEMBLY = 300  # coordinates + constraints up to which the statics and the continuation
+# assemble a model's Jacobians as dense arrays (``dense=True``): at the size of a device (10
+# coordinates, 7 constraints) one CSR construction or operation costs 20–150 µs of scipy's
+# Python, the dense one ≈ 1 µs, and the Newton matrix of such a model is decomposed densely (by
+# the SVD, mbseig.statics.linalg.SMALL = 300 unknowns) anyway
+
+
+def scatter(n_rows, n_cols, blocks, *, dense=False):
+    """Sum of dense local blocks (row indices, column indices, values) into a CSR matrix, or a
+    dense array when ``dense`` (duplicates summed in both)."""
+    if dense:
+        A = np.zeros((n_rows, n_cols))
+        for r, c, v in blocks:
+            if np.size(v):
+                np.add.at(A, np.ix_(np.asarray(r).ravel(), np.asarray(c).ravel()),
+                          np.asarray(v, dtype=float).reshape(np.size(r), np.size(c)))
+        return A
     triplets = []
     for r, c, v in blocks:
         if np.size(v) == 0:
@@ -93,9 +108,15 @@ FAST_CSR = 20000  # triplets up to which CSR is assembled by numpy (scipy's COO 
 # ≈ 0.3 ms of Python per matrix, which dominates the statics of a small model)
 
 
-def coo_sum(n_rows, n_cols, triplets):
-    """Sum of (rows, cols, values) triplets as CSR (duplicates summed, sorted indices)."""
+def coo_sum(n_rows, n_cols, triplets, *, dense=False):
+    """Sum of (rows, cols, values) triplets as CSR (duplicates summed, sorted indices), or as a
+    dense array when ``dense``."""
     triplets = [t for t in triplets if t[0].size]
+    if dense:
+        A = np.zeros((n_rows, n_cols))
+        for r, c, v in triplets:
+            np.add.at(A, (np.asarray(r), np.asarray(c)), np.asarray(v, dtype=float))
+        return A
     if not triplets:
         return sp.csr_matrix((n_rows, n_cols))
     r, c, v = (np.concatenate(x) for x in zip(*triplets))
@@ -137,7 +158,7 @@ def csr_of_dense(D):
 
 def saddle(A, G):
     """[[A, Gᵀ], [G, 0]] as CSR (the augmented matrix of a constrained model); assembled
-    densely when small."""
+    densely when small, and returned dense when A and G are both dense arrays."""
     n, m = A.shape[0], G.shape[0]
     if n + m > 400:
         return sp.bmat([[A, G.T], [G, None]], format="csr")
@@ -146,7 +167,7 @@ def saddle(A, G):
     Gd = G.toarray() if sp.issparse(G) else np.asarray(G, float)
     D[n:, :n] = Gd
     D[:n, n:] = Gd.T
-    return csr_of_dense(D)
+    return D if not (sp.issparse(A) or sp.issparse(G)) else csr_of_dense(D)
 
 
 def dense(A) -> np.ndarray:

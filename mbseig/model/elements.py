@@ -191,17 +191,16 @@ def relative_angle(dirs: Affine, q, sense: float, name: str):
     """θ = sense · atan2(a × b, a · b) of the stacked directions [a; b] = ``dirs(q)``, with its
     gradient g and Hessian H with respect to [a; b] (4-vectors, 4×4), shared by the torsional
     spring and the angle driver so that both measure the same angle the same way."""
-    w = dirs(q)
-    a, b = w[:2], w[2:]
-    if a @ a == 0.0 or b @ b == 0.0:
+    ax, ay, bx, by = dirs(q).tolist()  # (scalar arithmetic: called at every evaluation)
+    ra, rb = ax * ax + ay * ay, bx * bx + by * by
+    if ra == 0.0 or rb == 0.0:
         raise EquilibriumError("direction of zero length: angle undefined", element=name)
-    ga, Ha = _angle_derivatives(a)
-    gb, Hb = _angle_derivatives(b)
-    g = sense * np.concatenate([-ga, gb])
-    H = np.zeros((4, 4))
-    H[:2, :2] = -sense * Ha
-    H[2:, 2:] = sense * Hb
-    theta = sense * math.atan2(a[0] * b[1] - a[1] * b[0], a @ b)
+    # g = sense [−∇α(a); ∇α(b)], H = sense diag(−∇²α(a), ∇²α(b)) (_angle_derivatives)
+    g = np.array([ay / ra, -ax / ra, -by / rb, bx / rb]) * sense
+    sa, sb = -sense / (ra * ra), sense / (rb * rb)
+    pa, ma, pb, mb = 2 * ax * ay * sa, (ay * ay - ax * ax) * sa, 2 * bx * by * sb, (by * by - bx * bx) * sb
+    H = np.array([[pa, ma, 0.0, 0.0], [ma, -pa, 0.0, 0.0], [0.0, 0.0, pb, mb], [0.0, 0.0, mb, -pb]])
+    theta = sense * math.atan2(ax * by - ay * bx, ax * bx + ay * by)
     return theta, g, H
 
 

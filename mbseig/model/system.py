@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from ..numerics import coo_sum, scatter
+from ..numerics import DENSE_ASSEMBLY, coo_sum, scatter
 from .batched import spring_tangents
 
 __all__ = ["Model"]
@@ -117,8 +117,8 @@ class Model:
                 np.add.at(g, f.idx, f.force(q, qd))
         return g
 
-    def force_jacobians(self, q, qd=None):
-        """(K, C) = (−∂g/∂q, −∂g/∂q̇) as CSR matrices."""
+    def force_jacobians(self, q, qd=None, *, dense=False):
+        """(K, C) = (−∂g/∂q, −∂g/∂q̇) as CSR matrices (dense arrays when ``dense``)."""
         qd = np.zeros(self.n) if qd is None else qd
         kb, cb, kt, ct = [], [], [], []
         for f in self.forces:
@@ -130,9 +130,10 @@ class Model:
             K, C = f.jacobians(q, qd)
             kb.append((f.idx, f.idx, K))
             cb.append((f.idx, f.idx, C))
-        K, C = scatter(self.n, self.n, kb), scatter(self.n, self.n, cb)
+        K, C = scatter(self.n, self.n, kb, dense=dense), scatter(self.n, self.n, cb, dense=dense)
         if kt:
-            K, C = K + coo_sum(self.n, self.n, kt), C + coo_sum(self.n, self.n, ct)
+            K = K + coo_sum(self.n, self.n, kt, dense=dense)
+            C = C + coo_sum(self.n, self.n, ct, dense=dense)
         return K, C
 
     # ---- constraints ---------------------------------------------------------------------
@@ -141,16 +142,24 @@ class Model:
             return np.zeros(0)
         return np.concatenate([c.phi(q) for c in self.constraints])
 
-    def phi_q(self, q) -> sp.csr_matrix:
+    def phi_q(self, q, *, dense=False) -> sp.csr_matrix:
+        """Φ_q(q) (CSR; a dense array when ``dense``)."""
         off = self._row_offsets()
         blocks = [(np.arange(off[k], off[k + 1]), c.idx, c.jac(q)) for k, c in enumerate(self.constraints)]
-        return scatter(self.n_constraints, self.n, blocks)
+        return scatter(self.n_constraints, self.n, blocks, dense=dense)
 
-    def constraint_hessian(self, q, lam) -> sp.csr_matrix:
-        """H(λ) = Σ_k λ_k ∇²Φ_k(q), the stiffness of the constraint forces."""
+    def constraint_hessian(self, q, lam, *, dense=False) -> sp.csr_matrix:
+        """H(λ) = Σ_k λ_k ∇²Φ_k(q), the stiffness of the constraint forces (CSR; a dense array
+        when ``dense``)."""
         off = self._row_offsets()
         blocks = [(c.idx, c.idx, c.hess(q, lam[off[k]:off[k + 1]])) for k, c in enumerate(self.constraints)]
-        return scatter(self.n, self.n, blocks)
+        return scatter(self.n, self.n, blocks, dense=dense)
+
+    @property
+    def dense_assembly(self) -> bool:
+        """Whether the statics assemble this model's Jacobians densely (a small model:
+        :data:`mbseig.numerics.DENSE_ASSEMBLY`)."""
+        return self.n + self.n_constraints <= DENSE_ASSEMBLY
 
     def gamma(self, q, qd) -> np.ndarray:
         """γ = −(Φ_q q̇)_q q̇, so that Φ_q q̈ = γ on the constraint manifold."""

@@ -55,7 +55,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from ..errors import EquilibriumError, MbseigError
-from ..numerics import LazyModule, constraint_rank, saddle
+from ..numerics import LazyModule, constraint_rank, dense, saddle
 from .linalg import DENSE_LIMIT, SMALL, NewtonMatrix, StepScales, multipliers, solve_bordered
 from .newton import Memo, Stall, newton, settings_for
 
@@ -94,6 +94,8 @@ class Family:
                 _, _, piv = sla.qr(Phi_q.toarray().T, pivoting=True, mode="economic")
                 self.rows = np.sort(piv[:rank])
         self.N = self.n + self.rows.size
+        # a small model's R and J from dense evaluations (mbseig.numerics.DENSE_ASSEMBLY)
+        self.dense = bool(getattr(model0, "dense_assembly", False))
         self.evaluations = 0
         self._memo_store: dict = {}
 
@@ -146,18 +148,18 @@ class Family:
             g = model.generalized_force(q)
             if not self.m:
                 return g
-            Phi_q = model.phi_q(q)[self.rows]
+            Phi_q = model.phi_q(q, dense=self.dense)[self.rows]
             return np.concatenate([g - Phi_q.T @ lam, -model.phi(q)[self.rows]])
 
     def _J(self, y, p):
         model = self.model(p)
         q = y[:self.n]
         with np.errstate(all="ignore"):
-            K, _ = model.force_jacobians(q)
+            K, _ = model.force_jacobians(q, dense=self.dense)
             if not self.m:
-                return K.tocsr()
-            Phi_q = model.phi_q(q)[self.rows]
-            H = model.constraint_hessian(q, self.lam_full(y))
+                return K if self.dense else K.tocsr()
+            Phi_q = model.phi_q(q, dense=self.dense)[self.rows]
+            H = model.constraint_hessian(q, self.lam_full(y), dense=self.dense)
             return saddle(K + H, Phi_q)
 
     def _Rp(self, y, p):
@@ -226,12 +228,11 @@ def _det_sign(A) -> int:
     sign is undecided is not detected."""
     import warnings
 
-    A = sp.csc_matrix(A)
     with np.errstate(all="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore", sla.LinAlgWarning)
         if A.shape[0] <= DENSE_LIMIT:
             try:
-                lu, piv = sla.lu_factor(A.toarray(), check_finite=False)
+                lu, piv = sla.lu_factor(dense(A), check_finite=False)
             except (ValueError, sla.LinAlgError):
                 return 0
             d = np.diag(lu)
@@ -241,7 +242,7 @@ def _det_sign(A) -> int:
             sign = (-1) ** swaps * int(np.prod(np.sign(d)))
             return int(sign)
         try:
-            lu = spla.splu(A)
+            lu = spla.splu(sp.csc_matrix(A))
         except RuntimeError:
             return 0
         d = lu.U.diagonal()
@@ -278,6 +279,8 @@ def _bordered(fam, y, p, t, w):
     A = fam.J(y, p)
     rp = fam.Rp(y, p)
     c = w * t
+    if not sp.issparse(A):  # a small model's dense J
+        return A, rp, np.block([[A, -rp[:, None]], [c[None, :-1], np.array([[c[-1]]])]])
     B = sp.bmat([[A, sp.csr_matrix(-rp[:, None])],
                  [sp.csr_matrix(c[None, :-1]), sp.csr_matrix([[c[-1]]])]], format="csr")
     return A, rp, B

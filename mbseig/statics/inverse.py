@@ -38,6 +38,7 @@ import numpy as np
 from ..errors import EquilibriumError
 from ..model.driver import check_command
 from .linalg import NewtonMatrix, augmented
+from .newton import Memo
 
 __all__ = ["resolve_commands", "reuse_commands", "command_settings"]
 
@@ -167,7 +168,7 @@ def _newton_free_length(make_model, with_spring, pre_constraints, eq, row, l_sta
     try:
         with np.errstate(all="ignore"):
             g_l = (m_h.generalized_force(eq.q) - m_star.generalized_force(eq.q)) / h
-            A, _ = augmented(m_star, eq.q, eq.lam)
+            A, _ = augmented(Memo(m_star), eq.q, eq.lam)  # (dense for a small model)
             x, e = NewtonMatrix(A).solve(np.concatenate([g_l, np.zeros(A.shape[0] - g_l.size)]))
     except (EquilibriumError, ArithmeticError, ValueError):
         return None

@@ -25,7 +25,7 @@ import scipy.sparse as sp
 
 from ..errors import EquilibriumError
 from ..model.elements import DistanceConstraint
-from ..numerics import LazyModule, blas_limit, constraint_rank, coo_sum, saddle
+from ..numerics import LazyModule, _rank, blas_limit, constraint_rank, coo_sum, dense, saddle
 
 spla = LazyModule("scipy.sparse.linalg")  # sparse solvers: imported at first use
 
@@ -104,19 +104,24 @@ class StepScales:
 
 
 def augmented(model, q, lam):
-    """[[K + H(λ), Φ_qᵀ], [Φ_q, 0]] (CSR) and Φ_q at q."""
+    """[[K + H(λ), Φ_qᵀ], [Φ_q, 0]] (CSR, or a dense array when the model's evaluations are
+    dense: :class:`mbseig.statics.newton.Memo` of a small model) and Φ_q at q."""
     K, _ = model.force_jacobians(q)
     Phi_q = model.phi_q(q)
     if model.n_constraints:
         H = model.constraint_hessian(q, lam)
         A = saddle(K + H, Phi_q)
     else:
-        A = K.tocsr()
+        A = K.tocsr() if sp.issparse(K) else K
     return A, Phi_q
 
 
 def _equilibrate(A):
     """d with d_i = 1/√max_j |A_ij| (1 for empty rows), for the scaling D A D."""
+    if not sp.issparse(A):
+        mx = np.max(np.abs(A), axis=1, initial=0.0)
+        mx[~(mx > 0)] = 1.0
+        return 1.0 / np.sqrt(mx)
     A = sp.csr_matrix(A)
     mx = np.zeros(A.shape[0])
     nz = np.diff(A.indptr) > 0
@@ -132,8 +137,10 @@ class NewtonMatrix:
 
     def __init__(self, A, *, what="Newton matrix", weights=None):
         self.weights = weights  # metric of the unknowns in which solutions are made least
-        self.A = A if isinstance(A, sp.csr_matrix) else sp.csr_matrix(A)
-        N = self.A.shape[0]
+        N = A.shape[0]
+        if N > SMALL or sp.issparse(A):  # (a small dense A stays dense: decomposed by the SVD)
+            A = A if isinstance(A, sp.csr_matrix) else sp.csr_matrix(A)
+        self.A = A
         self.d = _equilibrate(self.A)
         self.kind = "svd"
         self.lu = None
@@ -151,7 +158,7 @@ class NewtonMatrix:
                     f"model above the dense limit of {DENSE_LIMIT})", element="equilibrium")
         if self.lu is None:
             with np.errstate(all="ignore"):
-                As = self.d[:, None] * self.A.toarray() * self.d[None, :]
+                As = self.d[:, None] * dense(self.A) * self.d[None, :]
                 U, s, Vt = sla.svd(As, full_matrices=False, lapack_driver="gesdd")
             keep = s > RCOND * (s[0] if s.size else 0.0)
             self.U, self.s, self.Vt, self.keep = U[:, keep], s[keep], Vt[keep], keep
@@ -221,8 +228,11 @@ def solve_bordered(A, col, row, corner, f, g, weights=None):
                                                   + abs(corner * tau) + abs(g)) + 1e-300)
                 if ok and np.all(np.isfinite(x)):
                     return x, tau
-    B = sp.bmat([[sp.csr_matrix(A), sp.csr_matrix(col[:, None])],
-                 [sp.csr_matrix(row[None, :]), sp.csr_matrix([[corner]])]], format="csr")
+    if N <= SMALL:
+        B = np.block([[dense(A), col[:, None]], [row[None, :], np.array([[corner]])]])
+    else:
+        B = sp.bmat([[sp.csr_matrix(A), sp.csr_matrix(col[:, None])],
+                     [sp.csr_matrix(row[None, :]), sp.csr_matrix([[corner]])]], format="csr")
     z = NewtonMatrix(B, weights=weights).solve(np.concatenate([f, [g]]))[0]
     return z[:N], float(z[N])
 
@@ -241,7 +251,7 @@ def multipliers(Phi_q, g, rank_tol, *, check):
     if m == 0:
         return np.zeros(0), 0, "none"
     if m + n > SMALL:
-        A = (Phi_q @ Phi_q.T).tocsc()
+        A = sp.csc_matrix(Phi_q @ Phi_q.T)
         with np.errstate(all="ignore"):
             try:
                 lu = spla.splu(A)
@@ -260,6 +270,8 @@ def multipliers(Phi_q, g, rank_tol, *, check):
                 f"the dense limit of {DENSE_LIMIT} the constraints must be independent",
                 element="equilibrium")
     with np.errstate(all="ignore"):
-        lam = sla.lstsq(Phi_q.toarray().T, g, lapack_driver="gelsd")[0]
-    rank = constraint_rank(Phi_q, rank_tol)[0] if check else m
+        lam, _, _, sv = sla.lstsq(dense(Phi_q).T, g, lapack_driver="gelsd")
+    # the rank from the same SVD (gelsd's singular values of Φ_qᵀ are Φ_q's), as
+    # constraint_rank decides it
+    rank = _rank(sv, rank_tol) if check else m
     return lam, rank, "SVD of Φ_q"

@@ -45,6 +45,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import EquilibriumError
+from ..numerics import dense
 from .failures import NoStaticEquilibrium, NotConverged
 from .linalg import (DENSE_LIMIT, NewtonMatrix, StepScales, augmented, multipliers,
                      solve_bordered)
@@ -344,9 +345,12 @@ def force_scale(model, q, rank_tol):
         K, _ = model.force_jacobians(q)
         Phi_q = model.phi_q(q)
         lam = multipliers(Phi_q, g, rank_tol, check=False)[0]
-        K = K if isinstance(K, sp.csr_matrix) else sp.csr_matrix(K)
-        knorm = (float(np.max(np.add.reduceat(np.abs(K.data), K.indptr[:-1][np.diff(K.indptr) > 0])))
-                 if K.nnz else 0.0)  # ‖K‖_∞ (row sums of the nonempty rows)
+        if sp.issparse(K):
+            K = K.tocsr()
+            knorm = (float(np.max(np.add.reduceat(np.abs(K.data), K.indptr[:-1][np.diff(K.indptr) > 0])))
+                     if K.nnz else 0.0)  # ‖K‖_∞ (row sums of the nonempty rows)
+        else:
+            knorm = float(np.max(np.abs(K).sum(axis=1), initial=0.0))
         f = max(float(np.max(np.abs(g), initial=0.0)), knorm * model.length_scale,
                 float(np.max(np.abs(Phi_q.T @ lam), initial=0.0)))
     return f if np.isfinite(f) and f > 0 else 1.0
@@ -370,6 +374,8 @@ class Memo:
     def __init__(self, model):
         self._model = model
         self._cache: dict = {}
+        # a small model's Jacobians as dense arrays (mbseig.numerics.DENSE_ASSEMBLY)
+        self._dense = bool(getattr(model, "dense_assembly", False))
 
     def __getattr__(self, name):
         return getattr(self._model, name)
@@ -386,22 +392,25 @@ class Memo:
     def phi(self, q):
         return self._get(("phi", q.tobytes()), lambda: self._model.phi(q))
 
-    def phi_q(self, q):
-        return self._get(("phi_q", q.tobytes()), lambda: self._model.phi_q(q))
+    # (``dense``: accepted for the model's signature; the memo gives its own form, dense for a
+    # small model, and callers that need a dense array convert with mbseig.numerics.dense)
+    def phi_q(self, q, *, dense=None):
+        return self._get(("phi_q", q.tobytes()), lambda: self._model.phi_q(q, dense=self._dense))
 
     def generalized_force(self, q, qd=None):
         if qd is not None:
             return self._model.generalized_force(q, qd)
         return self._get(("g", q.tobytes()), lambda: self._model.generalized_force(q))
 
-    def force_jacobians(self, q, qd=None):
+    def force_jacobians(self, q, qd=None, *, dense=None):
         if qd is not None:
-            return self._model.force_jacobians(q, qd)
-        return self._get(("K", q.tobytes()), lambda: self._model.force_jacobians(q))
+            return self._model.force_jacobians(q, qd, dense=self._dense)
+        return self._get(("K", q.tobytes()),
+                         lambda: self._model.force_jacobians(q, dense=self._dense))
 
-    def constraint_hessian(self, q, lam):
+    def constraint_hessian(self, q, lam, *, dense=None):
         return self._get(("H", q.tobytes(), np.asarray(lam).tobytes()),
-                         lambda: self._model.constraint_hessian(q, lam))
+                         lambda: self._model.constraint_hessian(q, lam, dense=self._dense))
 
 
 def finish(model, q, s, *, iterations, correction, method, path, lam=None, memo=None):
@@ -434,7 +443,7 @@ def _redundant_rows(model, Phi_q, rank):
     m = Phi_q.shape[0]
     if rank >= m:
         return []
-    _, _, piv = sla.qr(Phi_q.toarray().T, pivoting=True, mode="economic")
+    _, _, piv = sla.qr(dense(Phi_q).T, pivoting=True, mode="economic")
     names = model.constraint_row_names()
     return sorted({names[i] for i in piv[rank:]})
 

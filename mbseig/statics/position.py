@@ -60,7 +60,8 @@ def position_solve(model, q, scales, *, tol, max_iter=100, radius=0.5, prove=Tru
         Js = _scaled_jacobian(model, q, cscale, scales)
         rr = float(r @ r)
         if mu is None:  # Yamashita–Fukushima: μ ∝ ‖r‖², relative to ‖J‖²
-            mu = 1e-3 * min(1.0, rr) * max(float(np.max(np.abs(Js.data), initial=0.0)) ** 2, 1e-300)
+            mu = 1e-3 * min(1.0, rr) * max(float(np.max(np.abs(_values(Js)), initial=0.0)) ** 2,
+                                            1e-300)
         accepted = False
         for _ in range(60):
             z = _lm_step(Js, r, mu)
@@ -101,7 +102,17 @@ def position_solve(model, q, scales, *, tol, max_iter=100, radius=0.5, prove=Tru
 def _scaled_jacobian(model, q, cscale, scales):
     import scipy.sparse as sp
 
-    return (sp.diags(1.0 / cscale) @ model.phi_q(q) @ sp.diags(scales.ell)).tocsr()
+    Phi_q = model.phi_q(q)
+    if not sp.issparse(Phi_q):  # a small model's dense Jacobian (mbseig.statics.newton.Memo)
+        return Phi_q * (1.0 / cscale)[:, None] * scales.ell[None, :]
+    return (sp.diags(1.0 / cscale) @ Phi_q @ sp.diags(scales.ell)).tocsr()
+
+
+def _values(Js):
+    """The stored values of Js (its nonzeros when sparse, every entry when dense)."""
+    import scipy.sparse as sp
+
+    return sp.csr_matrix(Js).data if sp.issparse(Js) else np.ravel(Js)
 
 
 def _lm_step(Js, r, mu):
@@ -114,7 +125,7 @@ def _lm_step(Js, r, mu):
     with np.errstate(all="ignore"):
         try:
             if m <= 300:
-                A = G.toarray()
+                A = G.toarray() if sp.issparse(G) else np.array(G)
                 A[np.diag_indices(m)] += mu
                 try:
                     w = sla.solve(A, r, assume_a="pos")
@@ -131,12 +142,10 @@ def _lm_step(Js, r, mu):
 
 def _stationary(model, q, phi, cscale, scales):
     """Whether ‖Φ/scale‖² is stationary at q: |Jsᵀ r| ≤ STATIONARY ‖Js‖ ‖r‖ (scaled)."""
-    import scipy.sparse as sp
-
     r = phi / cscale
     Js = _scaled_jacobian(model, q, cscale, scales)
     grad = Js.T @ r
-    nJ = float(np.linalg.norm(sp.csr_matrix(Js).data))  # ‖Js‖_F
+    nJ = float(np.linalg.norm(_values(Js)))  # ‖Js‖_F
     return float(np.linalg.norm(grad)) <= STATIONARY * nJ * float(np.linalg.norm(r))
 
 

@@ -37,7 +37,7 @@ SELF_STRESS_TOL = 1e-8  # relative stiffness change of a unit self-stress that c
 
 
 def _basis(model, q, rank_tol):
-    Phi_q = dense(model.phi_q(q))
+    Phi_q = dense(model.phi_q(q, dense=True))
     if Phi_q.shape[0] == 0:
         return np.eye(model.n), np.zeros((0, 0)), Phi_q, 0
     U, s, Vt = sla.svd(Phi_q, full_matrices=True)
@@ -48,10 +48,10 @@ def _basis(model, q, rank_tol):
 def reduced_stiffness(model, q, lam, rank_tol=1e-10):
     """(K_r, N) at q with multipliers λ."""
     N, _, _, _ = _basis(model, q, rank_tol)
-    K, _ = model.force_jacobians(q)
+    K, _ = model.force_jacobians(q, dense=True)
     Kt = dense(K)
     if model.n_constraints:
-        Kt = Kt + dense(model.constraint_hessian(q, lam))
+        Kt = Kt + dense(model.constraint_hessian(q, lam, dense=True))
     return N.T @ Kt @ N, N
 
 
@@ -105,7 +105,7 @@ def self_stress_states(model, q, *, rank_tol=1e-10, tol=SELF_STRESS_TOL, states=
     # independent change (the states that change nothing are dropped)
     changes = []
     for j in range(Uo.shape[1]):
-        H = dense(model.constraint_hessian(q, Uo[:, j]))
+        H = dense(model.constraint_hessian(q, Uo[:, j], dense=True))
         h = float(np.linalg.norm(H, 2)) or 1.0
         changes.append((N.T @ H @ N).ravel() / h)
     C = np.array(changes).T  # columns: the change per state
