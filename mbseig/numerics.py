@@ -88,12 +88,13 @@ def scatter(n_rows, n_cols, blocks, *, dense=False):
     """Sum of dense local blocks (row indices, column indices, values) into a CSR matrix, or a
     dense array when ``dense`` (duplicates summed in both)."""
     if dense:
-        A = np.zeros((n_rows, n_cols))
+        keys, vals = [], []
         for r, c, v in blocks:
             if np.size(v):
-                np.add.at(A, np.ix_(np.asarray(r).ravel(), np.asarray(c).ravel()),
-                          np.asarray(v, dtype=float).reshape(np.size(r), np.size(c)))
-        return A
+                r, c = np.asarray(r).ravel(), np.asarray(c).ravel()
+                keys.append((r[:, None] * n_cols + c[None, :]).ravel())  # row-major, as v
+                vals.append(np.asarray(v, dtype=float).ravel())
+        return _dense_sum(n_rows, n_cols, keys, vals)
     triplets = []
     for r, c, v in blocks:
         if np.size(v) == 0:
@@ -102,6 +103,17 @@ def scatter(n_rows, n_cols, blocks, *, dense=False):
         # row-major (i, j) pairs of the block, as meshgrid(r, c, indexing="ij") gives them
         triplets.append((np.repeat(r, c.size), np.tile(c, r.size), np.asarray(v, dtype=float).ravel()))
     return coo_sum(n_rows, n_cols, triplets)
+
+
+def _dense_sum(n_rows, n_cols, keys, vals):
+    """The dense n_rows × n_cols array with vals summed at the flat indices keys (one
+    bincount: duplicates summed in their given order)."""
+    if not keys:
+        return np.zeros((n_rows, n_cols))
+    k = np.concatenate(keys)
+    if k.size and (k.min() < 0 or k.max() >= n_rows * n_cols):
+        raise IndexError(f"index outside a {n_rows} × {n_cols} matrix")
+    return np.bincount(k, weights=np.concatenate(vals), minlength=n_rows * n_cols).reshape(n_rows, n_cols)
 
 
 FAST_CSR = 20000  # triplets up to which CSR is assembled by numpy (scipy's COO path costs
@@ -113,10 +125,8 @@ def coo_sum(n_rows, n_cols, triplets, *, dense=False):
     dense array when ``dense``."""
     triplets = [t for t in triplets if t[0].size]
     if dense:
-        A = np.zeros((n_rows, n_cols))
-        for r, c, v in triplets:
-            np.add.at(A, (np.asarray(r), np.asarray(c)), np.asarray(v, dtype=float))
-        return A
+        return _dense_sum(n_rows, n_cols, [np.asarray(r) * n_cols + np.asarray(c) for r, c, _ in triplets],
+                          [np.asarray(v, dtype=float) for _, _, v in triplets])
     if not triplets:
         return sp.csr_matrix((n_rows, n_cols))
     r, c, v = (np.concatenate(x) for x in zip(*triplets))

@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 
 import mbseig.statics.continuation as cont
 from mbseig.casefile import read_case
-from mbseig.numerics import csr_from_triplets, saddle
+from mbseig.numerics import coo_sum, csr_from_triplets, saddle, scatter
 from mbseig.statics import resolve
 from mbseig.statics.inverse import command_settings
 from mbseig.studies.continuation import family_maker, sweep_line
@@ -46,6 +46,48 @@ def test_csr_from_triplets_equals_scipy(n_rows, n_cols, count, seed):
 def test_csr_from_triplets_refuses_indices_outside():
     with pytest.raises(IndexError):
         csr_from_triplets(2, 2, np.array([2]), np.array([0]), np.array([1.0]))
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(1, 7), st.integers(1, 7), st.integers(0, 5), st.integers(0, 2**32 - 1))
+def test_dense_assembly_equals_csr(n_rows, n_cols, count, seed):
+    """Reference: the CSR assembly of the same element blocks and triplets (scatter, coo_sum),
+    repeated indices included; equal to 4 ulp of the sums' size (another summation order)."""
+    rng = np.random.default_rng(seed)
+    blocks = []
+    for _ in range(count):
+        r, c = rng.integers(0, n_rows, rng.integers(1, 4)), rng.integers(0, n_cols, rng.integers(1, 4))
+        blocks.append((r, c, rng.standard_normal((r.size, c.size))))
+    trip = [(rng.integers(0, n_rows, 6), rng.integers(0, n_cols, 6), rng.standard_normal(6))
+            for _ in range(count)]
+    scale = sum(np.abs(b[2]).sum() for b in blocks) + sum(np.abs(t[2]).sum() for t in trip) + 1.0
+    for dense, csr in ((scatter(n_rows, n_cols, blocks, dense=True), scatter(n_rows, n_cols, blocks)),
+                       (coo_sum(n_rows, n_cols, trip, dense=True), coo_sum(n_rows, n_cols, trip))):
+        assert isinstance(dense, np.ndarray) and dense.shape == (n_rows, n_cols)
+        assert np.max(np.abs(dense - csr.toarray()), initial=0.0) <= 4 * np.finfo(float).eps * scale
+
+
+def test_dense_assembly_refuses_indices_outside():
+    with pytest.raises(IndexError):
+        scatter(2, 2, [(np.array([2]), np.array([0]), np.array([[1.0]]))], dense=True)
+
+
+def test_small_model_dense_evaluations_equal_csr():
+    """Reference: the model's CSR evaluations at the device's equilibrium; the dense ones the
+    statics and the continuation use for small models are the same matrices to 4 ulp."""
+    from mbseig.statics import equilibrium
+
+    model = resolve(read_case(CASES / "hand_device.toml").build())
+    assert model.dense_assembly
+    eq = equilibrium(model)
+    K, C = model.force_jacobians(eq.q)
+    Kd, Cd = model.force_jacobians(eq.q, dense=True)
+    for d, s in ((Kd, K), (Cd, C), (model.phi_q(eq.q, dense=True), model.phi_q(eq.q)),
+                 (model.constraint_hessian(eq.q, eq.lam, dense=True),
+                  model.constraint_hessian(eq.q, eq.lam))):
+        assert isinstance(d, np.ndarray)
+        ref = s.toarray()
+        assert np.max(np.abs(d - ref)) <= 4 * np.finfo(float).eps * max(np.abs(ref).max(), 1.0)
 
 
 def test_saddle_equals_bmat():
