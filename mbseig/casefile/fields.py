@@ -43,6 +43,9 @@ REQUIRED = object()
 
 def in_range(x) -> bool:
     """The number rule: finite, and 0 or MIN_MAGNITUDE ≤ |x| ≤ MAX_MAGNITUDE (arrays: all)."""
+    if type(x) is float or type(x) is int or isinstance(x, np.floating):  # a scalar (most fields)
+        a = abs(float(x))
+        return a == 0 or MIN_MAGNITUDE <= a <= MAX_MAGNITUDE  # (False for inf and NaN)
     a = np.abs(np.asarray(x, dtype=float))
     return bool(np.all((a == 0) | ((a >= MIN_MAGNITUDE) & (a <= MAX_MAGNITUDE))))
 
@@ -106,8 +109,9 @@ class Fields:
             out = np.array([evaluate(v, self.names) for v in value])
         except MbseigError as exc:
             raise exc.located(element=f"{self.label}.{key}") from None
-        for k, x in enumerate(out):
-            check_range(x, f"{key}[{k}]", self.label)
+        if not in_range(out):  # (the element that breaks the rule, named)
+            for k, x in enumerate(out):
+                check_range(x, f"{key}[{k}]", self.label)
         return out
 
     def text(self, key, default=REQUIRED):

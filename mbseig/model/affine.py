@@ -67,10 +67,10 @@ def combine(terms, *, stack: bool = False) -> Affine:
     if not terms:
         idx = np.zeros(0, np.intp)
         return Affine(idx, np.zeros((0, 0)), np.zeros(0))
-    idx = np.array(sorted({int(k) for t in terms for k in t[1].idx}), dtype=np.intp)
+    idx = np.unique(np.concatenate([t[1].idx for t in terms])).astype(np.intp, copy=False)
     parts = []
     for factor, aff in terms:
-        if np.ndim(factor) == 0:
+        if isinstance(factor, (int, float)) or np.ndim(factor) == 0:
             f = float(factor)
             parts.append((aff, f * aff.C, f * aff.d))
         else:
