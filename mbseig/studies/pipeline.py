@@ -17,7 +17,6 @@ import math
 
 from ..numerics import jsonable
 from .point import Analysis, analyze_model, as_spec
-from .refine import refine_analysis
 
 __all__ = ["Analysis", "analyze", "analyze_model", "modes_json", "as_spec"]
 
@@ -37,6 +36,8 @@ def analyze(case=None, *, config=None, params=None, solver="auto", constraint_st
     spec = as_spec(case)
     model = spec.build(config, **(params or {}))
     if refine or (getattr(model, "flexible", None) or {}).get("refinement"):
+        from .refine import refine_analysis  # cases with beams to refine only
+
         return refine_analysis(spec, config=config, params=params, request=refine, model=model,
                                **opts)
     return analyze_model(model, **opts)
