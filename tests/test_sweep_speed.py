@@ -147,3 +147,23 @@ def test_newton_start_of_inverse_statics(monkeypatch):
     assert abs(a - b) <= 1e-10 * abs(b)
     for rec in (newton, secant):
         assert abs(rec["residual_effort"]) <= 1e-12 * abs(rec["effort"])
+
+
+def test_kept_dense_evaluations_are_read_only_and_current():
+    """A small model keeps its last dense K, Φ_q, H by q: the kept arrays cannot be changed by a
+    caller (writing raises), and another q gives that q's matrices (reference: a fresh model's
+    evaluation at the other q, bitwise)."""
+    from mbseig.statics import equilibrium
+
+    spec = read_case(CASES / "hand_device.toml")
+    model = resolve(spec.build())
+    eq = equilibrium(model)
+    K, _ = model.force_jacobians(eq.q, dense=True)
+    assert model.force_jacobians(eq.q, dense=True)[0] is K  # kept
+    with pytest.raises(ValueError):
+        K[0, 0] = 1.0
+    q2 = eq.q + 1e-3
+    fresh = resolve(spec.build())
+    assert np.array_equal(model.force_jacobians(q2, dense=True)[0],
+                          fresh.force_jacobians(q2, dense=True)[0])
+    assert np.array_equal(model.phi_q(q2, dense=True), fresh.phi_q(q2).toarray())

@@ -76,6 +76,10 @@ class Model:
     outputs: tuple = ()
     gravity_force: np.ndarray = None
     mass_parts: tuple = ()
+    # the last dense evaluations (K and C, Φ_q, H(λ)) of a small model, keyed by q (and λ):
+    # a sweep point's corrector, force scale, static stability and linearization ask for the
+    # same matrices at one q; read-only arrays, so that a caller cannot change a kept one
+    _dense_kept: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     # ---- sizes ---------------------------------------------------------------------------
     @property
@@ -100,6 +104,22 @@ class Model:
         blocks = [(e.idx, e.idx, e.mass(q) - M_ref) for e, M_ref in self.mass_elements]
         return (self.mass + scatter(self.n, self.n, blocks)).tocsr()
 
+    def _kept(self, key, compute):
+        """compute() once per key among the last few dense evaluations (read-only arrays); a
+        model above the dense-assembly size keeps nothing (a dense K of a model examined up to
+        the dense limit of 4000 unknowns would hold 128 MB)."""
+        if not self.dense_assembly:
+            return compute()
+        hit = self._dense_kept.get(key)
+        if hit is None:
+            hit = compute()
+            for a in (hit if isinstance(hit, tuple) else (hit,)):
+                a.setflags(write=False)
+            if len(self._dense_kept) >= 8:
+                self._dense_kept.pop(next(iter(self._dense_kept)))
+            self._dense_kept[key] = hit
+        return hit
+
     # ---- forces --------------------------------------------------------------------------
     def generalized_force(self, q, qd=None, u=None) -> np.ndarray:
         """g(q, q̇), plus Σ b_i(q) u_i of the named inputs when ``u`` ({name: value}) is given
@@ -119,6 +139,11 @@ class Model:
 
     def force_jacobians(self, q, qd=None, *, dense=False):
         """(K, C) = (−∂g/∂q, −∂g/∂q̇) as CSR matrices (dense arrays when ``dense``)."""
+        if dense and qd is None:
+            return self._kept(("K", q.tobytes()), lambda: self._force_jacobians(q, None, True))
+        return self._force_jacobians(q, qd, dense)
+
+    def _force_jacobians(self, q, qd, dense):
         qd = np.zeros(self.n) if qd is None else qd
         kb, cb, kt, ct = [], [], [], []
         for f in self.forces:
@@ -144,6 +169,11 @@ class Model:
 
     def phi_q(self, q, *, dense=False) -> sp.csr_matrix:
         """Φ_q(q) (CSR; a dense array when ``dense``)."""
+        if dense:
+            return self._kept(("phi_q", q.tobytes()), lambda: self._phi_q(q, True))
+        return self._phi_q(q, False)
+
+    def _phi_q(self, q, dense):
         off = self._row_offsets()
         blocks = [(np.arange(off[k], off[k + 1]), c.idx, c.jac(q)) for k, c in enumerate(self.constraints)]
         return scatter(self.n_constraints, self.n, blocks, dense=dense)
@@ -151,6 +181,13 @@ class Model:
     def constraint_hessian(self, q, lam, *, dense=False) -> sp.csr_matrix:
         """H(λ) = Σ_k λ_k ∇²Φ_k(q), the stiffness of the constraint forces (CSR; a dense array
         when ``dense``)."""
+        if dense:
+            lam = np.asarray(lam, dtype=float)
+            return self._kept(("H", q.tobytes(), lam.tobytes()),
+                              lambda: self._constraint_hessian(q, lam, True))
+        return self._constraint_hessian(q, lam, False)
+
+    def _constraint_hessian(self, q, lam, dense):
         off = self._row_offsets()
         blocks = [(c.idx, c.idx, c.hess(q, lam[off[k]:off[k + 1]])) for k, c in enumerate(self.constraints)]
         return scatter(self.n, self.n, blocks, dense=dense)
