@@ -82,3 +82,32 @@ def test_param_override(capsys):
     assert out["dof"] == 3 and out["parameters"]["n"] == 3
     # closed form, n = 3: omega_1 = 2 sqrt(1000) sin(pi/8)
     assert out["modes"][0]["omega_n"] == pytest.approx(2 * np.sqrt(1000) * np.sin(np.pi / 8), rel=1e-12)
+
+
+def test_executable_prompt_exit_delivers_the_whole_output(tmp_path):
+    """``python -m mbseig`` ends modes and linearize without the interpreter's teardown
+    (mbseig.cli.console): the output must be complete. Reference: main() in this process
+    prints the same text; the --out file is written and readable; a refusal keeps exit code 2
+    and its one line on stderr."""
+    import contextlib
+    import io
+    import subprocess
+    import sys
+
+    case = str(CASES / "chain_damped.toml")
+    r = subprocess.run([sys.executable, "-m", "mbseig", "modes", case, "--json"],
+                       capture_output=True, text=True)
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        assert main(["modes", case, "--json"]) == 0
+    assert r.returncode == 0 and r.stderr == ""
+    assert json.loads(r.stdout) == json.loads(buf.getvalue())
+    out = tmp_path / "lin.npz"
+    r = subprocess.run([sys.executable, "-m", "mbseig", "linearize", case, "--out", str(out)],
+                       capture_output=True, text=True)
+    assert r.returncode == 0
+    with np.load(out) as d:
+        assert d["M"].shape[0] == d["M"].shape[1] > 0
+    r = subprocess.run([sys.executable, "-m", "mbseig", "modes", str(tmp_path / "missing.toml")],
+                       capture_output=True, text=True)
+    assert r.returncode == 2 and r.stdout == "" and len(r.stderr.strip().splitlines()) == 1

@@ -10,12 +10,13 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 import warnings
 
 from ..errors import CaseError, MbseigError, ReportedWarning
 
-__all__ = ["main", "SUBCOMMANDS"]
+__all__ = ["main", "console", "SUBCOMMANDS"]
 
 SUBCOMMANDS = ["linearize", "modes", "frf", "check", "sweep", "report", "bench"]
 # one line each for ``mbseig --help`` without importing every command's module
@@ -31,6 +32,10 @@ SUBCOMMAND_HELP = {
 # commands whose output carries the text of every ReportedWarning (beam-theory guidance, notes on
 # the equilibrium: mbseig.cli.common.output_notes), so the warning would only repeat it on stderr
 REPORTING_COMMANDS = {"modes", "linearize", "check"}
+# commands that leave nothing open when they return (their output is on stdout and stderr, and
+# any file they write is written and closed by then): the executable ends them without Python's
+# interpreter teardown (:func:`console`)
+PROMPT_EXIT = {"modes", "linearize"}
 
 
 class _Parser(argparse.ArgumentParser):
@@ -80,5 +85,24 @@ def main(argv=None) -> int:
         return 130
 
 
+def console() -> None:
+    """The ``mbseig`` executable (and ``python -m mbseig``): :func:`main`, then, for a command of
+    ``PROMPT_EXIT``, the process ends as soon as its output streams are flushed, without the
+    interpreter's teardown — freeing the numpy, scipy and mbseig modules object by object, which
+    measured ≈ 35 ms on a 0.4 s ``mbseig modes`` of a small case and does nothing for a command
+    that has written its output.  Other commands (worker pools, plots, reports, temporary
+    files) exit normally.  ``main`` itself always returns (tests and embedding call it)."""
+    argv = sys.argv[1:]
+    code = main(argv)
+    if _chosen(argv) in PROMPT_EXIT:
+        try:
+            sys.stdout.flush()
+            sys.stderr.flush()
+        except (BrokenPipeError, OSError):
+            code = code or 1  # the output could not be delivered
+        os._exit(code)
+    sys.exit(code)
+
+
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    console()
