@@ -36,6 +36,6 @@ def test_bench_quick_large_and_startup_sections(tmp_path, capsys):
     # (ζ below 1e-2 on this model: |s₁| = ω₁ to within 1e-3 relative)
     assert abs(general["omega_1"] - large["floor"]["omega_1"]) <= 1e-3 * large["floor"]["omega_1"]
     startup = [r for r in res["rows"] if r["section"] == "startup"]
-    assert len(startup) == 3 and all(r["time"] > 0 for r in startup)
+    assert len(startup) == 4 and all(r["time"] > 0 for r in startup)
     md = (tmp_path / "benchmarks.md").read_text()
     assert "## Large constrained model" in md and "## Start-up" in md

@@ -372,7 +372,12 @@ def bench_startup(repeats, log, case="hand_device"):
     cli = [str(exe)] if exe.exists() else [sys.executable, "-m", "mbseig"]
     cmds = {"import numpy, scipy.linalg (floor)": [sys.executable, "-c", "import numpy, scipy.linalg"],
             "import mbseig": [sys.executable, "-c", "import mbseig"],
-            f"mbseig modes {case}": [*cli, "modes", str(case_path(case))]}
+            f"mbseig modes {case}": [*cli, "modes", str(case_path(case))],
+            # the same command through main() with Python's normal exit (teardown included):
+            # what the executable's prompt exit saves (mbseig.cli.console)
+            f"mbseig modes {case}, normal exit": [
+                sys.executable, "-c", "import sys; from mbseig.cli import main; "
+                f"sys.exit(main(['modes', {str(case_path(case))!r}]))"]}
     # as Python runs by default, from cached bytecode: a PYTHONDONTWRITEBYTECODE in the
     # environment (set on some CI machines) would make every run compile mbseig's modules
     # anew (≈ 60 ms here) while numpy and scipy load theirs from the install; one untimed
