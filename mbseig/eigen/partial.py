@@ -83,6 +83,7 @@ from .measures import (
     colnorm,
     componentwise,
     conditions,
+    expand_pairs,
     fro,
     is_symmetric,
     proportional_real_error,
@@ -460,8 +461,9 @@ def solve_partial(M, P, Q, *, n_modes: int | None = None, target: float | None =
     del X, Yc
     if not symmetric_path:  # back to every returned pair: partners conjugated
         s, eta, kappa = s_all, eta[pos], kappa[pos]
-        Xq = _expand(Xq, pos, partner)
-        Yq = Xq if Yq is None or Yq is Xq else _expand(Yq, pos, partner)
+        same = Yq is None or Yq is Xq  # y = x̄: the left vectors are the right ones, expanded once
+        Xq = expand_pairs(Xq, pos, partner)
+        Yq = Xq if same else expand_pairs(Yq, pos, partner)
     real_error = None
     if name == "partial-proportional":
         a, b = extras["alpha"], extras["beta"]
@@ -526,14 +528,6 @@ def _with_partners(chosen, s, tol):
     cols, conj = np.array(cols, int), np.array(conj, bool)
     s_out = np.where(conj, np.conj(s[cols]), s[cols]) if cols.size else np.zeros(0, complex)
     return cols, conj, s_out
-
-
-def _expand(Xu, pos, partner):
-    """Columns Xu[:, pos], conjugated where ``partner``."""
-    out = Xu[:, pos]
-    if np.any(partner):
-        out[:, partner] = np.conj(out[:, partner])
-    return out
 
 
 # ---------------------------------------------------------------------------------------------
@@ -729,7 +723,7 @@ def _slepc_search(run, want, omega_t, band):
             break
         nev = min(2 * nev, run["limit"])
     cols, conj, s_out = _with_partners(upper[idx], s_all, tol)
-    X = _expand(np.asarray(X_all, complex), cols, conj)
+    X = expand_pairs(np.asarray(X_all, complex), cols, conj)
     return {"s": s_out, "X1": X, "X2": X, "k": nev, "shifts": [0.0],
             "coverage": {"measure": "|s|", "omega_n": (lo, hi), "note": note, "verified": ok},
             "slepc": info}
