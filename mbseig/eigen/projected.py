@@ -141,11 +141,27 @@ class _Op:
         if V.ndim == 1:
             return self.A @ V
         if np.iscomplexobj(V):
-            out = np.empty(V.shape if self.d is not None else (self.A.shape[0], V.shape[1]),
-                           complex, order="F")
-            out.real, out.imag = self @ np.ascontiguousarray(V.real), self @ np.ascontiguousarray(V.imag)
+            out = np.empty((self.A.shape[0], V.shape[1]), complex, order="F")
+            self._real(V.real, out.real)
+            self._real(V.imag, out.imag)
             return out
-        return self.d * V if self.d is not None else self.A @ V
+        if self.d is not None:
+            return self.d * V
+        if V.flags.c_contiguous:
+            return self.A @ V
+        out = np.empty((self.A.shape[0], V.shape[1]), order="F")
+        self._real(V, out)
+        return out
+
+    def _real(self, V, out):
+        """out = A V for a real block V (any layout), column by column where A is sparse: a
+        block product would first copy a column-major V to row-major (scipy's layout), a
+        transposition that cost more than the product at 10⁶ rows; the sums are the same."""
+        if self.d is not None:
+            np.multiply(self.d, V, out=out)
+            return
+        for j in range(V.shape[1]):
+            out[:, j] = self.A @ np.ascontiguousarray(V[:, j])
 
 
 def _rayleigh(s0, U, MU, PU, QU):
@@ -249,9 +265,12 @@ class _Basis:
         C = np.empty((2 * k, 2 * p))
         C[:k, :p], C[:k, p:] = c2.real, c2.imag
         C[k:, :p], C[k:, p:] = c1.real, c1.imag
-        R = self.A @ C
+        # R = A C formed as (Cᵀ Aᵀ)ᵀ: column-major like U, so that its halves go into U's real
+        # and imaginary parts without a transposing copy (at 10⁶ rows 0.6 s against 2.2 s)
+        R = (C.T @ self.A.T).T
         U = np.empty((R.shape[0], p), complex, order="F")
-        U.real, U.imag = -R[:, :p], -R[:, p:]
+        np.negative(R[:, :p], out=U.real)
+        np.negative(R[:, p:], out=U.imag)
         del R
         U /= colnorm(U)
         return U
