@@ -57,6 +57,7 @@ from .measures import (
     colnorm,
     componentwise,
     conditions,
+    expand_pairs,
     fro,
     is_symmetric,
     pow2_scale,
@@ -310,13 +311,81 @@ def _solve_companion(M, P, Q, opts, name, reason, norms):
     A[n:, n:] = Pt
     A[n:, n:] *= -1.0 / gamma
     _require_finite(A, "the mass-normalized companion matrix")
-    out = _lapack(sla.eig, A, left=opts["left"], right=True, overwrite_a=True, check_finite=False)
-    mu, W, Z = (out[0], out[1], out[2]) if opts["left"] else (out[0], None, out[1])
+    if np.iscomplexobj(A):  # complex M, P, Q: no conjugate pairs, every column measured
+        out = _lapack(sla.eig, A, left=opts["left"], right=True, overwrite_a=True,
+                      check_finite=False)
+        mu, W, Z = (out[0], out[1], out[2]) if opts["left"] else (out[0], None, out[1])
+        pos = partner = None
+    else:
+        mu, Z, W, pos, partner = _geev_pairs(A, opts["left"])
+    mu_m = mu if pos is None else mu[~partner]  # the measured eigenvalues
     X1 = back(Z[:n])
-    X2 = _second_half(back(Z[n:]), mu, X1)
+    X2 = _second_half(back(Z[n:]), mu_m, X1)
     Y = back(W[n:]) if W is not None else None
-    return _general_result(M, P, Q, gamma * mu, X1, X2, Y, 0, {"gamma": gamma}, opts, name,
-                           reason, norms)
+    sol = _general_result(M, P, Q, gamma * mu_m, X1, X2, Y, 0, {"gamma": gamma}, opts, name,
+                          reason, norms)
+    return sol if pos is None else _with_partners(sol, gamma * mu, pos, partner)
+
+
+def _geev_pairs(A, left):
+    """LAPACK ``geev`` on the real A, called as ``scipy.linalg.eig`` calls it (the workspace of
+    its own query, A overwritten), and the vectors of one member of each conjugate pair only.
+
+    Returns (μ, Z, W, pos, partner): all 2n eigenvalues in LAPACK's order; Z (and W, the left
+    vectors, or None) the complex vectors of the measured eigenvalues (real ones and the member
+    with Im μ > 0 of each pair); ``pos[i]`` the measured column of eigenvalue i and ``partner``
+    where it is the conjugate (μ̄, z̄) of that column.  LAPACK stores a pair (Im μ > 0 first) as
+    two real columns, z = v_j ± i v_{j+1}: forming only the first halves the complex vectors
+    and every measure of them (η, κ of a conjugate pair of a real problem are equal exactly).
+    """
+    geev, geev_lwork = sla.get_lapack_funcs(("geev", "geev_lwork"), (A,))
+    n2 = A.shape[0]
+    work, info = geev_lwork(n2, compute_vl=int(left), compute_vr=1)
+    lwork = max(int(work.real), 1) if info == 0 else max(1, 4 * n2)
+    wr, wi, vl, vr, info = geev(A, lwork=lwork, compute_vl=int(left), compute_vr=1,
+                                overwrite_a=1)
+    if info < 0:
+        raise SolverError(f"LAPACK geev: illegal value in argument {-info}")
+    if info > 0:
+        raise SolverError("LAPACK failed (the QR algorithm did not converge in geev): the "
+                          "model's magnitudes are likely beyond what double precision "
+                          "resolves; rescale the units")
+    mu = wr + 1j * wi
+    partner = wi < 0
+    first, j = np.flatnonzero(wi > 0), np.flatnonzero(partner)
+    documented = first.size == j.size and np.array_equal(first + 1, j) and \
+        np.array_equal(wr[first], wr[j]) and np.array_equal(wi[first], -wi[j])
+    if documented:
+        pos = np.cumsum(~partner) - 1
+        measured = np.flatnonzero(~partner)
+
+        def vectors(V):
+            Z = V[:, measured].astype(complex)
+            Z.imag[:, pos[first]] = V[:, j]
+            return Z
+    else:  # not the documented layout: every column formed (scipy.linalg.eig's rule) and measured
+        pos, partner = np.arange(n2), np.zeros(n2, bool)
+        pairs = np.flatnonzero((wi > 0) | np.r_[wi[1:] < 0, False])
+
+        def vectors(V):
+            Z = V.astype(complex)
+            for i in pairs:
+                Z.imag[:, i] = V[:, i + 1]
+                Z[:, i + 1] = np.conj(Z[:, i])
+            return Z
+
+    return mu, vectors(vr), (vectors(vl) if left else None), pos, partner
+
+
+def _with_partners(sol, s, pos, partner):
+    """``sol`` of the measured eigenvalues extended to all of them: eigenvalue i is s[i], its
+    vectors and measures those of column pos[i], conjugated where ``partner``."""
+    X = expand_pairs(sol.vectors, pos, partner)
+    Y = sol.left_vectors
+    Y = X if Y is sol.vectors else (None if Y is None else expand_pairs(Y, pos, partner))
+    details = {**sol.details, "measured_columns": int(sol.eigenvalues.size)}
+    return replace(sol, eigenvalues=s, vectors=X, left_vectors=Y, details=details,
+                   backward_error=sol.backward_error[pos], condition=sol.condition[pos])
 
 
 def _second_half(Z2, mu, X1):
