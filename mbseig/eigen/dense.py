@@ -365,7 +365,7 @@ def _geev_pairs(A, left):
             return Z
     else:  # not the documented layout: every column formed (scipy.linalg.eig's rule) and measured
         pos, partner = np.arange(n2), np.zeros(n2, bool)
-        pairs = np.flatnonzero((wi > 0) | np.r_[wi[1:] < 0, False])
+        pairs = np.flatnonzero((wi[:-1] > 0) | (wi[1:] < 0))  # i and i + 1 both exist
 
         def vectors(V):
             Z = V.astype(complex)
