@@ -343,6 +343,7 @@ def backward_errors(ops, s, X, norms):
     A pair with zero residual has η = 0 even where the weights vanish (s = 0 with Q = 0).
     """
     M, P, Q = _row_sliceable(ops)
+    X = np.ascontiguousarray(X)  # each block's Q[r] @ X would otherwise copy the whole X
     MX, PX = M @ X, P @ X
     s = np.asarray(s)
     rn = None
@@ -374,6 +375,7 @@ def componentwise(ops, s, X, Yc, *, abs_ops=None):
     aM, aP, aQ = _row_sliceable(abs_ops if abs_ops is not None else tuple(abs(A) for A in ops))
     s = np.asarray(s)
     Yc = X if Yc is None else Yc
+    X = np.ascontiguousarray(X)  # each block's products would otherwise copy the whole X
     t, big = _reversal(s)
     a = np.abs(t)
     AX = np.abs(X)

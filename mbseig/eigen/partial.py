@@ -417,7 +417,7 @@ def solve_partial(M, P, Q, *, n_modes: int | None = None, target: float | None =
         w, V = found["w"], found["V"]
         alpha, beta = extras.get("alpha", 0.0), extras.get("beta", 0.0)
         s = undamped_roots(w, alpha, beta)
-        V = V / colnorm(V)
+        V = np.divide(V, colnorm(V), order="C")  # row-major: the measures run over blocks of rows
         X = np.concatenate([V, V], axis=1)
         if m and beta != 0.0:  # multipliers of the damped mode: μ = (1 + βs) λ (module doc)
             X = X.astype(complex)
