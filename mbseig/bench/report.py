@@ -214,7 +214,8 @@ def write_report(res, out_dir):
         L += ["", "## Sweeps of the hand device", "",
               f"A 2-D sweep (k_a × c_a, {sw[0]['n']} points, continuation along each k_a line, one "
               "task per line; the actuator's free length re-solved at every k_a), after a warm-up "
-              "run; Dask on a multi-process `LocalCluster` (a real scheduler, one thread per "
+              "run; the two in-process rows are medians of three interleaved runs, the others one "
+              "run each; Dask on a multi-process `LocalCluster` (a real scheduler, one thread per "
               "worker). The C4 row sweeps the tendon load f instead (the command reused); its "
               "speed-up is against the k_a sweep.", "",
               "| runner | workers | time | points/s | speed-up |", "|---|---|---|---|---|"]
