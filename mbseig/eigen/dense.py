@@ -317,7 +317,7 @@ def _solve_companion(M, P, Q, opts, name, reason, norms):
         mu, W, Z = (out[0], out[1], out[2]) if opts["left"] else (out[0], None, out[1])
         pos = partner = None
     else:
-        mu, Z, W, pos, partner = _geev_pairs(A, opts["left"])
+        mu, Z, W, pos, partner = _lapack(_geev_pairs, A, opts["left"])
     mu_m = mu if pos is None else mu[~partner]  # the measured eigenvalues
     X1 = back(Z[:n])
     X2 = _second_half(back(Z[n:]), mu_m, X1)
@@ -346,10 +346,8 @@ def _geev_pairs(A, left):
                                 overwrite_a=1)
     if info < 0:
         raise SolverError(f"LAPACK geev: illegal value in argument {-info}")
-    if info > 0:
-        raise SolverError("LAPACK failed (the QR algorithm did not converge in geev): the "
-                          "model's magnitudes are likely beyond what double precision "
-                          "resolves; rescale the units")
+    if info > 0:  # as scipy.linalg.eig raises it: _lapack makes it the one SolverError
+        raise np.linalg.LinAlgError("eig algorithm (geev) did not converge")
     mu = wr + 1j * wi
     partner = wi < 0
     first, j = np.flatnonzero(wi > 0), np.flatnonzero(partner)
