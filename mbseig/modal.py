@@ -55,7 +55,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from .eigen import EPS, SOLVERS, SingularPencilError, solve_partial, solve_qep
+from .eigen import EPS, Problem, Request, SingularPencilError, solve
 from .errors import SolverError
 from .linear import LinearModel
 
@@ -215,8 +215,9 @@ def modes(M, P=None, Q=None, *, solver: str = "auto", N=None, coordinate_names=N
         ``band = (ω_lo, ω_hi)``; ``constraints`` is Φ_q when M, P, Q are in full coordinates.
     eta_warn : a listed mode whose backward errors (normwise and componentwise) both exceed it is
         flagged in :attr:`Modes.flags` and named in a RuntimeWarning.
-    Other keywords go to :func:`mbseig.eigen.solve_qep` (``sym_tol``, ``rayleigh_tol``, ``scale``,
-    ``left``, ``companion_cond``) or to :func:`mbseig.eigen.solve_partial`.
+    Other keywords are the path options of the request (:class:`mbseig.eigen.Request`): those of
+    :func:`mbseig.eigen.solve_qep` (``sym_tol``, ``rayleigh_tol``, ``scale``, ``left``,
+    ``companion_cond``) or of :func:`mbseig.eigen.solve_partial`.
     """
     if isinstance(M, LinearModel):
         lin = M
@@ -225,9 +226,10 @@ def modes(M, P=None, Q=None, *, solver: str = "auto", N=None, coordinate_names=N
             constraints = lin.constraint_jacobian
     if Q is None:
         raise SolverError("modes(M, P, Q) needs Q (or a LinearModel alone)")
-    path = SOLVERS.get(solver)
+    request = Request(solver, n_modes=n_modes, target=target, band=band, options=solver_options)
+    problem = Problem(M, P, Q, G=constraints)
     if (band is not None and n_modes is None and target is None and constraints is None
-            and (path is None or not path.partial)
+            and Request(solver).family() == "dense"
             and (not sp.issparse(M) or M.shape[0] <= BAND_DENSE_MAX)):
         # a band of a model small enough for the dense path: solve it all, list the band
         full = modes(M, P, Q, solver=solver, N=N, coordinate_names=coordinate_names,
@@ -235,19 +237,13 @@ def modes(M, P=None, Q=None, *, solver: str = "auto", N=None, coordinate_names=N
                      safety=safety, n_dominant=n_dominant, rigid_rank_tol=rigid_rank_tol,
                      eta_warn=eta_warn, **solver_options)
         return _band(full, band)
-    partial = (n_modes is not None or target is not None or band is not None
-               or constraints is not None or (path is not None and path.partial))
     try:
-        if partial:
-            sol = solve_partial(M, P, Q, n_modes=n_modes, target=target, band=band,
-                                G=constraints, solver=solver, **solver_options)
-        else:
-            if sp.issparse(M) and M.shape[0] > DENSE_MAX:
-                raise SolverError(f"{M.shape[0]} unknowns is beyond the dense path (limit "
-                                  f"{DENSE_MAX}): ask for a partial spectrum (n_modes=, target= or "
-                                  f"band=; mbseig modes --n-modes K or --band-hz F1 F2)")
-            sol = solve_qep(M, P if P is not None else np.zeros(np.shape(M)), Q, solver=solver,
-                            **solver_options)
+        if (request.family(problem) == "dense" and sp.issparse(M)
+                and M.shape[0] > DENSE_MAX):
+            raise SolverError(f"{M.shape[0]} unknowns is beyond the dense path (limit "
+                              f"{DENSE_MAX}): ask for a partial spectrum (n_modes=, target= or "
+                              f"band=; mbseig modes --n-modes K or --band-hz F1 F2)")
+        sol = solve(problem, request)
     except SingularPencilError as exc:
         if exc.vector is None:
             raise

@@ -1,24 +1,16 @@
-"""The solver contract and the one registry of eigensolver paths (docs/design.md, "Solvers").
-
-A path is a :class:`SolverPath`: a name, whether it computes a partial spectrum, the structure
-it needs, and a function ``solve(M, P, Q, **options) -> QEPSolution``.  :func:`register` adds
-one (with the function that runs it); :data:`SOLVERS` holds them all, dense and partial; :func:`mbseig.eigen.solve` dispatches by
-the path's ``partial`` flag, never by its name.  Every path returns the same result type.
-"""
+"""The result every eigensolver path returns (:class:`QEPSolution`) and the refusal of a
+singular pencil; the contract and registry of paths are in :mod:`mbseig.eigen.contract`."""
 
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 
 from ..errors import SolverError
 from .measures import componentwise
 
-__all__ = ["QEPSolution", "SolverPath", "SOLVERS", "register", "dense_solvers", "partial_solvers",
-           "SingularPencilError"]
+__all__ = ["QEPSolution", "SingularPencilError"]
 
 
 class SingularPencilError(SolverError):
@@ -88,48 +80,3 @@ class QEPSolution:
         eta_c, kappa_c = componentwise((M, P, Q), mu, self.vectors[:, idx], Yc)
         with np.errstate(over="ignore"):  # a bound beyond the double range is ∞: bounds nothing
             return eta_c, kappa_c * gamma
-
-
-@dataclass(frozen=True)
-class SolverPath:
-    """One eigensolver path: ``solve(M, P, Q, **options) -> QEPSolution``."""
-
-    name: str
-    partial: bool
-    needs: str  # the structure it requires, in words (shown when it does not apply)
-    solve: Callable = field(repr=False, compare=False)
-
-
-SOLVERS: dict[str, SolverPath] = {}
-
-
-def register(name, *, partial, needs, driver):
-    """Add the path ``name`` to :data:`SOLVERS`; ``driver(M, P, Q, solver=name, **options)``
-    is the function that runs it (:func:`mbseig.eigen.solve_qep` or ``solve_partial``)."""
-    SOLVERS[name] = SolverPath(name, partial, needs, functools.partial(driver, solver=name))
-
-
-def dense_solvers():
-    return [k for k, v in SOLVERS.items() if not v.partial]
-
-
-def partial_solvers():
-    return [k for k, v in SOLVERS.items() if v.partial]
-
-
-def requested_path(solver, auto, reason, extras, family, what="solver"):
-    """(name, reason, extras) of the path to run: ``auto``'s choice, or the requested one when
-    the structure allows it (eigh needs P = 0, proportional needs Rayleigh damping)."""
-    if solver == "auto":
-        return auto, reason, extras
-    if solver not in family:
-        raise SolverError(f"unknown {what} {solver!r} (auto, {', '.join(family)})")
-    kind, auto_kind = solver.removeprefix("partial-"), auto.removeprefix("partial-")
-    structured = ("eigh", "proportional")
-    if kind in structured and auto_kind not in structured:
-        raise SolverError(f"solver {solver!r} does not apply: {reason}")
-    if kind == "eigh" and auto_kind == "proportional":
-        raise SolverError(f"solver {solver!r} does not apply: P is not zero")
-    if kind == "proportional" and auto_kind == "eigh":
-        extras = {"alpha": 0.0, "beta": 0.0}
-    return solver, f"requested ({reason})", extras

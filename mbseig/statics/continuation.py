@@ -56,8 +56,16 @@ import scipy.sparse as sp
 
 from ..errors import EquilibriumError, MbseigError
 from ..numerics import LazyModule, constraint_rank, dense, saddle
-from .linalg import DENSE_LIMIT, SMALL, NewtonMatrix, StepScales, multipliers, solve_bordered
-from .newton import Memo, Stall, newton, settings_for
+from .cache import Memo
+from .linalg import (
+    DENSE_LIMIT,
+    SMALL,
+    NewtonMatrix,
+    StepScales,
+    multipliers,
+    solve_bordered,
+)
+from .newton import Stall, newton, settings_for
 
 spla = LazyModule("scipy.sparse.linalg")  # sparse solvers: imported at first use
 

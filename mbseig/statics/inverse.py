@@ -37,8 +37,8 @@ import numpy as np
 
 from ..errors import EquilibriumError
 from ..model.driver import check_command
+from .cache import Memo
 from .linalg import NewtonMatrix, augmented
-from .newton import Memo
 
 __all__ = ["resolve_commands", "reuse_commands", "command_settings"]
 

@@ -25,7 +25,15 @@ import scipy.sparse as sp
 
 from ..errors import EquilibriumError
 from ..model.elements import DistanceConstraint
-from ..numerics import LazyModule, _rank, blas_limit, constraint_rank, coo_sum, dense, saddle
+from ..numerics import (
+    LazyModule,
+    _rank,
+    blas_limit,
+    constraint_rank,
+    coo_sum,
+    dense,
+    saddle,
+)
 
 spla = LazyModule("scipy.sparse.linalg")  # sparse solvers: imported at first use
 
@@ -105,7 +113,7 @@ class StepScales:
 
 def augmented(model, q, lam):
     """[[K + H(λ), Φ_qᵀ], [Φ_q, 0]] (CSR, or a dense array when the model's evaluations are
-    dense: :class:`mbseig.statics.newton.Memo` of a small model) and Φ_q at q."""
+    dense: :class:`mbseig.statics.cache.Memo` of a small model) and Φ_q at q."""
     K, _ = model.force_jacobians(q)
     Phi_q = model.phi_q(q)
     if model.n_constraints:

@@ -17,8 +17,9 @@ import dataclasses
 
 import numpy as np
 
+from .cache import Memo
 from .linalg import NewtonMatrix, augmented
-from .newton import Memo, Stall, newton
+from .newton import Stall, newton
 
 __all__ = ["scaled_loads", "has_loads", "continue_loads", "DT_START", "DT_MIN"]
 
@@ -38,8 +39,8 @@ def has_loads(model) -> bool:
 
 def scaled_loads(model, t: float):
     """The model with every load scaled by t (module docstring), behind its own
-    :class:`~mbseig.statics.newton.Memo`."""
-    base = getattr(model, "_model", model)
+    :class:`~mbseig.statics.cache.Memo`."""
+    base = model.model if isinstance(model, Memo) else model
     forces = tuple(dataclasses.replace(f, magnitude=t * f.magnitude) if _is_load(f) else f
                    for f in base.forces)
     return Memo(dataclasses.replace(base, g_const=t * base.g_const, forces=forces))

@@ -40,15 +40,18 @@ examined (:mod:`~mbseig.statics.stiffness`, :func:`mbseig.statics.equilibrium`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import EquilibriumError
-from ..numerics import dense
-from .failures import NoStaticEquilibrium, NotConverged
-from .linalg import (DENSE_LIMIT, NewtonMatrix, StepScales, augmented, multipliers,
-                     solve_bordered)
+from .linalg import (
+    NewtonMatrix,
+    StepScales,
+    augmented,
+    multipliers,
+    solve_bordered,
+)
 from .position import STATIONARY, constraint_residual, position_solve
 
 __all__ = ["Equilibrium", "solved", "Settings", "newton", "Stall", "Memo", "finish",
@@ -59,46 +62,6 @@ CRITERION = ("max_k |Φ_k|/scale_k ≤ tol; Newton correction max(|Δq_i|/ℓ_i,
              "force outside the range of the tangent stiffness ≤ tol·force_scale; λ the "
              "least-squares multipliers of q (a correction ≤ floor_tol is accepted where rounding "
              "stops it from decreasing)")
-
-
-@dataclass(frozen=True, eq=False)
-class Equilibrium:
-    """q₀, λ₀ with their residuals, the rank of Φ_q(q₀) and the tolerances used.
-
-    ``residual`` is the larger of ‖g − Φ_qᵀλ‖∞ / force_scale and max_k |Φ_k| / scale_k;
-    ``correction`` the last Newton correction in the model's scales (the convergence test).
-    ``static``: the static stability record (:func:`mbseig.statics.stiffness.static_stability`);
-    ``self_stress``: self-stress states of redundant constraints that change the stiffness;
-    ``stable_alternative``: a statically stable equilibrium offered when this one is unstable;
-    ``path``: how it was reached (direct Newton or load continuation, iterations).
-    """
-
-    q: np.ndarray
-    lam: np.ndarray
-    residual: float
-    force_residual: float
-    constraint_residual: float
-    iterations: int
-    rank: int
-    n_redundant: int
-    redundant: tuple = ()
-    reactions: tuple = ()  # (constraint name, λ values) per constraint element
-    tolerances: dict = field(default_factory=dict)
-    method: str = "newton"
-    model: object = None  # the model this is the equilibrium of (commands resolved), see solved()
-    correction: float = 0.0
-    static: dict = field(default_factory=dict)
-    self_stress: tuple = ()
-    stable_alternative: object = None
-    path: dict = field(default_factory=dict)
-    notes: tuple = ()
-
-
-def solved(model, eq):
-    """The model whose equilibrium ``eq`` is: ``eq.model`` when :func:`mbseig.equilibrium`
-    resolved inverse-statics commands (actuator settings), else ``model`` itself.  Every stage
-    after the equilibrium works on this model."""
-    return eq.model if getattr(eq, "model", None) is not None else model
 
 
 # ---------------------------------------------------------------------------------------------
@@ -150,7 +113,8 @@ class Solution:
     cond: float = np.nan
 
 
-def _lam(model, q, s):
+def static_multipliers(model, q, s):
+    """λ of the statics at q: the minimum-norm solution of Φ_qᵀλ = g (rank by ``s.rank_tol``)."""
     return multipliers(model.phi_q(q), model.generalized_force(q), s.rank_tol, check=False)[0]
 
 
@@ -191,7 +155,7 @@ def _trial(model, q, lam, step, NM, rhs0, n, s):
         return None
     try:
         with np.errstate(all="ignore"):
-            lt = _lam(model, qt, s)
+            lt = static_multipliers(model, qt, s)
             xt, et = NM.solve(_rhs(model, qt, lt, s))
     except (EquilibriumError, ArithmeticError, ValueError):
         return None
@@ -252,7 +216,7 @@ def _homotopy_step(model, q, lam, NM, R, x, motion, h, s):
         return None
     try:
         with np.errstate(all="ignore"):
-            ln = _lam(model, qn, s)
+            ln = static_multipliers(model, qn, s)
     except (EquilibriumError, ArithmeticError, ValueError):
         return None
     return (qn, ln) if np.all(np.isfinite(ln)) else None
@@ -277,7 +241,7 @@ def newton(model, q, s: Settings, *, max_iter=None, prove=True) -> Solution:
     if q is None:
         raise Stall("the position solve did not reach Φ = 0", q=q0, iterations=0)
     cscale = model.constraint_scales()
-    lam = _lam(model, q, s)
+    lam = static_multipliers(model, q, s)
     radius = s.radius
     it = 0
     free_streak, free_last = 0, np.inf
@@ -362,125 +326,3 @@ def settings_for(model, q, *, tol, xtol, floor_tol, max_iter, rank_tol):
     s.scales = StepScales(model)
     s.force_scale = force_scale(model, q, rank_tol)
     return s
-
-
-class Memo:
-    """The model seen through a small cache of its assembled quantities at the last few q (the
-    statics asks for Φ, Φ_q, g, K and H at one q several times; assembling them is what costs
-    on large models).  Every other attribute is the model's own."""
-
-    SIZE = 6
-
-    def __init__(self, model):
-        self._model = model
-        self._cache: dict = {}
-        # a small model's Jacobians as dense arrays (mbseig.numerics.DENSE_ASSEMBLY)
-        self._dense = bool(getattr(model, "dense_assembly", False))
-
-    def __getattr__(self, name):
-        return getattr(self._model, name)
-
-    def _get(self, key, compute):
-        hit = self._cache.get(key)
-        if hit is None:
-            hit = compute()
-            if len(self._cache) >= self.SIZE:
-                self._cache.pop(next(iter(self._cache)))
-            self._cache[key] = hit
-        return hit
-
-    def phi(self, q):
-        return self._get(("phi", q.tobytes()), lambda: self._model.phi(q))
-
-    # (``dense``: accepted for the model's signature; the memo gives its own form, dense for a
-    # small model, and callers that need a dense array convert with mbseig.numerics.dense)
-    def phi_q(self, q, *, dense=None):
-        return self._get(("phi_q", q.tobytes()), lambda: self._model.phi_q(q, dense=self._dense))
-
-    def generalized_force(self, q, qd=None):
-        if qd is not None:
-            return self._model.generalized_force(q, qd)
-        return self._get(("g", q.tobytes()), lambda: self._model.generalized_force(q))
-
-    def force_jacobians(self, q, qd=None, *, dense=None):
-        if qd is not None:
-            return self._model.force_jacobians(q, qd, dense=self._dense)
-        return self._get(("K", q.tobytes()),
-                         lambda: self._model.force_jacobians(q, dense=self._dense))
-
-    def constraint_hessian(self, q, lam, *, dense=None):
-        return self._get(("H", q.tobytes(), np.asarray(lam).tobytes()),
-                         lambda: self._model.constraint_hessian(q, lam, dense=self._dense))
-
-
-def finish(model, q, s, *, iterations, correction, method, path, lam=None, memo=None):
-    """The Equilibrium record at a converged q: least-squares λ, rank, residuals, reactions.
-    memo: the :class:`Memo` of ``model`` the solve used (its evaluations at q are reused)."""
-    n, m = model.n, model.n_constraints
-    ev = model if memo is None else memo
-    Phi_q = ev.phi_q(q)
-    g = ev.generalized_force(q)
-    lam_ls, rank, rank_method = multipliers(Phi_q, g, s.rank_tol, check=True)
-    lam = lam_ls if lam is None else lam
-    r1 = g - Phi_q.T @ lam
-    fr = float(np.max(np.abs(r1), initial=0.0)) / s.force_scale
-    cr = constraint_residual(ev, q, model.constraint_scales())[1]
-    redundant = _redundant_rows(model, Phi_q, rank) if n + m <= DENSE_LIMIT else []
-    reactions, k = [], 0
-    for c in model.constraints:
-        reactions.append((c.name, lam[k:k + c.n_eq].copy()))
-        k += c.n_eq
-    return Equilibrium(
-        q=q, lam=lam, residual=max(fr, cr), force_residual=fr, constraint_residual=cr,
-        iterations=int(iterations), rank=rank, n_redundant=m - rank, redundant=tuple(redundant),
-        reactions=tuple(reactions), tolerances={**s.record(), "rank_method": rank_method},
-        method=method, model=model, correction=float(correction), path=dict(path))
-
-
-def _redundant_rows(model, Phi_q, rank):
-    import scipy.linalg as sla
-
-    m = Phi_q.shape[0]
-    if rank >= m:
-        return []
-    _, _, piv = sla.qr(dense(Phi_q).T, pivoting=True, mode="economic")
-    names = model.constraint_row_names()
-    return sorted({names[i] for i in piv[rank:]})
-
-
-# ---------------------------------------------------------------------------------------------
-def _dominant(vec, names, scales, count=3):
-    rel = np.abs(vec) / scales.ell
-    top = np.argsort(-rel, kind="stable")[:count]
-    mx = rel[top[0]] if top.size else 0.0
-    return [names[i] for i in top if rel[i] >= 0.2 * mx and rel[i] > 0]
-
-
-def diagnose(model, q0, first: Stall, second, s: Settings):
-    """The true failure message from the failed attempts (docs/design.md, "Equilibrium")."""
-    names = model.coordinate_names
-    last = first
-    if last.free_dir is not None and last.free > np.sqrt(s.tol):
-        along = ", ".join(_dominant(last.free_dir, names, s.scales))
-        force = float(np.linalg.norm(last.free_dir))
-        return NoStaticEquilibrium(
-            f"no static equilibrium: free motion along {along} (no restoring force; an "
-            f"unbalanced generalized force of {force:.4g} acts along it at the last iterate, "
-            f"after {last.iterations} Newton iterations)", element="equilibrium")
-    q = last.q if last.q is not None else q0
-    moved = s.scales.largest(q - q0, names)
-    unit = lambda nm: "m" if nm.rpartition(".")[2] in ("x", "y", "z") else "rad"
-    moved_txt = ", ".join(f"{nm} ({dq:+.3g} {unit(nm)})" for nm, dq in moved) or "none"
-    hint = ("hint: start nearer the expected equilibrium (positions of the case, or q_init)")
-    if second is not None:
-        t = getattr(second, "load_factor", None)
-        if t is not None and t > 0:
-            hint += (f"; the load continuation from the unloaded state stopped at {t:.4g} of the "
-                     f"loads (a limit point: beyond it the equilibrium is on another branch, or "
-                     f"none exists)")
-        else:
-            hint += f"; the load continuation from the unloaded state failed too ({second.reason})"
-    return NotConverged(
-        f"did not converge from the given positions ({first.reason}; Newton correction "
-        f"{first.correction:.3g} of the model's size): the coordinates that moved most: "
-        f"{moved_txt}; {hint}", element="equilibrium")

@@ -103,7 +103,7 @@ def _scaled_jacobian(model, q, cscale, scales):
     import scipy.sparse as sp
 
     Phi_q = model.phi_q(q)
-    if not sp.issparse(Phi_q):  # a small model's dense Jacobian (mbseig.statics.newton.Memo)
+    if not sp.issparse(Phi_q):  # a small model's dense Jacobian (mbseig.statics.cache.Memo)
         return Phi_q * (1.0 / cscale)[:, None] * scales.ell[None, :]
     return (sp.diags(1.0 / cscale) @ Phi_q @ sp.diags(scales.ell)).tocsr()
 

@@ -32,8 +32,13 @@ import math
 
 import numpy as np
 
-from ..model.elements import DistanceConstraint, FollowerForce, LinearConstraint, SpringDamper
-from .newton import solved
+from ..model.elements import (
+    DistanceConstraint,
+    FollowerForce,
+    LinearConstraint,
+    SpringDamper,
+)
+from .result import solved
 
 __all__ = ["posture", "reactions", "actuator_effort", "rom_flags", "pin_reactions",
            "reaction_forces"]

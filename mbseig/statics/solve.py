@@ -9,8 +9,11 @@ import numpy as np
 
 from ..errors import MbseigError
 from ..model.linear_case import LinearCase
+from .cache import Memo
+from .diagnosis import diagnose
 from .loads import continue_loads
-from .newton import Equilibrium, Memo, Stall, diagnose, finish, newton, settings_for
+from .newton import Stall, newton, settings_for
+from .result import Equilibrium, finish
 
 __all__ = ["solve_statics"]
 

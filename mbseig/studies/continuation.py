@@ -33,11 +33,13 @@ from ..linear import linearize
 from ..modal import stability, tolerances, worst
 from ..model.linear_case import LinearCase
 from ..statics import equilibrium, examine, resolve
+from ..statics.cache import Memo
 from ..statics.continuation import CTOL, Family, follow
 from ..statics.inverse import command_settings, reuse_commands
-from ..statics.newton import Memo, finish, settings_for
-from ..statics.solve import solve_statics
+from ..statics.newton import settings_for
 from ..statics.reactions import posture
+from ..statics.result import finish
+from ..statics.solve import solve_statics
 from ..statics.stiffness import static_stability
 
 __all__ = ["sweep_line", "family_maker", "modal_point", "DIAGRAM_MODES_MAX"]

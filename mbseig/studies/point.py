@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..casefile import CaseSpec, read_case
-from ..eigen import SOLVERS
+from ..eigen import Request
 from ..errors import MbseigError, NumericalError
 from ..linear import LinearModel, linearize
 from ..modal import Modes, modes
@@ -89,8 +89,7 @@ def eigen_stage(lin: LinearModel, *, solver="auto", modes_options=None) -> Modes
         raise NumericalError(f"mode {k + 1} of {len(md)}: eigenvalue {md.eigenvalues[k]} with "
                              f"backward error {md.backward_error[k]} is not a finite result; "
                              f"likely cause: {EIGEN_CAUSE}", element="eigen")
-    path = SOLVERS.get(solver)
-    partial = bool(modes_options) or bool(extra) or (path is not None and path.partial)
+    partial = bool(modes_options) or bool(extra) or Request(solver).family() == "partial"
     if not partial and lin.dof > 0 and len(md) == 0:
         raise NumericalError(
             f"no finite mode among the {lin.dof} degrees of freedom ({md.n_infinite} infinite "

@@ -1,0 +1,60 @@
+"""One cache of the model quantities a static solve asks for at one q (Φ, Φ_q, g, K, C, the
+constraint Hessian), kept across the Newton steps, the force scale and the stability check."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+class Memo:
+    """The model seen through a small cache of its assembled quantities at the last few q (the
+    statics asks for Φ, Φ_q, g, K and H at one q several times; assembling them is what costs
+    on large models).  Every other attribute is the model's own."""
+
+    SIZE = 6
+
+    def __init__(self, model):
+        self._model = model
+        self._cache: dict = {}
+        # a small model's Jacobians as dense arrays (mbseig.numerics.DENSE_ASSEMBLY)
+        self._dense = bool(getattr(model, "dense_assembly", False))
+
+    def __getattr__(self, name):
+        return getattr(self._model, name)
+
+    @property
+    def model(self):
+        """The model behind the cache."""
+        return self._model
+
+    def _get(self, key, compute):
+        hit = self._cache.get(key)
+        if hit is None:
+            hit = compute()
+            if len(self._cache) >= self.SIZE:
+                self._cache.pop(next(iter(self._cache)))
+            self._cache[key] = hit
+        return hit
+
+    def phi(self, q):
+        return self._get(("phi", q.tobytes()), lambda: self._model.phi(q))
+
+    # (``dense``: accepted for the model's signature; the memo gives its own form, dense for a
+    # small model, and callers that need a dense array convert with mbseig.numerics.dense)
+    def phi_q(self, q, *, dense=None):
+        return self._get(("phi_q", q.tobytes()), lambda: self._model.phi_q(q, dense=self._dense))
+
+    def generalized_force(self, q, qd=None):
+        if qd is not None:
+            return self._model.generalized_force(q, qd)
+        return self._get(("g", q.tobytes()), lambda: self._model.generalized_force(q))
+
+    def force_jacobians(self, q, qd=None, *, dense=None):
+        if qd is not None:
+            return self._model.force_jacobians(q, qd, dense=self._dense)
+        return self._get(("K", q.tobytes()),
+                         lambda: self._model.force_jacobians(q, dense=self._dense))
+
+    def constraint_hessian(self, q, lam, *, dense=None):
+        return self._get(("H", q.tobytes(), np.asarray(lam).tobytes()),
+                         lambda: self._model.constraint_hessian(q, lam, dense=self._dense))
