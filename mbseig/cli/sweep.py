@@ -112,7 +112,7 @@ def _campbell(args, ranges, fixed, out_dir, paths) -> dict:
     import json
 
     try:
-        from .. import plots_spatial
+        from ..plots import spatial as plots_spatial
         from ..studies.campbell import campbell, speed_parameter
     except ImportError:  # the spatial layer is not part of this installation
         return {}

@@ -208,8 +208,8 @@ def _mode_label(k, md):
 
 
 def _spatial_draw():
-    """The three-view drawing of spatial models (mbseig.plots_spatial), imported when needed."""
-    from .. import plots_spatial
+    """The three-view drawing of spatial models (mbseig.plots.spatial), imported when needed."""
+    from ..plots import spatial as plots_spatial
 
     return plots_spatial.spatial_modes
 

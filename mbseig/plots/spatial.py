@@ -24,21 +24,19 @@ import math
 
 import numpy as np
 
-from .plots import project_constraints, save
+from .common import STYLE, figure, save
+from .mechanism import project_constraints
+
+#: the three-view and Campbell figures are set one point smaller than the planar ones
+SPATIAL_STYLE = {**STYLE, "font.size": 8}
 
 __all__ = ["VIEWS", "WHIRL_COLOURS", "campbell_diagram", "save", "spatial_modes"]
 
-_STYLE = {"svg.hashsalt": "mbseig", "font.size": 8}
 #: (horizontal axis, vertical axis, title) of the three orthographic views
 VIEWS = ((0, 1, "top (x, y)"), (0, 2, "front (x, z)"), (1, 2, "side (y, z)"))
 WHIRL_COLOURS = {"forward": "tab:blue", "backward": "tab:red", "mixed": "tab:gray",
                  "none": "tab:green", None: "k"}
 
-
-def _figure(**kw):
-    from matplotlib.figure import Figure
-
-    return Figure(**kw)
 
 
 def _body_polylines(model, q):
@@ -72,9 +70,9 @@ def spatial_modes(model, q0, shapes, labels, *, amplitude=0.15, title=""):
     displaced by ± the mode shape (red/blue), bodies drawn rigid (module docstring)."""
     import matplotlib
 
-    with matplotlib.rc_context(_STYLE):
+    with matplotlib.rc_context(SPATIAL_STYLE):
         n = max(len(labels), 1)
-        fig = _figure(figsize=(10.5, 3.2 * n))
+        fig = figure(figsize=(10.5, 3.2 * n))
         axes = fig.subplots(n, 3, squeeze=False)
         L = float(getattr(model, "length_scale", 1.0))
         fixed = [np.pad(np.asarray(a(q0), float), (0, 3 - a.dim)) for nm, a in model.points.items()
@@ -120,8 +118,8 @@ def campbell_diagram(res):
     import matplotlib
     from matplotlib.lines import Line2D
 
-    with matplotlib.rc_context(_STYLE):
-        fig = _figure(figsize=(8.8, 7))
+    with matplotlib.rc_context(SPATIAL_STYLE):
+        fig = figure(figsize=(8.8, 7))
         a1, a2 = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
         x = np.asarray(res.values, float)
         F = np.asarray(res.frequency) / (2 * math.pi)

@@ -1,0 +1,125 @@
+"""Stage 4: modes and their stability (docs/design.md, "Tolerances").
+
+For an eigenvalue s_k = −δ_k + iω_k:  ω_n = |s|,  ζ = δ/|s| (0 for a rigid-body mode),
+f = ω/2π (``freq_hz``: the damped frequency ω_d/2π, 0 for a real eigenvalue) and
+f_n = ω_n/2π (``freq_n_hz``: the natural frequency |s|/2π, what python-control's ``damp``
+reports and what ``--band-hz`` and ``--target-hz`` select on), and
+
+    δ > tol_k  stable,   |δ| ≤ tol_k  critical,   δ < −tol_k  unstable,
+
+    tol_k = max(safety · err_k,  stability_rtol · |s_k|,  stability_atol)
+
+where err_k is an error bound of s_k:
+
+* a simple eigenvalue: the smaller of the normwise and the componentwise first-order bounds,
+  κ·max(η, ε) and κ_c·max(η_c, ε) (:mod:`mbseig.eigen.measures`; both are valid, the second is
+  much sharper for badly scaled models and exact zero patterns);
+* a cluster (eigenvalues whose error discs of radius safety·err overlap, e.g. a defective double
+  root computed as two eigenvalues √ε apart, or a near-real complex pair): first-order bounds are
+  invalid there (κ = ∞ for an exactly defective one), so every member gets
+  err = spread + S·max(η, ε)^{1/b} — the distance of the members from their mean plus the
+  Hölder-type bound of a Jordan block of size b = ⌈k/g⌉ (k members, g independent eigenvectors,
+  S = max(|mean|, √(‖Q‖/‖M‖))); a semisimple cluster (b = 1) keeps spread + its first-order
+  bound.
+
+The structured paths (``eigh``, ``proportional``) compute δ = (α + βω²)/2 from an accurate ω² and
+supply a sharper bound of the error of Re s, which replaces err in the δ test (not in the
+rigid-body and real tests).  So "δ = 0" means "zero within the numerical error of this
+eigenvalue", and the tolerance of each verdict is recorded per mode: a computed eigenvalue with
+Re s above its bound is never called critical or rigid-body.  Kinds: ``rigid-body`` (|s| ≤ tol: s
+= 0 lies within its bound), ``oscillatory`` (complex, δ ≥ −tol), ``flutter`` (complex, δ < −tol),
+``overdamped`` (real, negative), ``divergence`` (real, positive); |ω| ≤ tol counts as real.
+
+Listing (real M, P, Q): a complex-conjugate pair once (ω > 0), real eigenvalues each; a pair with
+|ω| within its tolerance (a defective or nearly defective double root, e.g. critical damping)
+counts as two real eigenvalues and is listed twice with ω = 0; the rigid-body eigenvalues (s = 0,
+double when P x = 0) are listed once per independent vector, the member with the largest Re s
+first (a ±ε divergence pair shows its positive member).  Complex M, P, Q: every eigenvalue is
+listed (no conjugate pairs).  Sorted by ω_n, then δ, then ω (deterministic).
+
+Every listing accounts for the 2n eigenvalues of an n-DOF problem (:attr:`Modes.accounting`):
+listed modes (a pair counts 2) + rigid-body eigenvalues + infinite ones = 2n; a dense listing
+that does not (or a zero eigenvalue of higher multiplicity than twice its independent vectors:
+secular growth tᵏ that no listed mode shows) is refused with :class:`~mbseig.errors.SolverError`.
+A partial spectrum lists what it computed: its verdict is "of the modes computed" and
+:attr:`Modes.coverage` says which part of the s-plane that is.
+"""
+
+from __future__ import annotations
+
+
+import scipy.sparse as sp
+
+from ..eigen import Problem, Request, SingularPencilError, solve
+from ..errors import SolverError
+from ..linear import LinearModel
+from .bounds import error_bounds, stability, tolerances, worst, zero_pair_floor
+from .listing import band_of, coordinate_text, listing
+from .result import BAND_DENSE_MAX, DENSE_MAX, STABILITY_ORDER, Modes, Verdict
+
+__all__ = ["Modes", "Verdict", "modes", "STABILITY_ORDER", "tolerances", "stability", "worst"]
+
+
+
+def modes(M, P=None, Q=None, *, solver: str = "auto", N=None, coordinate_names=None,
+          stability_rtol: float = 1e-12, stability_atol: float = 0.0, safety: float = 10.0,
+          n_dominant: int = 3, rigid_rank_tol: float = 1e-6, n_modes: int | None = None,
+          target: float | None = None, band=None, constraints=None, eta_warn: float = 1e-12,
+          **solver_options) -> Modes:
+    """Solve and classify the modes of (M s² + P s + Q) x = 0.
+
+    M may be a :class:`~mbseig.linear.LinearModel` instead of a matrix: its M, P, Q, N,
+    coordinate names and (large constrained models) constraint Jacobian are used.
+    N, coordinate_names : null-space basis and full-coordinate names for mode shapes (q = N x).
+    stability_rtol, stability_atol, safety : see the module docstring.
+    rigid_rank_tol : relative threshold for counting independent eigenvectors (rigid-body modes,
+        Jordan block sizes of clusters).
+    n_modes, target, band, constraints : ask for a partial spectrum of sparse matrices (the
+        ``partial-*`` paths of :func:`mbseig.eigen.solve_partial`): ``n_modes`` modes nearest the
+        angular frequency ``target`` (rad/s, default 0), or every mode with ω_n in
+        ``band = (ω_lo, ω_hi)``; ``constraints`` is Φ_q when M, P, Q are in full coordinates.
+    eta_warn : a listed mode whose backward errors (normwise and componentwise) both exceed it is
+        flagged in :attr:`Modes.flags` and named in a RuntimeWarning.
+    Other keywords are the path options of the request (:class:`mbseig.eigen.Request`): those of
+    :func:`mbseig.eigen.solve_qep` (``sym_tol``, ``rayleigh_tol``, ``scale``, ``left``,
+    ``companion_cond``) or of :func:`mbseig.eigen.solve_partial`.
+    """
+    if isinstance(M, LinearModel):
+        lin = M
+        M, P, Q, N, coordinate_names = lin.M, lin.P, lin.Q, lin.N, lin.coordinate_names
+        if constraints is None:
+            constraints = lin.constraint_jacobian
+    if Q is None:
+        raise SolverError("modes(M, P, Q) needs Q (or a LinearModel alone)")
+    request = Request(solver, n_modes=n_modes, target=target, band=band, options=solver_options)
+    problem = Problem(M, P, Q, G=constraints)
+    if (band is not None and n_modes is None and target is None and constraints is None
+            and Request(solver).family() == "dense"
+            and (not sp.issparse(M) or M.shape[0] <= BAND_DENSE_MAX)):
+        # a band of a model small enough for the dense path: solve it all, list the band
+        full = modes(M, P, Q, solver=solver, N=N, coordinate_names=coordinate_names,
+                     stability_rtol=stability_rtol, stability_atol=stability_atol,
+                     safety=safety, n_dominant=n_dominant, rigid_rank_tol=rigid_rank_tol,
+                     eta_warn=eta_warn, **solver_options)
+        return band_of(full, band)
+    try:
+        if (request.family(problem) == "dense" and sp.issparse(M)
+                and M.shape[0] > DENSE_MAX):
+            raise SolverError(f"{M.shape[0]} unknowns is beyond the dense path (limit "
+                              f"{DENSE_MAX}): ask for a partial spectrum (n_modes=, target= or "
+                              f"band=; mbseig modes --n-modes K or --band-hz F1 F2)")
+        sol = solve(problem, request)
+    except SingularPencilError as exc:
+        if exc.vector is None:
+            raise
+        raise SolverError(f"singular pencil: {coordinate_text(coordinate_names, N, exc.vector)} "
+                          f"has no mass, damping or stiffness (det(M s² + P s + Q) ≡ 0, every s "
+                          f"would be an eigenvalue): give it mass or a spring, or remove it") from None
+    b = error_bounds(sol, safety=safety, stability_rtol=stability_rtol, stability_atol=stability_atol,
+                rank_tol=rigid_rank_tol)
+    b = zero_pair_floor(b, sol, M, P, safety)
+    return listing(sol, b, N=N, coordinate_names=coordinate_names, n_dominant=n_dominant,
+                    eta_warn=eta_warn,
+                    tolerances_used={"stability_rtol": stability_rtol,
+                                     "stability_atol": stability_atol, "safety": safety,
+                                     "rigid_rank_tol": rigid_rank_tol, "eta_warn": eta_warn})

@@ -1,0 +1,287 @@
+"""Error bounds of the eigenvalues and the stability each one decides (docs/design.md, "Modes
+and stability"): δ = 0 means |δ| within the eigenvalue's bound (10 κ η, the componentwise bound
+where sharper, a cluster bound for defective or nearly defective groups, a floor for the zero
+pair of a rigid-body mode); the tolerances recorded with the rule that made them."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+from ..eigen import EPS
+from .result import STABILITY_ORDER
+
+
+# ---------------------------------------------------------------------------------------------
+# error bounds and tolerances
+# ---------------------------------------------------------------------------------------------
+def frequency_scale(norms):
+    nM, nP, nQ = norms
+    if nM > 0 and nQ > 0:
+        return math.sqrt(nQ / nM)
+    if nM > 0 and nP > 0:
+        return nP / nM
+    if nP > 0 and nQ > 0:
+        return nQ / nP
+    return 1.0
+
+
+def numerical_rank(X, rank_tol):
+    """Numerical rank of the columns of X (pivoted QR, relative pivot threshold)."""
+    if X.shape[1] == 0:
+        return 0
+    Xn = X / np.maximum(np.linalg.norm(X, axis=0), np.finfo(float).tiny)
+    R = sla.qr(Xn, mode="r", pivoting=True)[0]
+    d = np.abs(np.diag(R))
+    return int(np.sum(d > rank_tol * d[0])) if d.size and d[0] > 0 else 0
+
+
+def nullity(sol, mean, spread, scale, max_order=2000):
+    """Independent eigenvectors of a cluster: the nullity of T(s̄) = s̄²M + s̄P + Q at its mean
+    (singular values within 10 (spread + √ε·scale)‖T′(s̄)‖ + 10³ε‖T(s̄)‖), for dense problems up
+    to ``max_order`` (0 otherwise).  The computed eigenvectors of a derogatory defective
+    eigenvalue need not span its eigenspace; T's singular values do."""
+    prob = sol.problem
+    if not (isinstance(prob, tuple) and len(prob) == 4):  # a partial path's: no dense pencil
+        return 0
+    M, P, Q, gamma = prob
+    if M.shape[0] > max_order:
+        return 0
+    M, P, Q = (A.toarray() if sp.issparse(A) else np.asarray(A) for A in (M, P, Q))
+    mu = mean.real / gamma + 1j * (mean.imag / gamma)
+    a = abs(mu)
+    if a > 1:  # reversed: T(μ)/μ² and T′(μ)/μ, the same ratios without overflow
+        t = 1.0 / mu
+        T, Td, r = M + t * P + (t * t) * Q, 2 * M + t * P, spread / gamma / a
+    else:
+        T, Td, r = (mu * mu) * M + mu * P + Q, 2 * mu * M + P, spread / gamma
+    if not (np.all(np.isfinite(T)) and np.all(np.isfinite(Td))):
+        return 0
+    sv = np.linalg.svd(T, compute_uv=False)
+    thr = 10 * (r + np.sqrt(EPS) * scale / gamma / max(a, 1.0)) * np.linalg.norm(Td) \
+        + 1e3 * EPS * sv[0]
+    return int(np.sum(sv <= thr))
+
+
+def components(n, pairs):
+    """Connected components (labels) of the graph on n nodes with the given edges."""
+    parent = np.arange(n)
+
+    def find(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for i, j in pairs:
+        ri, rj = find(i), find(j)
+        if ri != rj:
+            parent[max(ri, rj)] = min(ri, rj)
+    return np.array([find(i) for i in range(n)])
+
+
+@dataclass(frozen=True)
+class Bounds:
+    err: np.ndarray  # error bound of s
+    tol: np.ndarray  # tolerance for the rigid-body and real tests
+    tol_re: np.ndarray  # tolerance for the δ test
+    rigid: np.ndarray
+    cluster: np.ndarray  # cluster label per eigenvalue (its own index when alone)
+    block: np.ndarray  # estimated Jordan block size of the eigenvalue's cluster
+    geometric: np.ndarray = None  # independent eigenvectors of the eigenvalue's cluster
+
+
+class AllPairs:
+    """The two cKDTree queries :func:`error_bounds` uses, by all pairs: for the few eigenvalues of a
+    small model this is faster than importing scipy.spatial (≈ 0.1 s of start-up)."""
+
+    def __init__(self, points):
+        self.z = points[:, 0] + 1j * points[:, 1]
+
+    def query(self, points, k=2):
+        z = points[:, 0] + 1j * points[:, 1]
+        d = np.sort(np.abs(z[:, None] - self.z[None, :]), axis=1)[:, :k]
+        return d, None
+
+    def query_ball_point(self, x, r):
+        x = np.asarray(x, float)
+        single = x.ndim == 1
+        x = np.atleast_2d(x)
+        d = np.abs((x[:, 0] + 1j * x[:, 1])[:, None] - self.z[None, :])
+        r = np.broadcast_to(np.asarray(r, float), (x.shape[0],))
+        out = [np.flatnonzero(d[i] <= r[i]).tolist() for i in range(x.shape[0])]
+        return out[0] if single else out
+
+
+def neighbour_index(points, small=256):
+    """Nearest-neighbour queries on the eigenvalues: all pairs for a small spectrum, a k-d tree
+    (scipy.spatial, imported here: off the start-up path) above."""
+    if points.shape[0] <= small:
+        return AllPairs(points)
+    from scipy.spatial import cKDTree
+
+    return cKDTree(points)
+
+
+def error_bounds(sol, *, safety=10.0, stability_rtol=1e-12, stability_atol=0.0, rank_tol=1e-6):
+    """Error bounds, tolerances and clusters of every eigenvalue of ``sol`` (module docstring)."""
+    s = np.asarray(sol.eigenvalues)
+    k = s.size
+    eta = np.maximum(np.asarray(sol.backward_error, float), EPS)
+    with np.errstate(over="ignore", invalid="ignore"):
+        err = np.asarray(sol.condition, float) * eta
+    err = np.where(np.isnan(err), np.inf, err)
+    scale = frequency_scale(sol.norms)
+    S = np.maximum(np.abs(s), scale)
+    holder2 = S * np.sqrt(eta)
+    # componentwise bounds where the normwise one does not separate s from 0, from the real axis
+    # or from its neighbours (computed only there: they cost a product with |M|, |P|, |Q|)
+    if k > 1:  # the tree on s / max|s|: squared distances of |s| ~ 1e300 would overflow
+        unit = float(np.max(np.abs(s))) or 1.0
+        points = np.column_stack([s.real, s.imag]) / unit
+        tree = neighbour_index(points)
+        near = tree.query(points, k=2)[0][:, 1] * unit
+    else:
+        near = np.full(k, np.inf)
+    # (an exactly zero Re s is critical whatever the bound: no need to sharpen it for that)
+    gaps = [np.abs(s), np.where(s.real != 0, np.abs(s.real), np.inf),
+            np.where(s.imag != 0, np.abs(s.imag), np.inf), near]
+    undecided = safety * err >= np.minimum.reduce(gaps)
+    idx = np.flatnonzero(undecided)
+    if idx.size:
+        eta_c, kappa_c = sol.componentwise(idx)
+        with np.errstate(over="ignore", invalid="ignore"):
+            err_c = kappa_c * np.maximum(eta_c, EPS)
+        err_c = np.where(np.isnan(err_c), np.inf, err_c)
+        err[idx] = np.minimum(err[idx], err_c)
+    # linking radius: the first-order bound, but where other eigenvalues lie within it (first
+    # order is then unreliable) no more than the Hölder radius S·η^{1/k} of a block of all k of
+    # them; an infinite bound (an exactly defective pair) links within the double's S·√η
+    radius = np.where(np.isfinite(err), err, holder2)
+    cluster = np.arange(k)
+    block = np.ones(k, int)
+    if k > 1:
+        finite = np.flatnonzero(np.isfinite(err) & (err > 0))
+        if finite.size:
+            reach = np.minimum(safety * err[finite] / unit, 4.0)
+            counts = np.array([len(c) for c in tree.query_ball_point(points[finite], reach)])
+            holder_k = S[finite] * eta[finite] ** (1.0 / np.maximum(counts, 1))
+            radius[finite] = np.where(counts > 1, np.minimum(err[finite], holder_k), err[finite])
+        pairs = set()
+        reach = np.minimum(2 * safety * radius / unit, 4.0)  # beyond 4 max|s|: everything
+        for i in range(k):  # radius 0 still finds exact duplicates
+            for j in tree.query_ball_point(points[i], reach[i]):
+                if j != i and abs(s[i] - s[j]) <= safety * (radius[i] + radius[j]):
+                    pairs.add((min(i, j), max(i, j)))
+        cluster = components(k, pairs)
+    err = err.copy()
+    labels, inverse, counts = np.unique(cluster, return_inverse=True, return_counts=True)
+    alone = (counts[inverse] == 1) & ~np.isfinite(err)  # κ = ∞ alone: a defective root, Hölder
+    err[alone], block[alone] = holder2[alone], 2
+    geometric = np.ones(k, int)
+    for c in labels[counts > 1]:
+        members = np.flatnonzero(cluster == c)
+        mean0 = np.mean(s[members])
+        spread0 = float(np.max(np.abs(s[members] - mean0)))
+        g = max(numerical_rank(sol.vectors[:, members], rank_tol),
+                nullity(sol, mean0, spread0, max(abs(mean0), scale)))
+        g = min(g, members.size)
+        geometric[members] = g
+        b = max(1, math.ceil(members.size / max(g, 1)))
+        mean = np.mean(s[members])
+        spread = float(np.max(np.abs(s[members] - mean)))
+        if b == 1:
+            first = np.max(np.where(np.isfinite(err[members]), err[members], holder2[members]))
+            err[members] = spread + first
+        else:
+            Sc = max(abs(mean), scale)
+            err[members] = spread + Sc * float(np.max(eta[members])) ** (1.0 / b)
+        block[members] = b
+    floor = [stability_rtol * np.abs(s), np.full(k, stability_atol)]
+    tol = np.maximum.reduce([safety * err, *floor])
+    re_err = sol.real_error
+    if re_err is None:
+        tol_re = tol
+    else:
+        clustered = block > 1  # the path's Re s bound is first order: not inside a defective cluster
+        re_bound = np.where(clustered, err, np.minimum(err, re_err))
+        tol_re = np.maximum.reduce([safety * re_bound, *floor])
+    return Bounds(err, tol, tol_re, np.abs(s) <= tol, cluster, block, geometric)
+
+
+def zero_pair_floor(b, sol, M, P, safety, nQ=None, gamma=1.0):
+    """Near s = 0, an undamped eigenvalue comes from s² = −ω² with ω² a small difference of
+    stiffness terms: an ε-relative error of Q (its formation Nᵀ K N, rounding of K) moves ω² by
+    up to ε‖Q‖‖x‖²/|xᴴMx| and s by the square root of that, which no first-order bound sees.  For
+    an eigenvalue whose damping term is below its inertia term (|xᴴPx| ≤ |s||xᴴMx|, the ±√ω²
+    structure), the error bound is raised to that Hölder radius,
+    h = √(max(η, ε) ‖Q‖_F ‖x‖² / |xᴴMx|),  with the mode's own modal mass (a light body's spin
+    has a far larger h than the global √(ε‖Q‖/‖M‖)); s within safety·h of 0 is then rigid-body
+    (critical).  An eigenvalue beyond it keeps its verdict."""
+    import dataclasses
+
+    s = np.asarray(sol.eigenvalues)
+    if s.size == 0 or sol.complex_problem or sol.vectors is None or M is None:
+        return b
+    scale = frequency_scale(sol.norms)
+    cand = np.flatnonzero(np.abs(s) <= 1e-3 * scale)
+    if cand.size == 0:
+        return b
+    nQ = float(sol.norms[2]) if nQ is None else nQ
+    s = s / gamma  # M, P, Q of a problem scaled by s = γ μ: work in μ, radius back in s
+    eta = np.maximum(np.asarray(sol.backward_error, float), EPS)
+    err, tol, tol_re, rigid = b.err.copy(), b.tol.copy(), b.tol_re.copy(), b.rigid.copy()
+    Mm = M if sp.issparse(M) else np.asarray(M)
+    Pm = None if P is None else (P if sp.issparse(P) else np.asarray(P))
+    for k in cand:
+        x = sol.vectors[:, k]
+        if x.shape[0] != Mm.shape[0]:
+            return b
+        mx = abs(np.vdot(x, Mm @ x))
+        px = 0.0 if Pm is None else abs(np.vdot(x, Pm @ x))
+        if mx == 0 or px > abs(s[k]) * mx:
+            continue
+        h = math.sqrt(eta[k] * nQ * float(np.vdot(x, x).real) / mx)
+        s_k, h = s[k] * gamma, h * gamma
+        if abs(s_k) <= safety * h:
+            err[k] = max(err[k], h)
+            tol[k] = max(tol[k], safety * h)
+            tol_re[k] = max(tol_re[k], safety * h)
+            rigid[k] = True
+    return dataclasses.replace(b, err=err, tol=tol, tol_re=tol_re, rigid=rigid)
+
+
+def tolerances(sol, *, safety=10.0, stability_rtol=1e-12, stability_atol=0.0, rank_tol=1e-6):
+    """(err, tol, tol_re, rigid) per eigenvalue of a :class:`~mbseig.eigen.QEPSolution`.
+
+    err: error bound of s (first order, normwise or componentwise, or the cluster bound of a
+    defective or nearly defective cluster: module docstring); tol = max(safety·err,
+    stability_rtol·|s|, stability_atol) for the rigid-body and real tests, tol_re the same with
+    the path's sharper bound of Re s where it has one (the δ test), rigid: |s| ≤ tol, with the
+    zero-pair floor of :func:`zero_pair_floor` (from the problem the pairs refer to).  The one
+    definition used by :func:`modes` and by the sweeps.
+    """
+    b = error_bounds(sol, safety=safety, stability_rtol=stability_rtol, stability_atol=stability_atol,
+                rank_tol=rank_tol)
+    prob = sol.problem
+    if isinstance(prob, tuple) and len(prob) == 4:  # the zero-pair floor, as modes() applies it
+        Ms, Ps, Qs, gamma = prob
+        nQs = float(np.linalg.norm(Qs.tocsr().data) if sp.issparse(Qs) else np.linalg.norm(Qs))
+        b = zero_pair_floor(b, sol, Ms, Ps, safety, nQ=nQs, gamma=float(gamma))
+    return b.err, b.tol, b.tol_re, b.rigid
+
+
+def stability(delta, tol_re, rigid) -> list:
+    """stable / critical / unstable per eigenvalue: δ against its tolerance; rigid-body modes
+    (s = 0 within its error) are critical."""
+    return ["critical" if r else "stable" if d > t else "unstable" if d < -t else "critical"
+            for d, t, r in zip(delta, tol_re, rigid)]
+
+
+def worst(stabilities) -> str:
+    """The verdict over modes: the worst of their stabilities ("stable" for none)."""
+    return max(stabilities, key=STABILITY_ORDER.get) if len(stabilities) else "stable"

@@ -1,0 +1,124 @@
+"""The result of the modes stage: :class:`Modes` (eigenvalues, damping, classification, error
+measures and shapes) and its :class:`Verdict`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+class Verdict(str):
+    """The verdict word ("stable", "critical" or "unstable"): it compares equal to, and is written
+    to JSON as, the word; ``scope`` says what it covers ("" for the full spectrum, "of the modes
+    computed (...)" for a partial one), and ``str()``/formatting give the word with its scope."""
+
+    def __new__(cls, word, scope=""):
+        obj = super().__new__(cls, word)
+        obj.scope = scope
+        return obj
+
+    @property
+    def word(self) -> str:
+        return str.__str__(self)
+
+    def __str__(self):
+        return f"{self.word} {self.scope}" if self.scope else self.word
+
+    def __format__(self, spec):
+        return format(str(self), spec)
+
+STABILITY_ORDER = {"stable": 0, "critical": 1, "unstable": 2}
+DENSE_MAX = 5000  # sparse input above this size needs a partial-spectrum request
+BAND_DENSE_MAX = 2000  # a band of a model up to this size is listed from the dense solution
+
+
+@dataclass(frozen=True, eq=False)
+class Modes:
+    """Listed modes of M s² + P s + Q with per-mode errors, tolerances and classification."""
+
+    eigenvalues: np.ndarray
+    delta: np.ndarray
+    omega_n: np.ndarray
+    omega_d: np.ndarray
+    freq_hz: np.ndarray
+    zeta: np.ndarray
+    stability: list
+    kind: list
+    backward_error: np.ndarray
+    condition: np.ndarray
+    error_estimate: np.ndarray
+    tolerance: np.ndarray
+    vectors: np.ndarray  # reduced coordinates, one column per listed mode
+    shapes: np.ndarray  # full coordinates q = N x, normalized to max |component| = 1
+    dominant: list  # per mode: [(coordinate name, |component|), ...]
+    verdict: str
+    solver: str
+    solver_reason: str
+    n_infinite: int
+    all_eigenvalues: np.ndarray
+    tolerances: dict = field(default_factory=dict)
+    left_vectors: object = None  # conjugated left vectors ȳ of the listed modes (or None)
+    multiplicity: np.ndarray = None  # eigenvalues each listed mode stands for (pair 2, real 1)
+    accounting: dict = field(default_factory=dict)  # every eigenvalue accounted (module doc)
+    coverage: str = ""  # partial spectrum: what was computed ("" for the full spectrum)
+    partial: bool = False
+    complex_problem: bool = False
+    flags: list = field(default_factory=list)  # per mode: notes ("η above eta_warn", ...)
+
+    def __len__(self):
+        return self.eigenvalues.size
+
+    @property
+    def freq_n_hz(self) -> np.ndarray:
+        """Natural frequencies ω_n/2π = |s|/2π (Hz); ``freq_hz`` is the damped ω_d/2π."""
+        return self.omega_n / (2 * np.pi)
+
+    def __repr__(self):
+        n = len(self)
+        scope = f", {self.coverage}" if self.coverage else ""
+        if n == 0:
+            return f"<Modes: none listed, verdict {self.verdict}, solver {self.solver}{scope}>"
+        lo, hi = float(np.min(self.freq_n_hz)), float(np.max(self.freq_n_hz))
+        return (f"<Modes: {n} listed, f_n {lo:.4g} … {hi:.4g} Hz, verdict {self.verdict}, "
+                f"solver {self.solver}{scope}>")
+
+    def to_dataframe(self):
+        """The listed modes as a pandas DataFrame, one row a mode (index: mode number from 1):
+        eigenvalue parts, δ, ω_n, ω_d, f_n, f_d, ζ, stability, kind, η, κ, tolerance, dominant
+        coordinates.  pandas is optional: ImportError with the install hint when missing."""
+        try:
+            import pandas as pd
+        except ImportError:
+            raise ImportError("Modes.to_dataframe needs pandas (pip install pandas)") from None
+        n = len(self)
+        return pd.DataFrame({
+            "re": self.eigenvalues.real, "im": self.eigenvalues.imag, "delta": self.delta,
+            "omega_n": self.omega_n, "omega_d": self.omega_d, "freq_n_hz": self.freq_n_hz,
+            "freq_hz": self.freq_hz, "zeta": self.zeta, "stability": list(self.stability),
+            "kind": list(self.kind), "backward_error": self.backward_error,
+            "condition": self.condition, "tolerance": self.tolerance,
+            "dominant": [", ".join(nm for nm, _ in d) for d in self.dominant],
+        }, index=pd.RangeIndex(1, n + 1, name="mode"))
+
+    def table(self) -> str:
+        """Readable fixed-width table of the listed modes."""
+        head = (f"{'#':>3} {'Re s':>13} {'Im s':>13} {'delta':>11} {'omega_n':>11} "
+                f"{'f_n [Hz]':>11} {'f_d [Hz]':>11} "
+                f"{'zeta':>10} {'eta':>8}  {'stability':<9} {'kind':<11} dominant")
+        rows = [head, "-" * len(head)]
+        for k in range(len(self)):
+            s = self.eigenvalues[k]
+            dom = ", ".join(f"{nm}" for nm, _ in self.dominant[k][:3])
+            note = f"  [{'; '.join(self.flags[k])}]" if self.flags and self.flags[k] else ""
+            rows.append(
+                f"{k + 1:>3} {s.real:>13.6g} {s.imag:>13.6g} {self.delta[k]:>11.4g} "
+                f"{self.omega_n[k]:>11.6g} {self.freq_n_hz[k]:>11.6g} {self.freq_hz[k]:>11.6g} "
+                f"{self.zeta[k]:>10.3g} "
+                f"{self.backward_error[k]:>8.1e}  {self.stability[k]:<9} {self.kind[k]:<11} {dom}{note}"
+            )
+        if self.coverage:
+            rows.append(f"partial spectrum: {self.coverage}")
+        rows.append("f_n = omega_n/2pi = |s|/2pi (natural), f_d = omega_d/2pi (damped; 0 for a "
+                    "real eigenvalue)")
+        return "\n".join(rows)
