@@ -339,7 +339,7 @@ def _named_angles(model, q0, outputs):
             add(a["name"], drv.idx, drv.jac(q0)[0])
     for f in model.forces:
         if isinstance(f, TorsionalSpringDamper):
-            W, g = f._parts(q0, np.zeros(model.n))[:2]
+            W, g = f.torque_parts(q0, np.zeros(model.n))[:2]
             add(element_name(f.name), f.idx, g @ W)
     for o in outputs:
         if o.kind == "angle" and o.quantity == "angle":

@@ -190,10 +190,10 @@ def constraint_rank(Phi_q, rank_tol):
     if Phi_q.shape[0] == 0:
         return 0, np.zeros(0)
     s = sla.svd(dense(Phi_q), compute_uv=False)
-    return _rank(s, rank_tol), s
+    return rank_of(s, rank_tol), s
 
 
-def _rank(s, rank_tol):
+def rank_of(s, rank_tol):
     return int(np.sum(s > rank_tol * s[0])) if s.size and s[0] > 0 else 0
 
 
@@ -202,7 +202,7 @@ def null_space_basis(Phi_q, n, rank_tol):
     if Phi_q.shape[0] == 0:
         return np.eye(n), 0
     _, s, vt = sla.svd(dense(Phi_q), full_matrices=True)
-    rank = _rank(s, rank_tol)
+    rank = rank_of(s, rank_tol)
     return vt[rank:].T.copy(), rank
 
 

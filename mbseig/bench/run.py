@@ -295,7 +295,7 @@ def _large_worker(kind, n, n_modes):
     import scipy.sparse.linalg as spla
 
     from ..eigen import solve_partial
-    from ..eigen.partial import _bordered
+    from ..eigen.shift_invert import bordered as _bordered
 
     t0 = time.perf_counter()
     M, C, K, G = large_chain(n)

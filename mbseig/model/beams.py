@@ -177,7 +177,7 @@ class BeamElement(Force):
         _, l, _, _, phi = self._kinematics(self.nodes(q))
         return np.array([l - self.l0, phi[0], phi[1]])
 
-    def _parts(self, w):
+    def strain_parts(self, w):
         d, l, e, n, phi = self._kinematics(w)
         s, l0 = self.section, self.l0
         EA = s.E * s.A
@@ -197,12 +197,12 @@ class BeamElement(Force):
     # -- force element interface ------------------------------------------------------------
     def force(self, q, qd):
         w = self.nodes(q)
-        *_, B, Up, _ = self._parts(w)
+        *_, B, Up, _ = self.strain_parts(w)
         return -(self.nodes.C.T @ (B.T @ Up))
 
     def jacobians(self, q, qd):
         w = self.nodes(q)
-        d, l, e, n, B, Up, Upp = self._parts(w)
+        d, l, e, n, B, Up, Upp = self.strain_parts(w)
         H_l = _D.T @ (np.outer(n, n) / l) @ _D
         x, y = d
         r4 = (x * x + y * y) ** 2

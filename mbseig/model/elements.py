@@ -178,7 +178,7 @@ class SpringDamper(Force):
         return D.T @ Kf[0] @ D, D.T @ Cf[0] @ D
 
 
-def _angle_derivatives(v):
+def angle_derivatives(v):
     """Gradient and Hessian of the polar angle α = atan2(v_y, v_x)."""
     x, y = v
     r2 = x * x + y * y
@@ -195,7 +195,7 @@ def relative_angle(dirs: Affine, q, sense: float, name: str):
     ra, rb = ax * ax + ay * ay, bx * bx + by * by
     if ra == 0.0 or rb == 0.0:
         raise EquilibriumError("direction of zero length: angle undefined", element=name)
-    # g = sense [−∇α(a); ∇α(b)], H = sense diag(−∇²α(a), ∇²α(b)) (_angle_derivatives)
+    # g = sense [−∇α(a); ∇α(b)], H = sense diag(−∇²α(a), ∇²α(b)) (angle_derivatives)
     g = np.array([ay / ra, -ax / ra, -by / rb, bx / rb]) * sense
     sa, sb = -sense / (ra * ra), sense / (rb * rb)
     pa, ma, pb, mb = 2 * ax * ay * sa, (ay * ay - ax * ax) * sa, 2 * bx * by * sb, (by * by - bx * bx) * sb
@@ -225,7 +225,7 @@ class TorsionalSpringDamper(Force):
     def angle(self, q):
         return relative_angle(self.dirs, q, self.sense, self.name)[0]
 
-    def _parts(self, q, qd):
+    def torque_parts(self, q, qd):
         W = self.dirs.C
         theta, g, H = relative_angle(self.dirs, q, self.sense, self.name)
         dtheta = (theta - self.angle0 + math.pi) % (2 * math.pi) - math.pi
@@ -235,11 +235,11 @@ class TorsionalSpringDamper(Force):
         return W, g, H, wd, tau
 
     def force(self, q, qd):
-        W, g, H, wd, tau = self._parts(q, qd)
+        W, g, H, wd, tau = self.torque_parts(q, qd)
         return -tau * (W.T @ g)
 
     def jacobians(self, q, qd):
-        W, g, H, wd, tau = self._parts(q, qd)
+        W, g, H, wd, tau = self.torque_parts(q, qd)
         Kw = np.outer(g, self.stiffness * g + self.damping * (H @ wd)) + tau * H
         return W.T @ Kw @ W, self.damping * (W.T @ np.outer(g, g) @ W)
 

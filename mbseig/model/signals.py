@@ -112,8 +112,8 @@ def _element_direction(el, q, label):
         if d.size == 1:
             return -D[0]
         return -(D.T @ _line(el, d, label)[1])
-    if isinstance(el, TorsionalSpringDamper):  # planar and spatial (same _parts contract)
-        W, g = el._parts(q, np.zeros_like(q))[:2]
+    if isinstance(el, TorsionalSpringDamper):  # planar and spatial (same torque_parts contract)
+        W, g = el.torque_parts(q, np.zeros_like(q))[:2]
         return -(W.T @ g)
     if isinstance(el, FollowerForce):
         Cp = el.stacked.C[:2]
@@ -204,7 +204,7 @@ def _spring_parts(el, q, qd, label=None):
 
 
 def _torsional_parts(el, q, qd):
-    W, g = el._parts(q, qd)[:2]
+    W, g = el.torque_parts(q, qd)[:2]
     theta = el.angle(q)
     grad = g @ W
     rate = float(grad @ qd[el.idx])

@@ -35,7 +35,7 @@ from .affine import Affine, combine
 from .base import Force
 from .elements import TorsionalSpringDamper
 from .spatial_body import FRAME_SIZE, point_matrix, vector_matrix
-from .spatial_joints import QuadraticMap, Rows, _selectors, axis_angle
+from .spatial_joints import QuadraticMap, Rows, selectors, axis_angle
 
 __all__ = [
     "BodyMoment",
@@ -188,7 +188,7 @@ def bushing_rows(frames, locals_) -> QuadraticMap:
     """Strains of a bushing at a point: d = R₁ᵀ(P₂ − P₁) and the small rotation of b2 relative
     to b1 in b1's axes (module docstring), on the stacked frames."""
     z = combine([(1.0, frames[0]), (1.0, frames[1])], stack=True)
-    S1, S2 = _selectors()
+    S1, S2 = selectors()
     rows = Rows(z)
     D = point_matrix(locals_[1]) @ S2 - point_matrix(locals_[0]) @ S1
     E1 = [vector_matrix(e) @ S1 for e in np.eye(3)]
@@ -215,7 +215,7 @@ class SpatialTorsional(TorsionalSpringDamper):
     def angle(self, q):
         return float(axis_angle(self.rows, self.dirs(q))[0].real)
 
-    def _parts(self, q, qd):
+    def torque_parts(self, q, qd):
         W = self.dirs.C
         theta, g, H = axis_angle(self.rows, self.dirs(q))
         wd = W @ qd[self.idx]

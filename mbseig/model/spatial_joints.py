@@ -42,7 +42,7 @@ import numpy as np
 from .affine import Affine, combine
 from .base import Constraint
 from .driver import AngleDriver
-from .elements import _angle_derivatives
+from .elements import angle_derivatives
 from .spatial_body import FRAME_SIZE, point_matrix, vector_matrix
 
 __all__ = [
@@ -194,7 +194,7 @@ def normal_pair(a):
     return p, np.cross(a, p)
 
 
-def _selectors():
+def selectors():
     S1 = np.hstack([np.eye(FRAME_SIZE), np.zeros((FRAME_SIZE, FRAME_SIZE))])
     return S1, np.roll(S1, FRAME_SIZE, axis=1)
 
@@ -208,7 +208,7 @@ def joint_rows(kind: str, frames, locals_, axes, length: float) -> QuadraticMap:
     of position rows.
     """
     z = combine([(1.0, frames[0]), (1.0, frames[1])], stack=True)
-    S1, S2 = _selectors()
+    S1, S2 = selectors()
     rows = Rows(z)
     P = (point_matrix(locals_[0]) @ S1 - point_matrix(locals_[1]) @ S2) / length
     V1 = lambda e: vector_matrix(e) @ S1
@@ -243,7 +243,7 @@ def angle_rows(frames, axis) -> QuadraticMap:
     """x = p₁·p₂ and y = q̂₁·p₂ on the two frames: θ = atan2(y, x) is the rotation of b2
     relative to b1 about ``axis`` (right-handed), zero at the reference."""
     z = combine([(1.0, frames[0]), (1.0, frames[1])], stack=True)
-    S1, S2 = _selectors()
+    S1, S2 = selectors()
     p, qn = normal_pair(axis)
     p2 = vector_matrix(p) @ S2
     return (Rows(z).dot(vector_matrix(p) @ S1, p2).dot(vector_matrix(qn) @ S1, p2)).build()
@@ -253,7 +253,7 @@ def axis_angle(rows: QuadraticMap, z):
     """(θ, ∇θ, ∇²θ) with respect to z of θ = atan2(y, x), (x, y) the two rows of ``rows``."""
     xy = rows.values(z)
     G = rows.grad(z)
-    gv, Hv = _angle_derivatives(xy)
+    gv, Hv = angle_derivatives(xy)
     theta = np.arctan2(xy[1], xy[0])
     return theta, gv @ G, G.T @ Hv @ G + rows.weighted(gv)
 

@@ -27,7 +27,7 @@ from ..errors import EquilibriumError
 from ..model.elements import DistanceConstraint
 from ..numerics import (
     LazyModule,
-    _rank,
+    rank_of,
     blas_limit,
     constraint_rank,
     coo_sum,
@@ -281,5 +281,5 @@ def multipliers(Phi_q, g, rank_tol, *, check):
         lam, _, _, sv = sla.lstsq(dense(Phi_q).T, g, lapack_driver="gelsd")
     # the rank from the same SVD (gelsd's singular values of Φ_qᵀ are Φ_q's), as
     # constraint_rank decides it
-    rank = _rank(sv, rank_tol) if check else m
+    rank = rank_of(sv, rank_tol) if check else m
     return lam, rank, "SVD of Φ_q"
