@@ -35,7 +35,7 @@ def figure(**kw):
     return Figure(**kw)
 
 
-def cmap(name):
+def colormap(name):
     import matplotlib
 
     return matplotlib.colormaps[name]

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..errors import CaseError
 from .common import (
-    cmap,
+    colormap,
     figure,
     nice_levels,
     save,
@@ -140,7 +140,7 @@ def speed_accuracy(res):
     rows = [r for r in res["rows"] if r["section"] in ("dense", "structured", "partial", "jacobians")
             and isinstance(r.get("error"), float) and math.isfinite(r["error"])]
     methods = list(dict.fromkeys(f"{r['section']}: {r['method']}" for r in rows))
-    colors = cmap("tab20").colors  # one colour per method (tab10 repeats after ten)
+    colors = colormap("tab20").colors  # one colour per method (tab10 repeats after ten)
     for k, m in enumerate(methods):
         pts = [r for r in rows if f"{r['section']}: {r['method']}" == m]
         x = [r["time"] for r in pts]

@@ -11,7 +11,7 @@ import numpy as np
 from .common import (
     LINESTYLES,
     axis_label,
-    cmap,
+    colormap,
     decade_scale,
     figure,
     line_label,
@@ -30,7 +30,7 @@ def root_locus(res):
 
     fig = figure(figsize=(8.5, 5))
     ax = fig.subplots()
-    cmap = cmap("tab10")
+    cmap = colormap("tab10")
     modes_seen = {}
     for l, S in enumerate(res.tracks):
         numbers = mode_numbers(res, l)
@@ -80,7 +80,7 @@ def modes_vs_parameter(res):
 
     fig = figure(figsize=(8.5, 6))
     a1, a2 = fig.subplots(2, 1, sharex=True)
-    cmap = cmap("tab10")
+    cmap = colormap("tab10")
     x = np.asarray(res.values, float)
     modes_seen = {}
     for l, S in enumerate(res.tracks):
@@ -236,7 +236,7 @@ def stability_chart(res):
     first grid point was stable shaded."""
     fig = figure(figsize=(7, 5.4))
     ax = fig.subplots()
-    cmap = cmap("tab10")
+    cmap = colormap("tab10")
     along = res.curves[0]["along"] if res.curves else ""
     for i, c in enumerate(res.curves):
         pts = sorted((p for p in c["points"] if p["value"] is not None), key=lambda p: p["p2"])

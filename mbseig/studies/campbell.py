@@ -30,6 +30,7 @@ from ..model.spatial_whirl import rotors, whirl
 from ..numerics import jsonable
 from ..statics import equilibrium, solved
 from .point import as_spec
+from .records import CampbellPoint
 from .runners import Runner
 from .sweep import mac_matrix, track_line
 
@@ -43,16 +44,16 @@ def campbell_point(case, config, params):
         eq = equilibrium(model)
         md = modes(linearize(model, eq))
     except MbseigError as exc:
-        return {"params": dict(params), "error": exc.one_line()}
+        return CampbellPoint(params=dict(params), error=exc.one_line())
     model = solved(model, eq)
     rs = rotors(model)
     if not rs:
-        return {"params": dict(params), "error": f"{model.name}: the model has no rotor"}
-    return {"params": dict(params), "error": None, "eigenvalues": md.eigenvalues,
-            "shapes": md.shapes, "tol": md.tolerance, "kind": list(md.kind),
-            "stability": list(md.stability), "speed": float(rs[0].speed),
-            "whirl": [whirl(model, eq.q, md.shapes[:, k], md.eigenvalues[k])
-                      for k in range(len(md))]}
+        return CampbellPoint(params=dict(params), error=f"{model.name}: the model has no rotor")
+    return CampbellPoint(params=dict(params), error=None, eigenvalues=md.eigenvalues,
+                         shapes=md.shapes, tol=md.tolerance, kind=list(md.kind),
+                         stability=list(md.stability), speed=float(rs[0].speed),
+                         whirl=[whirl(model, eq.q, md.shapes[:, k], md.eigenvalues[k])
+                                for k in range(len(md))])
 
 
 def speed_parameter(case, name, values, *, config=None, fixed=None) -> bool:

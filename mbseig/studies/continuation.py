@@ -25,6 +25,8 @@ settings are reused (``record["commands"]``).
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from ..eigen import solve_qep
@@ -41,6 +43,7 @@ from ..statics.reactions import posture
 from ..statics.result import finish
 from ..statics.solve import solve_statics
 from ..statics.stiffness import static_stability
+from .records import SweepPoint
 
 __all__ = ["sweep_line", "family_maker", "modal_point", "DIAGRAM_MODES_MAX"]
 
@@ -87,10 +90,10 @@ def modal_point(model, eq, params, *, safety, stability_rtol):
         verdict = worst(stability(-s.real, tol, rigid))
     out_of_range = ([p["name"] for p in posture(model, eq.q) if not p["in_range"]]
                     if (getattr(model, "report", None) or {}).get("angles") else [])
-    return {"params": dict(params), "error": None, "eigenvalues": s, "shapes": X, "tol": tol,
-            "verdict": verdict, "out_of_range": out_of_range, "solver": solver,
-            "q": np.asarray(eq.q, float), "iterations": int(eq.iterations),
-            "static": (eq.static or {}).get("verdict")}
+    return SweepPoint(params=dict(params), error=None, eigenvalues=s, shapes=X, tol=tol,
+                      verdict=verdict, out_of_range=out_of_range, solver=solver,
+                      q=np.asarray(eq.q, float), iterations=int(eq.iterations),
+                      static=(eq.static or {}).get("verdict"))
 
 
 def _angles(model, q):
@@ -152,13 +155,12 @@ def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rto
                 eq = equilibrium(model, offer_stable=False, self_stress="report")
                 how = "cold"
             eq = examine(eq, offer_stable=False, self_stress="report")
-            pt = modal_point(eq.model, eq, point_params(v), **opts)
-            pt["statics"] = how
+            pt = replace(modal_point(eq.model, eq, point_params(v), **opts), statics=how)
             if bp is not None:
-                pt["segment"], pt["branch_kind"] = bp.segment, bp.kind
-                pt["corrector_iterations"] = bp.iterations
+                pt = replace(pt, segment=bp.segment, branch_kind=bp.kind,
+                             corrector_iterations=bp.iterations)
         except MbseigError as exc:
-            pt = {"params": point_params(v), "error": exc.one_line()}
+            pt = SweepPoint.failed(point_params(v), exc.one_line())
         points.append(pt)
     out = {"points": points, "branch": [], "events": [], "record": {}}
     if branch is None:

@@ -44,7 +44,7 @@ import csv
 import itertools
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -53,10 +53,21 @@ from .. import plots
 from ..errors import CaseError, MbseigError
 from ..numerics import jsonable
 from ..statics import equilibrium
-from .boundaries import (AMBIGUOUS_MAC, BEND, CONJUGATE_PENALTY, DISTANCE_WEIGHT, MAX_INSERT,
-                         Evaluator, follow_boundary, locate, mac_matrix, match_cost)
+from .boundaries import (
+    AMBIGUOUS_MAC,
+    BEND,
+    CONJUGATE_PENALTY,
+    DISTANCE_WEIGHT,
+    MAX_INSERT,
+    Evaluator,
+    follow_boundary,
+    locate,
+    mac_matrix,
+    match_cost,
+)
 from .continuation import modal_point, sweep_line
 from .point import as_spec
+from .records import Boundary, BoundaryCurve, Fold, SweepPoint
 from .runners import Runner, progress_bar
 
 __all__ = ["parse_range", "SweepResult", "run_sweep", "evaluate_point", "mac_matrix",
@@ -95,10 +106,9 @@ def evaluate_point(case, config, params, *, safety=10.0, stability_rtol=1e-12, q
         model = case.build(config, **params)
         eq = equilibrium(model, q_init=q_init, offer_stable=False, self_stress="report")
         pt = modal_point(eq.model, eq, params, safety=safety, stability_rtol=stability_rtol)
-        pt["statics"] = "cold"
-        return pt
+        return replace(pt, statics="cold")
     except MbseigError as exc:
-        return {"params": dict(params), "error": exc.one_line()}
+        return SweepPoint.failed(params, exc.one_line())
 
 
 def _match_cost(ref_s, ref_shapes, s, shapes, scale):
@@ -338,12 +348,13 @@ class SweepResult:
             lines.append({"fixed": {k: float(v) for k, v in fixed.items()}, "points": pts,
                           "tracks": tracks, "branch": branch,
                           "continuation": self.records[l] if self.records else None})
-        bounds = [{k: v for k, v in b.items() if k not in ("shape", "q")} for b in self.boundaries]
+        bounds = [b.to_json() for b in self.boundaries]
         return jsonable({
             "case": self.case, "config": self.config,
             "fixed": {k: v for k, v in self.fixed.items()},
             "axes": [{"name": n, "values": [float(x) for x in v]} for n, v in self.axes],
-            "lines": lines, "boundaries": bounds, "folds": self.folds, "curves": self.curves,
+            "lines": lines, "boundaries": bounds, "folds": [f.to_json() for f in self.folds],
+            "curves": [c.to_json() for c in self.curves],
             "diagram": self.diagram, "tolerances": self.tolerances,
         })
 
@@ -441,31 +452,24 @@ def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None,
             onset = "loss" if -S[k, j].real + tols[l][k, j] >= 0 else "recovery"
             un = S[k + 1, j] if onset == "loss" else S[k, j]
             real = abs(un.imag) <= max(tols[l][k + 1 if onset == "loss" else k, j], 1e-12 * abs(un))
-            boundaries.append({
-                "line": l, "fixed": {n: float(v) for n, v in lines[l].items()},
-                "parameter": axis0, "value": res["value"], "track": int(j),
-                "bracket": [float(values0[k]), float(values0[k + 1])],
-                "eigenvalue": res["eigenvalue"],
-                "kind": "divergence" if real else "flutter",
-                "stability": onset, "converged": res["converged"],
-                "function_calls": res["function_calls"], "xtol": xtol,
-                "event": "crossing", "method": res["method"], "test": res["test"],
-                "band": res["band"],
-                "tolerance": res["tolerance"], "shape": res["shape"], "q": res["q"],
-            })
+            boundaries.append(Boundary.crossing(
+                line=l, fixed={n: float(v) for n, v in lines[l].items()}, parameter=axis0,
+                track=int(j), bracket=[float(values0[k]), float(values0[k + 1])],
+                kind="divergence" if real else "flutter", stability=onset, xtol=xtol,
+                found=res))
         boundaries = _merge_conjugates(boundaries, xtol)
         folds = []
         for l, evs in enumerate(events):
             for e in evs:
                 if e.get("type") not in ("fold", "branch point") or e.get("located") is False:
                     continue
-                rec = {"line": l, "fixed": {n: float(v) for n, v in lines[l].items()},
-                       "parameter": axis0, "value": float(e["p"]), "type": e["type"],
-                       "branch": ("turns " + e["turns"]) if e.get("turns") else
-                                 ("switched to the stable branch" if e.get("switched") else
-                                  "continues"),
-                       "before": e.get("before"), "after": e.get("after"), "dof": e.get("dof"),
-                       "angles": e.get("angles")}
+                rec = Fold(line=l, fixed={n: float(v) for n, v in lines[l].items()},
+                           parameter=axis0, value=float(e["p"]), type=e["type"],
+                           branch=("turns " + e["turns"]) if e.get("turns") else
+                                  ("switched to the stable branch" if e.get("switched") else
+                                   "continues"),
+                           before=e.get("before"), after=e.get("after"), dof=e.get("dof"),
+                           angles=e.get("angles"))
                 folds.append(rec)
                 if not e.get("dof"):
                     continue
@@ -473,16 +477,7 @@ def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None,
                 if e["type"] == "fold" and before == after:
                     continue
                 onset = "recovery" if before == "unstable" and after != "unstable" else "loss"
-                boundaries.append({
-                    "line": l, "fixed": rec["fixed"], "parameter": axis0, "value": rec["value"],
-                    "track": None, "bracket": None, "eigenvalue": [0.0, 0.0],
-                    "kind": "divergence", "stability": onset, "converged": True,
-                    "function_calls": 0, "xtol": xtol, "event": e["type"],
-                    "branch": rec["branch"],
-                    "method": ("fold of the branch: dp/ds = 0 by Brent's method on the arclength"
-                               if e["type"] == "fold" else
-                               "branch point: det of the bordered Jacobian changes sign (bisection)"),
-                    "band": [rec["value"], rec["value"]], "tolerance": 0.0})
+                boundaries.append(Boundary.at_event(rec, stability=onset, xtol=xtol))
         boundaries.sort(key=lambda b: (b["line"], b["value"]))
         curve_list = []
         if curves and len(axes) == 2 and continuation:
@@ -518,9 +513,9 @@ def _curves(runner, case, config, fixed, axes, lines, boundaries, span, xtol, op
     found = runner.map(curve_task, calls, "curves")
     out = []
     for b, pts in zip(starts, found):
-        out.append({"parameter": axis0, "along": axis2, "stability": b["stability"],
-                    "kind": b["kind"], "start": b["value"], "points": pts,
-                    "bend": BEND, "max_insert": MAX_INSERT, "xtol": xtol})
+        out.append(BoundaryCurve(parameter=axis0, along=axis2, stability=b["stability"],
+                                 kind=b["kind"], start=b["value"], points=pts, bend=BEND,
+                                 max_insert=MAX_INSERT, xtol=xtol))
     return out
 
 
