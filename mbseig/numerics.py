@@ -24,7 +24,7 @@ import scipy.sparse as sp
 
 from .errors import MbseigError, NumericalError
 
-__all__ = ["LazyModule", "scatter", "coo_sum", "dense", "constraint_rank", "null_space_basis", "colnorm",
+__all__ = ["LazyModule", "min_norm_projection", "scatter", "coo_sum", "dense", "constraint_rank", "null_space_basis", "colnorm",
            "unit_columns", "jsonable", "nonfinite", "require_finite", "watched", "DOUBLE_RANGE",
            "blas_limit", "element_name", "user_names"]
 
@@ -324,3 +324,24 @@ def blas_limit(n):
             _BLAS_CONTROLLER.append(ThreadpoolController())
     controller = _BLAS_CONTROLLER[0]
     return contextlib.nullcontext() if controller is None else controller.limit(limits=n)
+
+
+def min_norm_projection(residual, jacobian, x, scales, *, tol, max_iter):
+    """x moved onto residual(x) = 0 by Gauss–Newton with minimum-norm steps
+    (x ← x − J⁺ r, J = jacobian(x)), the one projector onto the constraints (mode-shape drawings,
+    the time-domain check).  Returns (x, max |r_k|/scale_k before the last step taken, converged,
+    the sum of the steps)."""
+    x = np.array(x, dtype=float)
+    total = np.zeros_like(x)
+    res = math.inf
+    for _ in range(max_iter):
+        r = np.asarray(residual(x), float)
+        res = float(np.max(np.abs(r) / scales, initial=0.0))
+        if res <= tol:
+            return x, res, True, total
+        J = jacobian(x)
+        J = J.toarray() if hasattr(J, "toarray") else np.asarray(J)
+        step = -np.linalg.lstsq(J, r, rcond=None)[0]
+        x += step
+        total += step
+    return x, res, False, total

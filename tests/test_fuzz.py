@@ -277,7 +277,7 @@ def classify(r) -> tuple[str, str]:
 # counted and reported (an xfail naming the area), not failed here; tests/test_input_rules.py
 # holds the eigen area's minimal reproductions
 AREAS = {
-    "eigen area, issue 13/17 eigen part": ("mbseig/eigen/", "mbseig/modal.py",
+    "eigen area, issue 13/17 eigen part": ("mbseig/eigen/", "mbseig/modal/",
                                            "mbseig/casefile/matrices.py", "mbseig.eigen",
                                            "mbseig.modal"),
     "statics area, issue 10": ("mbseig/statics/", "mbseig.statics"),

@@ -163,11 +163,9 @@ class Batcher:
         if fixed:
             idx = np.full((nb, dim), -1, dtype=np.intp)
         else:
-            start = len(b.q_init)
-            idx = np.arange(start, start + nb * dim, dtype=np.intp).reshape(nb, dim)
             axes = "xyz"[:dim]
-            b.coord_names += [f"{nm}.{ax}" for nm in names for ax in axes]
-            b.q_init += pos.ravel().tolist()
+            idx = b.assembly.coordinates([f"{nm}.{ax}" for nm in names for ax in axes],
+                                         pos.ravel().tolist(), "length").reshape(nb, dim)
         b.point_index.update(zip(names, idx))
         b.point_pos.update(zip(names, pos))
         self._register(names, idx, pos)

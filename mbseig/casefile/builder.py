@@ -14,6 +14,7 @@ import scipy.sparse as sp
 
 from ..errors import CaseError
 from ..model.affine import Affine, combine
+from ..model.assembly import Assembly
 from ..model.driver import AngleDriver, check_command
 from ..model.elements import (
     DistanceConstraint,
@@ -58,8 +59,7 @@ class Builder:
         self.dim = dim
         self.point_index: dict[str, np.ndarray] = {}  # name → coordinate indices (−1: fixed)
         self.point_pos: dict[str, np.ndarray] = {}
-        self.coord_names: list[str] = []
-        self.q_init: list[float] = []
+        self.assembly = Assembly()  # coordinates with their kinds, element ends
         self.bodies: dict[str, dict] = {}
         self.markers: dict[str, Affine] = {}
         self.named: dict[str, tuple] = {}  # element name → ("joint" | "force", index, label)
@@ -69,6 +69,14 @@ class Builder:
         self.mass_parts: list = []  # (name, idx, block) of every body and mass (modal energy)
         self._affine: dict[str, Affine] = {}  # point maps, made once a build (affine_of)
         self._dirs: dict[tuple, Affine] = {}  # body directions, made once a build (body_dir)
+
+    @property
+    def coord_names(self) -> list:
+        return self.assembly.names
+
+    @property
+    def q_init(self) -> list:
+        return self.assembly.values
 
     # -- points ------------------------------------------------------------------------
     def build(self):
@@ -86,9 +94,8 @@ class Builder:
             if fixed:
                 idx = np.full(self.dim, -1, dtype=np.intp)
             else:
-                idx = np.arange(len(self.q_init), len(self.q_init) + self.dim, dtype=np.intp)
-                self.coord_names += [f"{pname}.{_AXES[a]}" for a in range(self.dim)]
-                self.q_init += list(pos)
+                idx = self.assembly.coordinates([f"{pname}.{_AXES[a]}" for a in range(self.dim)],
+                                                pos, "length")
             self.point_index[pname] = idx
             self.point_pos[pname] = pos
         flex = any(k in self.data for k in ("beams", "fe_bodies", "refinement"))
@@ -207,7 +214,8 @@ class Builder:
             expected=self.expected, report=report, commands=commands,
             mass_elements=tuple(mass_elements), flexible=flexible_record,
             inputs=inputs, outputs=outputs, gravity_force=self.gravity_force,
-            mass_parts=tuple(self.mass_parts),
+            mass_parts=tuple(self.mass_parts), coordinate_kinds=tuple(self.assembly.kinds),
+            element_ends=dict(self.assembly.element_ends),
         )
 
     def _remember(self, item, kind, elements, before, label):
@@ -294,6 +302,20 @@ class Builder:
                                                    b["length"])
         return aff
 
+    def record_ends(self, element, f, key):
+        """Record the named points (basic points or body markers) the two-point references
+        ``key`` of ``element`` name, in the order of its difference map; an inline reference
+        ({body, local}) names no point and records nothing."""
+        refs = f.t.get(key)
+        names = [template(r, f.names, f) if isinstance(r, str) else None for r in refs]
+        if all(n in self.point_index or n in self.markers for n in names):
+            self.assembly.ends(element, *names)
+
+    def record_bodies(self, element, f):
+        """Record the two bodies (None for the ground) ``element`` acts between."""
+        names = [template(str(n), f.names, f) for n in f.t.get("bodies")]
+        self.assembly.ends(element, "bodies", *(None if n == "ground" else n for n in names))
+
     def two_points(self, f):
         pts = f.raw("points")
         if not isinstance(pts, list) or len(pts) != 2:
@@ -320,6 +342,7 @@ class Builder:
             L = f.num("length", float(np.linalg.norm(diff(self.q0))), positive=True)
             f.done()
             self.add_constraint(constraints, DistanceConstraint(f.label, diff, L), f)
+            self.record_ends(f.label, f, "points")
         elif kind == "fixed":
             p = self.point_ref(f, "point")
             target = f.vec("position", self.dim, p(self.q0))
@@ -418,6 +441,7 @@ class Builder:
                 raise f.error("free_length must not be negative")
             if diff.idx.size:
                 forces.append(SpringDamper(f.label, diff, k, l0, c))
+                self.record_ends(f.label, f, "points")
         elif kind == "torsional":
             if self.dim != 2:
                 raise f.error("torsional springs need dimension = 2")
@@ -429,6 +453,7 @@ class Builder:
             f.done()
             if stacked.idx.size:
                 forces.append(TorsionalSpringDamper(f.label, stacked, k, c, a0, sense))
+                self.record_bodies(f.label, f)
         elif kind == "force":
             p = self.point_ref(f, "point")
             vec = f.vec("vector", self.dim)

@@ -32,7 +32,13 @@ import numpy as np
 
 from ..errors import CaseError, ReportedWarning
 from ..model.affine import Affine, combine
-from ..model.beams import THEORIES, BeamElement, BeamSection, RotationLock, section_properties
+from ..model.beams import (
+    THEORIES,
+    BeamElement,
+    BeamSection,
+    RotationLock,
+    section_properties,
+)
 from ..model.fe_body import LinearFEBody
 from .fields import Fields, check_range, expand, template
 from .matrices import matrix_value
@@ -70,11 +76,8 @@ class _BeamSpec:
 
 
 # ---------------------------------------------------------------------------------------------
-def _new_coord(b, name, value):
-    k = len(b.q_init)
-    b.coord_names.append(name)
-    b.q_init.append(float(value))
-    return k
+def _new_coord(b, name, value, kind):
+    return b.assembly.coordinate(name, value, kind)
 
 
 def _parse_ends(f):
@@ -204,14 +207,14 @@ def allocate(b, mesh=None):
                 spec.pos_idx.append(b.point_index[p])
             else:
                 r = xa + chord * (i / n)
-                idx = [_new_coord(b, f"{spec.name}.n{i}.{ax}", r[a]) for a, ax in enumerate("xy")]
+                idx = [_new_coord(b, f"{spec.name}.n{i}.{ax}", r[a], "length") for a, ax in enumerate("xy")]
                 spec.node_pos.append(r)
                 spec.pos_idx.append(np.array(idx, dtype=np.intp))
             end = 0 if i == 0 else 1 if i == n else None
             if end is not None and spec.ends[end] == "clamped":
                 spec.theta_idx.append(-1)
             else:
-                spec.theta_idx.append(_new_coord(b, f"{spec.name}.n{i}.theta", spec.theta0))
+                spec.theta_idx.append(_new_coord(b, f"{spec.name}.n{i}.theta", spec.theta0, "angle"))
         for msg in spec.warnings:
             warnings.warn(f"{label}: {msg}", BeamTheoryWarning, stacklevel=4)
         b.beam_specs.append(spec)
@@ -254,8 +257,8 @@ def _fe_spec(b, f):
             raise f.error(f"{key} matrix is not symmetric")
     theta_idx = []
     for p, rot in zip(iface, rots):
-        theta_idx.append(-1 if rot == "clamped" else _new_coord(b, f"{name}.{p}.theta", 0.0))
-    eta_idx = [_new_coord(b, f"{name}.eta{k + 1}", 0.0) for k in range(M.shape[0] - n_if)]
+        theta_idx.append(-1 if rot == "clamped" else _new_coord(b, f"{name}.{p}.theta", 0.0, "angle"))
+    eta_idx = [_new_coord(b, f"{name}.eta{k + 1}", 0.0, "modal") for k in range(M.shape[0] - n_if)]
     return {"name": name, "label": f.label, "M": M, "K": K, "interface": iface, "ndof": ndof,
             "rotations": list(rots), "theta_idx": theta_idx, "eta_idx": eta_idx}
 

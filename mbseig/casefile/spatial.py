@@ -122,12 +122,12 @@ class SpatialBuilder(Builder):
         self.specs.append({"name": bname, "f": f, "origin": origin, "triad": triad})
 
     def _allocate(self, bname, values):
-        k = len(self.q_init)
-        n = len(values)
-        axes = "xyz" if n == 3 else [f"{v}.{a}" for v in "uvw" for a in "xyz"]
-        self.coord_names += [f"{bname}.{a}" for a in axes]
-        self.q_init += [float(v) for v in values]
-        return np.arange(k, k + n, dtype=np.intp)
+        """A body's basic point at its centre of mass (3 values, lengths) or its unit vectors
+        u, v, w (9 values, directions)."""
+        if len(values) == 3:
+            return self.assembly.coordinates([f"{bname}.{a}" for a in "xyz"], values, "length")
+        return self.assembly.coordinates([f"{bname}.{v}.{a}" for v in "uvw" for a in "xyz"],
+                                         values, "direction")
 
     def _bind(self):
         """Frames of the bodies once the points exist, and the length scale of the model (its

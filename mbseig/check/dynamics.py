@@ -17,7 +17,7 @@ import scipy.linalg as sla
 
 from ..errors import CaseError, SimulationError
 from ..model.linear_case import LinearCase
-from ..numerics import dense, null_space_basis
+from ..numerics import dense, min_norm_projection, null_space_basis
 
 __all__ = ["ForwardDynamics", "Simulation", "simulate", "INTEGRATORS"]
 
@@ -135,17 +135,10 @@ class ForwardDynamics:
         """Minimum-norm corrections onto Φ(q₀ + u) = 0 and Φ_q v = 0; returns (u, v, |Δu|, |Δv|)."""
         if self.m == 0:
             return u, v, 0.0, 0.0
-        u = u.copy()
-        du_total = np.zeros_like(u)
-        for _ in range(max_iter):
-            q = self.q0 + u
-            r = self.phi(q)
-            if np.max(np.abs(r) / self.cscale) <= self.projection_tol:
-                break
-            du = -np.linalg.lstsq(self.phi_q(q), r, rcond=None)[0]
-            u += du
-            du_total += du
-        else:
+        u, _, converged, du_total = min_norm_projection(
+            lambda x: self.phi(self.q0 + x), lambda x: self.phi_q(self.q0 + x), u, self.cscale,
+            tol=self.projection_tol, max_iter=max_iter)
+        if not converged:
             raise SimulationError(
                 "position projection onto the constraints did not converge (the motion left the "
                 "region where the constraints can be satisfied)", element="time-domain check")
@@ -182,7 +175,9 @@ def simulate(dynamics: ForwardDynamics, u0, v0, t_eval, *, segment_samples: int,
              atol_velocity: float) -> Simulation:
     """Integrate from (u0, v0) through the sample times ``t_eval`` (t_eval[0] = 0), projecting
     onto the constraints every ``segment_samples`` samples."""
-    from scipy.integrate import solve_ivp  # imported here: it costs ~0.2 s at import mbseig
+    from scipy.integrate import (
+        solve_ivp,  # imported here: it costs ~0.2 s at import mbseig
+    )
 
     if method not in INTEGRATORS:
         raise CaseError(f"unknown integrator {method!r} (one of {', '.join(INTEGRATORS)})",

@@ -86,7 +86,7 @@ evaluations, 158 s, for 20 of its periods; capped, 2 % of that); a capped run sa
 ``unresolved`` and its resolutions u_δ, u_ω widen accordingly.
 
 Rigid-body modes (s = 0) are not fitted (the reason is recorded); instead a static probe of the
-nonlinear model checks that it offers no restoring force along them (see :func:`_probe_rigid`),
+nonlinear model checks that it offers no restoring force along them (see :func:`probe_rigid`),
 compared with the force and stiffness scale of the points that mode moves, so a linearization
 that turns an oscillation into a rigid-body mode cannot pass either, whatever else the model
 holds.
@@ -96,176 +96,26 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 
 import numpy as np
 
 from ..errors import CaseError, SimulationError
 from ..model.linear_case import LinearCase
-from ..plots import plot_check
 from ..statics import solved
 from ..statics.reactions import reaction_forces
 from .dynamics import ForwardDynamics, simulate
+from .fit import (
+    amplification,
+    fit_exponential,
+    judge,
+    left_row,
+    probe_rigid,
+    smaller_amplitude,
+)
+from .result import CheckResult, ModeCheck
 
 __all__ = ["CheckResult", "ModeCheck", "check_modes", "parse_mode_list"]
-
-
-# ---------------------------------------------------------------------------------------------
-# Results
-# ---------------------------------------------------------------------------------------------
-@dataclass(frozen=True, eq=False)
-class ModeCheck:
-    """Predicted vs measured δ, ω of one listed mode (1-based ``index`` as in the modes table).
-
-    ``skipped`` holds the reason when the mode was not simulated; a rigid-body mode is then
-    probed statically (``probe_omega`` = ω_eff against ``probe_reference`` = ω_ref) and
-    ``passed`` is the probe's verdict (None for a mode neither simulated nor probed).
-    Arrays ``t``, ``eta`` (modal coordinate) and ``response`` (the dominant coordinate's
-    deviation, named ``coordinate``) are kept for plots.
-    """
-
-    index: int
-    kind: str
-    eigenvalue: complex
-    predicted_delta: float
-    predicted_omega: float
-    measured_delta: float = math.nan
-    measured_omega: float = math.nan
-    rel_error_delta: float = math.nan
-    rel_error_omega: float = math.nan
-    passed: bool | None = None
-    skipped: str = ""
-    duration: float = 0.0
-    periods: float = 0.0
-    efolds: float = 0.0
-    amplitude: float = 0.0
-    fit_residual: float = math.nan
-    fit_amplitude: float = math.nan
-    constraint_drift: float = 0.0
-    velocity_drift: float = 0.0
-    max_projection: float = 0.0
-    nfev: int = 0
-    elapsed: float = 0.0
-    coordinate: str = ""
-    probe_omega: float = math.nan
-    probe_reference: float = math.nan
-    se_delta: float = math.nan  # standard errors of the fitted slopes
-    se_omega: float = math.nan
-    amplification: float = math.nan  # state errors → modal coordinate (≈ 1; ≫ 1 near a defect)
-    amplitude_share_delta: float = 0.0  # |δ(a) − δ(a/10)| when re-run at a tenth (else 0)
-    amplitude_share_omega: float = 0.0
-    resolution_delta: float = math.nan  # u_δ: what the run resolves of δ
-    resolution_omega: float = math.nan  # u_ω
-    tolerance_delta: float = math.nan  # the δ tolerance applied: max(delta_rtol·|δ_p|, u_δ)
-    tolerance_omega: float = math.nan
-    capped: bool = False  # the run was cut at max_fast_periods of the fastest mode
-    unresolved: str = ""  # what the run could not resolve (empty: everything asked)
-    t: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    eta: np.ndarray = field(default_factory=lambda: np.zeros(0, complex))
-    response: np.ndarray = field(default_factory=lambda: np.zeros(0))
-
-    def to_dict(self) -> dict:
-        skipped = bool(self.skipped)
-        num = (lambda x: None) if skipped else float
-        return {
-            "index": self.index,
-            "kind": self.kind,
-            "eigenvalue": [float(self.eigenvalue.real), float(self.eigenvalue.imag)],
-            "predicted": {"delta": float(self.predicted_delta),
-                          "omega": float(self.predicted_omega)},
-            "measured": {"delta": num(self.measured_delta), "omega": num(self.measured_omega)},
-            "rel_error": {"delta": num(self.rel_error_delta), "omega": num(self.rel_error_omega)},
-            "passed": self.passed,
-            "skipped": self.skipped or None,
-            "duration": float(self.duration),
-            "periods": float(self.periods),
-            "efolds": float(self.efolds),
-            "amplitude": float(self.amplitude),
-            "fit_residual": num(self.fit_residual),
-            "constraint_drift": float(self.constraint_drift),
-            "velocity_drift": float(self.velocity_drift),
-            "max_projection": float(self.max_projection),
-            "nfev": int(self.nfev),
-            "elapsed": float(self.elapsed),
-            "coordinate": self.coordinate,
-            "probe": None if math.isnan(self.probe_omega) else {
-                "omega_eff": float(self.probe_omega), "omega_ref": float(self.probe_reference)},
-            "resolution": {"delta": num(self.resolution_delta), "omega": num(self.resolution_omega)},
-            "tolerance": {"delta": num(self.tolerance_delta), "omega": num(self.tolerance_omega)},
-            "capped": bool(self.capped),
-            "unresolved": self.unresolved or None,
-        }
-
-
-@dataclass(frozen=True, eq=False)
-class CheckResult:
-    """Outcome of :func:`check_modes`: one :class:`ModeCheck` per requested mode.
-
-    ``passed`` is True when no mode failed (neither a fit nor a rigid-body probe); ``tolerances``
-    records every tolerance and option used; ``reactions`` are the equilibrium constraint
-    reactions (see :func:`reaction_forces`) and ``actuators`` the inverse-statics driver records
-    (effort per actuator, :mod:`mbseig.inverse_statics`) of the model, if it has any.
-    """
-
-    name: str
-    parameters: dict
-    modes: tuple
-    tolerances: dict
-    integrator: str
-    elapsed: float
-    reactions: tuple = ()
-    constraint_stiffness: bool = True
-    actuators: tuple = ()
-
-    @property
-    def passed(self) -> bool:
-        return not any(m.passed is False for m in self.modes)
-
-    @property
-    def failed(self) -> list:
-        return [m.index for m in self.modes if m.passed is False]
-
-    def to_dict(self) -> dict:
-        per_mode = {k: self.tolerances[k] for k in ("delta_rtol", "omega_rtol", "zero_delta_tol")}
-        return {
-            "case": self.name,
-            "parameters": dict(self.parameters),
-            "passed": self.passed,
-            "integrator": self.integrator,
-            "constraint_stiffness": self.constraint_stiffness,
-            "tolerances": dict(self.tolerances),
-            "elapsed": float(self.elapsed),
-            "modes": [{**m.to_dict(), "tolerances": per_mode} for m in self.modes],
-            "reactions": [dict(r) for r in self.reactions],
-            "actuators": [dict(r) for r in self.actuators],
-        }
-
-    def table(self) -> str:
-        head = (f"{'#':>3} {'kind':<11} {'delta pred':>12} {'delta meas':>12} {'err':>9} "
-                f"{'omega pred':>12} {'omega meas':>12} {'err':>9}  {'result':<6} {'periods':>7}")
-        rows = [head, "-" * len(head)]
-        for m in self.modes:
-            if m.skipped:
-                if math.isnan(m.probe_omega):
-                    rows.append(f"{m.index:>3} {m.kind:<11} {m.predicted_delta:>12.6g} {'':>12} "
-                                f"{'':>9} {m.predicted_omega:>12.6g} {'':>12} {'':>9}  skip    "
-                                f"({m.skipped})")
-                else:
-                    rel = m.probe_omega / m.probe_reference if m.probe_reference else math.inf
-                    rows.append(f"{m.index:>3} {m.kind:<11} {m.predicted_delta:>12.6g} {'':>12} "
-                                f"{'':>9} {m.predicted_omega:>12.6g} {m.probe_omega:>12.6g} "
-                                f"{rel:>9.2e}  {'pass' if m.passed else 'FAIL':<6}  (static "
-                                f"probe: restoring ω_eff vs ω_ref {m.probe_reference:.4g})")
-                continue
-            rows.append(
-                f"{m.index:>3} {m.kind:<11} {m.predicted_delta:>12.6g} {m.measured_delta:>12.6g} "
-                f"{m.rel_error_delta:>9.2e} {m.predicted_omega:>12.6g} {m.measured_omega:>12.6g} "
-                f"{m.rel_error_omega:>9.2e}  {'pass' if m.passed else 'FAIL':<6} {m.periods:>7.1f}")
-        return "\n".join(rows)
-
-    def plot(self, directory) -> list:
-        """Write one PNG per simulated mode to ``directory``; returns the paths."""
-        return plot_check(self, directory)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -358,7 +208,7 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
         base = dict(index=k, kind=kind, eigenvalue=s, predicted_delta=float(modes.delta[j]),
                     predicted_omega=float(modes.omega_d[j]))
         if kind == "rigid-body":
-            w_eff, w_ref = _probe_rigid(dyn, Mr, N, modes.vectors[:, j], amplitude * length,
+            w_eff, w_ref = probe_rigid(dyn, Mr, N, modes.vectors[:, j], amplitude * length,
                                         modes, eq, length, names)
             results.append(ModeCheck(
                 **base, skipped="rigid-body mode (s = 0): no decay rate or frequency to fit; "
@@ -366,8 +216,8 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
                 passed=bool(w_eff <= rigid_tol * w_ref)))
             continue
         t0 = time.perf_counter()
-        x, yh = modes.vectors[:, j], _left_row(modes, j, Mr, Pr, Qr)
-        amp = _amplification(Mr, Pr, s, x, yh)
+        x, yh = modes.vectors[:, j], left_row(modes, j, Mr, Pr, Qr)
+        amp = amplification(Mr, Pr, s, x, yh)
         if not amp <= defective_amplification:
             results.append(ModeCheck(
                 **base, amplification=amp,
@@ -379,10 +229,10 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
             if amp > recheck_amplification:  # nearly defective: the amplitude's share, measured
                 small = _check_one(dyn, Mr, Pr, N, s, x, yh, names, base,
                                    {**opts, "amplitude": opts["amplitude"] / 10})
-                mc = _smaller_amplitude(mc, small)
+                mc = smaller_amplitude(mc, small)
         except SimulationError as exc:
             raise exc.located(file=getattr(model, "source", None), element=f"mode {k}") from None
-        results.append(replace(_judge(replace(mc, amplification=amp), s, delta_rtol, omega_rtol,
+        results.append(replace(judge(replace(mc, amplification=amp), s, delta_rtol, omega_rtol,
                                       zero_delta_tol, resolution_k, ode_rtol),
                                elapsed=time.perf_counter() - t0))
     reactions = tuple(reaction_forces(model, eq))
@@ -400,75 +250,6 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
         integrator=method, elapsed=time.perf_counter() - t_start, reactions=reactions,
         constraint_stiffness=bool(getattr(lin, "constraint_stiffness", True)),
         actuators=tuple(dict(r) for r in getattr(model, "drivers", ()) or ()))
-
-
-def _judge(mc, s, delta_rtol, omega_rtol, zero_delta_tol, resolution_k, ode_rtol):
-    """Pass/fail of a simulated mode against tolerances tied to the run's resolution (module
-    docstring), and what the run could not resolve."""
-    floor = ode_rtol * abs(s)
-    u_d = max(resolution_k * mc.se_delta, floor, mc.amplitude_share_delta)
-    u_w = max(resolution_k * mc.se_omega, floor, mc.amplitude_share_omega)
-    w_p = mc.predicted_omega if mc.kind not in ("overdamped", "divergence") else 0.0
-    w_scale = w_p if w_p > 0 else abs(s)
-    tol_d = max(delta_rtol * abs(mc.predicted_delta), u_d)
-    tol_w = max(omega_rtol * w_scale, u_w)
-    err_d, err_w = abs(mc.measured_delta - mc.predicted_delta), abs(mc.measured_omega - w_p)
-    notes = [mc.unresolved] if mc.unresolved else []
-    if u_d > zero_delta_tol * abs(s):
-        notes.append(f"δ resolved only to ±{u_d:.2g} (> zero_delta_tol·|s| = "
-                     f"{zero_delta_tol * abs(s):.2g})")
-    if u_w > omega_rtol * w_scale:
-        notes.append(f"ω resolved only to ±{u_w:.2g} (> omega_rtol·ω = {omega_rtol * w_scale:.2g}; "
-                     f"the run turns {abs(w_p) * mc.duration:.3g} rad)")
-    return replace(mc, rel_error_delta=err_d / (tol_d / delta_rtol),
-                   rel_error_omega=err_w / (tol_w / omega_rtol),
-                   passed=bool(err_d <= tol_d and err_w <= tol_w), resolution_delta=u_d,
-                   resolution_omega=u_w, tolerance_delta=tol_d, tolerance_omega=tol_w,
-                   unresolved="; ".join(notes))
-
-
-def _amplification(Mr, Pr, s, x, yh):
-    """How much a relative error of the state (x, ẋ ~ |s| x) grows in the modal coordinate:
-    ‖y‖(‖sM + P‖ + |s|‖M‖)‖x‖ / |yᴴ(2sM + P)x| (≈ 1 for a well separated mode, ≈ ω_n/ω_d for
-    a pair near critical damping, ∞ for a Jordan block)."""
-    den = abs(yh @ ((2 * s * Mr + Pr) @ x))
-    num = np.linalg.norm(yh) * (np.linalg.norm(s * Mr + Pr) + abs(s) * np.linalg.norm(Mr)) \
-        * np.linalg.norm(x)
-    return float(num / den) if den > 0 else math.inf
-
-
-def _smaller_amplitude(big, small):
-    """The run at a tenth of the amplitude is the measurement; how far it moved from the full
-    amplitude's is the amplitude-dependent share of the error (a bound of what remains in it
-    for any error growing like aᵖ, p ≥ 1), counted into the resolution."""
-    return replace(small, amplitude_share_delta=abs(big.measured_delta - small.measured_delta),
-                   amplitude_share_omega=abs(big.measured_omega - small.measured_omega))
-
-
-def _left_row(modes, j, Mr, Pr, Qr, repeat_rtol=1e-8):
-    """yᴴ of listed mode j, for the modal coordinate: the eigensolver's left vector
-    (``Modes.left_vectors``) when s_j is a simple eigenvalue; for a repeated one (another
-    eigenvalue within ``repeat_rtol``·max(|s|, 1)), the left null vector of s²M + sP + Q best
-    aligned with (2sM + P)x, so that the modal coordinate of this shape is picked out."""
-    s, x = complex(modes.eigenvalues[j]), modes.vectors[:, j]
-    near = np.abs(modes.all_eigenvalues - s) <= repeat_rtol * max(abs(s), 1.0)
-    if modes.left_vectors is not None and int(np.sum(near)) == 1:
-        return np.asarray(modes.left_vectors[:, j])  # conjugated left vector: yᴴ = ȳᵀ
-    return _left_vector(Mr, Pr, Qr, s, x).conj()
-
-
-def _left_vector(Mr, Pr, Qr, s, x, rtol=1e-8):
-    """y with yᴴ(s²M + sP + Q) = 0 and yᴴ(2sM + P)x real positive (largest over a repeated
-    eigenvalue's left null space)."""
-    T = s * s * Mr + s * Pr + Qr
-    U, sv, _ = np.linalg.svd(T)
-    k = max(1, int(np.sum(sv <= rtol * max(sv[0], 1e-300))))
-    Y = U[:, -k:]
-    b = Y.conj().T @ ((2 * s * Mr + Pr) @ x)
-    if np.linalg.norm(b) == 0:
-        raise SimulationError(f"eigenvalue {s:.6g} is defective (yᴴ(2sM + P)x = 0): its modal "
-                              f"coordinate is undefined")
-    return Y @ b
 
 
 def _check_one(dyn, Mr, Pr, N, s, x, yh, names, base, o):
@@ -517,7 +298,7 @@ def _check_one(dyn, Mr, Pr, N, s, x, yh, names, base, o):
         raise SimulationError(f"eigenvalue {s:.6g} is defective (yᴴ(2sM + P)x = 0): its modal "
                               f"coordinate is undefined")
     eta = (yh @ ((s * Mr + Pr) @ X + Mr @ Xd)) / den
-    meas_delta, meas_omega, resid, eta0, se_d, se_w = _fit_exponential(sim.t, eta)
+    meas_delta, meas_omega, resid, eta0, se_d, se_w = fit_exponential(sim.t, eta)
     if real_mode:  # η is real: its phase is constant (0 or π), the fitted slope a residue
         meas_omega = abs(meas_omega)
     # an oscillatory mode keeps the sign of its phase slope: a response turning the other way
@@ -533,86 +314,3 @@ def _check_one(dyn, Mr, Pr, N, s, x, yh, names, base, o):
         velocity_drift=sim.velocity_drift, max_projection=sim.max_projection, nfev=sim.nfev,
         coordinate=names[jmax], t=sim.t, eta=eta, response=sim.u[jmax], se_delta=se_d,
         se_omega=se_w, capped=capped, unresolved=unresolved)
-
-
-def _probe_rigid(dyn, Mr, N, x, a, modes, eq, length, names):
-    """(ω_eff, ω_ref) for a listed rigid-body mode: does the nonlinear model really offer no
-    restoring force along it?
-
-    The reduced accelerations at q₀ ± a N x̂ (projected onto the constraints, q̇ = 0) give by
-    central differences k_eff = −x̂ᵀM_r(ẍ₊ − ẍ₋) / (2a x̂ᵀM_r x̂) and ω_eff = √|k_eff|; the
-    O(a²) offset of the projected start from a curved rigid motion is even in a and cancels.
-    ω_ref is the scale of the mode at hand (:func:`_mode_scale`): the forces and stiffnesses on
-    the points it moves, so a stiff element elsewhere in the model cannot hide a restoring
-    force.  A linearization that drops a stiffness (the pendulum without Σλ∇²Φ) reports a
-    rigid-body mode that fails this probe.
-    """
-    x = x.real if np.linalg.norm(x.real) >= np.linalg.norm(x.imag) else x.imag
-    full = N @ x
-    x = x / full[int(np.argmax(np.abs(full)))]
-    acc = []
-    for sign in (1.0, -1.0):
-        u, _, _, _ = dyn.project(sign * a * (N @ x), np.zeros(dyn.n))
-        qdd, _ = dyn.acceleration(dyn.q0 + u, np.zeros(dyn.n))
-        acc.append(N.T @ qdd)
-    k_eff = -(x @ Mr @ (acc[0] - acc[1])) / (2 * a * (x @ Mr @ x))
-    w_eff = math.sqrt(abs(k_eff))
-    w_ref = _mode_scale(dyn, N @ x, eq, length, names)
-    if w_ref == 0.0:  # nothing acts on these points: the model's other modes give the scale
-        others = [abs(s) for s, kd in zip(modes.eigenvalues, modes.kind) if kd != "rigid-body"]
-        w_ref = max(others, default=0.0)
-    return w_eff, w_ref
-
-
-def _mode_scale(dyn, shape, eq, length, names, involved_tol=1e-3):
-    """Frequency scale of the points a mode moves: ω_ref² = max(f/(L m), k/m) over those points'
-    coordinates, with f the largest applied generalized force at equilibrium, k the largest
-    row sum of |K + Σλ∇²Φ| (forces' and constraint forces' stiffness) and m the largest row
-    sum of |M| of the coordinates that move (|shape| ≥ involved_tol·max)."""
-    mag = np.abs(shape)
-    moving = np.flatnonzero(mag >= involved_tol * mag.max()) if mag.size and mag.max() > 0 else []
-    groups = {str(names[j]).rsplit(".", 1)[0] for j in moving}
-    coords = [j for j, nm in enumerate(names) if str(nm).rsplit(".", 1)[0] in groups]
-    if not coords:
-        return 0.0
-    Mabs = np.abs(dyn.M)
-    m = float(np.max(Mabs[moving].sum(axis=1), initial=0.0))
-    if m <= 0:
-        return 0.0
-    q0 = dyn.q0
-    if dyn.linear:
-        g = np.zeros(dyn.n)
-        K = np.abs(np.asarray(dyn.Q))
-    else:
-        g = np.asarray(dyn.force(q0, np.zeros(dyn.n)))
-        K = abs(dyn.model.force_jacobians(q0)[0])
-        lam = getattr(eq, "lam", None)
-        if dyn.m and lam is not None and len(lam):
-            K = K + abs(dyn.model.constraint_hessian(q0, lam))
-        K = K.toarray() if hasattr(K, "toarray") else np.asarray(K)
-    f = float(np.max(np.abs(g[coords]), initial=0.0))
-    k = float(np.max(K[coords].sum(axis=1), initial=0.0))
-    return math.sqrt(max(f / (length * m), k / m))
-
-
-def _fit_exponential(t, eta):
-    """Least-squares fit of η(t) = η₀ e^{(−δ + iω) t}: log|η| and unwrapped arg η linear in t.
-
-    Returns (δ, ω, rms residual of log η, fitted |η₀|, standard error of δ, of ω); the
-    standard errors are those of the two slopes from the residuals (N − 2 degrees of freedom).
-    """
-    mag = np.abs(eta)
-    if np.any(mag == 0) or not np.all(np.isfinite(mag)):
-        raise SimulationError("the modal coordinate vanished or overflowed during the run")
-    logm = np.log(mag)
-    ph = np.unwrap(np.angle(eta))
-    A = np.column_stack([np.ones_like(t), t])
-    (c0, c1), *_ = np.linalg.lstsq(A, logm, rcond=None)
-    (p0, p1), *_ = np.linalg.lstsq(A, ph, rcond=None)
-    r_m, r_p = logm - c0 - c1 * t, ph - p0 - p1 * t
-    res = np.sqrt(np.mean(r_m**2 + r_p**2))
-    sxx = float(np.sum((t - t.mean()) ** 2))
-    dof = max(t.size - 2, 1)
-    se_d = math.sqrt(float(np.sum(r_m**2)) / dof / sxx) if sxx > 0 else math.inf
-    se_w = math.sqrt(float(np.sum(r_p**2)) / dof / sxx) if sxx > 0 else math.inf
-    return float(-c1), float(p1), float(res), float(np.exp(c0)), se_d, se_w

@@ -53,11 +53,12 @@ import scipy.sparse as sp
 from ..eigen import Problem, Request, SingularPencilError, solve
 from ..errors import SolverError
 from ..linear import LinearModel
-from .bounds import error_bounds, stability, tolerances, worst, zero_pair_floor
+from .bounds import error_bounds, stability, tolerance_rule, tolerances, worst, zero_pair_floor
 from .listing import band_of, coordinate_text, listing
 from .result import BAND_DENSE_MAX, DENSE_MAX, STABILITY_ORDER, Modes, Verdict
 
-__all__ = ["Modes", "Verdict", "modes", "STABILITY_ORDER", "tolerances", "stability", "worst"]
+__all__ = ["Modes", "Verdict", "modes", "STABILITY_ORDER", "tolerances", "tolerance_rule",
+           "stability", "worst"]
 
 
 

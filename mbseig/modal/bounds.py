@@ -285,3 +285,16 @@ def stability(delta, tol_re, rigid) -> list:
 def worst(stabilities) -> str:
     """The verdict over modes: the worst of their stabilities ("stable" for none)."""
     return max(stabilities, key=STABILITY_ORDER.get) if len(stabilities) else "stable"
+
+
+def tolerance_rule(tolerances) -> str:
+    """The rule that made each mode's stability tolerance, from the values a :class:`Modes`
+    recorded (``safety``, ``stability_rtol``, ``stability_atol``): ``max(safety κ η, rtol |s|
+    [, atol])``, κ η the eigenvalue's error bound (first order, componentwise where sharper, a
+    cluster's bound for a defective or nearly defective group)."""
+    terms = [f"{tolerances.get('safety', 10.0):g} κ η",
+             f"{tolerances.get('stability_rtol', 1e-12):g} |s|"]
+    atol = tolerances.get("stability_atol", 0.0)
+    if atol:
+        terms.append(f"{atol:g}")
+    return f"max({', '.join(terms)})"

@@ -50,6 +50,9 @@ class Model:
         batched or flexible masses (modal energy per body, :mod:`mbseig.studies.design`).
     flexible : ``{"bodies": {name: record}, "refinement": {...}}`` for beams and FE bodies
         (theory, slenderness, elements, warnings), see :mod:`mbseig.casefile.flexible`.
+    coordinate_kinds : the kind of each coordinate (length, direction, angle, modal) and
+    element_ends : the named points each element acts between, both recorded by the reader
+        (:mod:`mbseig.model.assembly`).
     """
 
     name: str
@@ -76,6 +79,8 @@ class Model:
     outputs: tuple = ()
     gravity_force: np.ndarray = None
     mass_parts: tuple = ()
+    coordinate_kinds: tuple = ()  # per coordinate: length, direction, angle, modal (assembly)
+    element_ends: dict = field(default_factory=dict)  # element → the points it acts between
     # the last dense evaluations (K and C, Φ_q, H(λ)) of a small model, keyed by q (and λ):
     # a sweep point's corrector, force scale, static stability and linearization ask for the
     # same matrices at one q; read-only arrays, so that a caller cannot change a kept one

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from ..numerics import element_name
+from ..numerics import element_name, min_norm_projection
 from .common import (
     figure,
     styled,
@@ -18,44 +18,26 @@ from .common import (
 # mechanism drawings
 def project_constraints(model, q, *, tol=1e-12, max_iter=30):
     """q moved onto the constraint manifold Φ(q) = 0 by Gauss–Newton with minimum-norm steps
-    (q ← q − Φ_q⁺ Φ(q)); returns (q, max |Φ_k| / scale_k).  Displaying a mode by moving along it
-    and projecting back keeps rigid bodies rigid (a linear displacement q₀ + a·v stretches them
-    by O(a²))."""
+    (:func:`mbseig.numerics.min_norm_projection`); returns (q, max |Φ_k| / scale_k).  Displaying
+    a mode by moving along it and projecting back keeps rigid bodies rigid (a linear
+    displacement q₀ + a·v stretches them by O(a²))."""
     q = np.array(q, dtype=float)
     phi_fn, jac_fn = getattr(model, "phi", None), getattr(model, "phi_q", None)
     if phi_fn is None or jac_fn is None or not getattr(model, "n_constraints", 0):
         return q, 0.0
     scales = np.asarray(model.constraint_scales() if hasattr(model, "constraint_scales")
                         else np.ones(model.n_constraints), float)
-    res = math.inf
-    for _ in range(max_iter):
-        phi = np.asarray(phi_fn(q), float)
-        res = float(np.max(np.abs(phi) / scales, initial=0.0))
-        if res <= tol:
-            break
-        J = jac_fn(q)
-        J = J.toarray() if hasattr(J, "toarray") else np.asarray(J)
-        step = np.linalg.lstsq(J, phi, rcond=None)[0]
-        q = q - step
+    q, res, _, _ = min_norm_projection(phi_fn, jac_fn, q, scales, tol=tol, max_iter=max_iter)
     return q, res
 
 
-def _pairs_matching(model, aff, q0):
-    """Names (a, b) of two points with aff = r_b − r_a (checked at two configurations), or
-    None: how a spring or a rod between two named points is found from its difference map."""
-    names = list(model.points)
-    if len(names) > 400 or getattr(aff, "dim", 0) != 2:
+def _point_pair(model, element):
+    """Names (a, b) of the points ``element`` acts between (r_b − r_a), as the reader recorded
+    them (:mod:`mbseig.model.assembly`), or None."""
+    ends = getattr(model, "element_ends", {}).get(element.name)
+    if not ends or ends[0] == "bodies" or len(ends) != 2:
         return None
-    rng = np.random.default_rng(0)
-    q1 = q0 + rng.standard_normal(q0.size) * max(getattr(model, "length_scale", 1.0), 1e-9) * 0.1
-    P0 = np.array([model.points[n](q0) for n in names])
-    P1 = np.array([model.points[n](q1) for n in names])
-    d0, d1 = aff(q0), aff(q1)
-    scale = max(float(np.max(np.abs(P0))), 1e-300)
-    E = (np.linalg.norm(P0[None, :, :] - P0[:, None, :] - d0, axis=2)
-         + np.linalg.norm(P1[None, :, :] - P1[:, None, :] - d1, axis=2))  # E[a, b]
-    a, b = np.unravel_index(int(np.argmin(E)), E.shape)
-    return (names[a], names[b]) if E[a, b] <= 1e-9 * scale else None
+    return ends if all(p in model.points for p in ends) else None
 
 
 def mechanism_layout(model, q0):
@@ -79,13 +61,13 @@ def mechanism_layout(model, q0):
         kind = type(e).__name__
         user = element_name(getattr(e, "name", kind), part=False)
         if hasattr(e, "diff") and hasattr(e, "stiffness"):
-            ends = _pairs_matching(model, e.diff, q0)
+            ends = _point_pair(model, e)
             if ends:
                 out["springs"].append({"name": user, "ends": ends,
                                        "spring": float(getattr(e, "stiffness", 0)) != 0,
                                        "damper": float(getattr(e, "damping", 0)) != 0})
         elif hasattr(e, "dirs") and hasattr(e, "angle0"):
-            at = _torsion_point(model, e, q0, body_dirs)
+            at = _torsion_point(model, e, body_dirs)
             if at is not None:
                 out["torsional"].append({"name": user, "at": at})
         elif hasattr(e, "stacked") and hasattr(e, "magnitude"):
@@ -95,7 +77,7 @@ def mechanism_layout(model, q0):
         if hasattr(c, "diff") and hasattr(c, "length"):
             if any(user == b["name"] for b in out["bodies"]):
                 continue  # a body's rigid length: the body is drawn
-            ends = _pairs_matching(model, c.diff, q0)
+            ends = _point_pair(model, c)
             if ends:
                 out["rods"].append({"name": user, "ends": ends})
         elif hasattr(c, "G") and hasattr(c, "point") and np.shape(c.G) == (1, 2):
@@ -106,28 +88,15 @@ def mechanism_layout(model, q0):
     return out
 
 
-def _torsion_point(model, e, q0, body_dirs):
-    """The point shared by the two bodies a torsional element acts between (the joint), by
-    matching its directions [a; b] with the bodies' directions r_j − r_i."""
-    rng = np.random.default_rng(1)
-    q1 = q0 + rng.standard_normal(q0.size) * 0.1 * max(getattr(model, "length_scale", 1.0), 1e-9)
-    try:
-        ab0, ab1 = e.dirs(q0), e.dirs(q1)
-    except Exception:  # noqa: BLE001 - a drawing aid only
+def _torsion_point(model, e, body_dirs):
+    """The point shared by the two bodies a torsional element acts between (the joint), from
+    the bodies the reader recorded (:mod:`mbseig.model.assembly`); with the ground as the
+    first body, a fixed point of the second."""
+    ends = getattr(model, "element_ends", {}).get(e.name)
+    if not ends or ends[0] != "bodies":
         return None
-    found = []
-    for h in (slice(0, 2), slice(2, 4)):
-        hit = None
-        for name, (i, j) in body_dirs.items():
-            d0 = model.points[j](q0) - model.points[i](q0)
-            d1 = model.points[j](q1) - model.points[i](q1)
-            c = np.linalg.norm(ab0[h]) / max(np.linalg.norm(d0), 1e-300)
-            if (np.linalg.norm(ab0[h] - c * d0) + np.linalg.norm(ab1[h] - c * d1)
-                    <= 1e-9 * max(np.linalg.norm(ab0[h]), 1e-300)):
-                hit = name
-        found.append(hit)
-    b1, b2 = found
-    if b2 is None:
+    b1, b2 = ends[1], ends[2]
+    if b2 not in body_dirs or (b1 is not None and b1 not in body_dirs):
         return None
     pts2 = set(body_dirs[b2])
     shared = pts2 & set(body_dirs[b1]) if b1 else {p for p in pts2 if model.points[p].idx.size == 0}

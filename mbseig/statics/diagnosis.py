@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..model.assembly import UNITS
 from .failures import NoStaticEquilibrium, NotConverged
 from .newton import Settings, Stall
 
@@ -30,8 +31,8 @@ def diagnose(model, q0, first: Stall, second, s: Settings):
             f"after {last.iterations} Newton iterations)", element="equilibrium")
     q = last.q if last.q is not None else q0
     moved = s.scales.largest(q - q0, names)
-    unit = lambda nm: "m" if nm.rpartition(".")[2] in ("x", "y", "z") else "rad"
-    moved_txt = ", ".join(f"{nm} ({dq:+.3g} {unit(nm)})" for nm, dq in moved) or "none"
+    kind = dict(zip(names, model.coordinate_kinds))
+    moved_txt = ", ".join(f"{nm} ({dq:+.3g}{_unit(kind[nm])})" for nm, dq in moved) or "none"
     hint = ("hint: start nearer the expected equilibrium (positions of the case, or q_init)")
     if second is not None:
         t = getattr(second, "load_factor", None)
@@ -45,3 +46,9 @@ def diagnose(model, q0, first: Stall, second, s: Settings):
         f"did not converge from the given positions ({first.reason}; Newton correction "
         f"{first.correction:.3g} of the model's size): the coordinates that moved most: "
         f"{moved_txt}; {hint}", element="equilibrium")
+
+
+def _unit(kind) -> str:
+    """The unit printed after a coordinate change of this kind (none for dimensionless ones)."""
+    unit = UNITS[kind]
+    return "" if unit == "1" else f" {unit}"

@@ -1,8 +1,9 @@
 """Linear algebra of the statics: the Newton matrix, minimum-norm corrections, multipliers and
 the size of a step in the model's own scales (docs/design.md, "Equilibrium").
 
-Sizes.  A coordinate is measured in its own scale ℓ_i: the model's length scale L for point
-coordinates (names ending in ``.x``, ``.y``, ``.z``), 1 rad for angles and other coordinates.  A
+Sizes.  A coordinate is measured in its own scale ℓ_i: the model's length scale L for length
+coordinates (``coordinate_kinds``, recorded by the reader: :mod:`mbseig.model.assembly`), 1 for
+angles, unit-vector components and modal amplitudes.  A
 rigid length (a distance constraint between the ends of a body or a rod) is measured by the
 rotation it makes, |Δd|/L_body.  The size of a step is the largest of these
 (:class:`StepScales`); the trust region and the convergence test use it.
@@ -27,11 +28,11 @@ from ..errors import EquilibriumError
 from ..model.elements import DistanceConstraint
 from ..numerics import (
     LazyModule,
-    rank_of,
     blas_limit,
     constraint_rank,
     coo_sum,
     dense,
+    rank_of,
     saddle,
 )
 
@@ -54,21 +55,15 @@ def blas_threads(n):
     return blas_limit(n)
 
 
-def _is_length(name: str) -> bool:
-    """A point coordinate (``P.x``, ``beam.n3.y``): a length.  Angles (``beam.n3.theta``) and the
-    unit vectors of spatial bodies (``body.u.x``, ``.v.``, ``.w.``) are dimensionless."""
-    parts = name.split(".")
-    return parts[-1] in ("x", "y", "z") and not (len(parts) >= 3 and parts[-2] in ("u", "v", "w"))
-
-
 class StepScales:
     """ℓ_i per coordinate and the rigid lengths' direction maps (module docstring)."""
 
     def __init__(self, model):
         L = float(getattr(model, "length_scale", 1.0) or 1.0)
-        names = model.coordinate_names
         self.length = L
-        self.ell = np.array([L if _is_length(nm) else 1.0 for nm in names])
+        # a position component scales with the model's length; directions, angles and modal
+        # amplitudes are dimensionless (mbseig.model.assembly)
+        self.ell = np.array([L if kind == "length" else 1.0 for kind in model.coordinate_kinds])
         rows, cols, vals, inv_len = [], [], [], []
         r = 0
         for c in model.constraints:

@@ -40,323 +40,37 @@ the stability chart is drawn.
 
 from __future__ import annotations
 
-import csv
 import itertools
-import json
-import math
-from dataclasses import dataclass, field, replace
-from pathlib import Path
 
 import numpy as np
 
-from .. import plots
-from ..errors import CaseError, MbseigError
-from ..numerics import jsonable
-from ..statics import equilibrium
+from ..errors import CaseError
+from ..model.assembly import UNITS
 from .boundaries import (
     AMBIGUOUS_MAC,
     BEND,
     CONJUGATE_PENALTY,
     DISTANCE_WEIGHT,
     MAX_INSERT,
-    Evaluator,
-    follow_boundary,
-    locate,
     mac_matrix,
-    match_cost,
 )
-from .continuation import modal_point, sweep_line
+from .continuation import sweep_line
 from .point import as_spec
-from .records import Boundary, BoundaryCurve, Fold, SweepPoint
+from .records import Boundary, BoundaryCurve, Fold
 from .runners import Runner, progress_bar
+from .sweep_outputs import write_outputs
+from .sweep_result import SweepResult
+from .tracking import (
+    curve_task,
+    evaluate_point,
+    locate_task,
+    parse_range,
+    track_line,
+    track_shapes,
+)
 
 __all__ = ["parse_range", "SweepResult", "run_sweep", "evaluate_point", "mac_matrix",
            "track_line", "write_outputs", "progress_bar"]
-
-
-def parse_range(text: str):
-    """``"k_a=1e3:1e4:10"`` → ("k_a", array of 10 values from 1e3 to 1e4 inclusive)."""
-    name, sep, rng = text.partition("=")
-    parts = rng.split(":")
-    if not sep or not name.strip() or len(parts) != 3:
-        raise CaseError(f"--param expects NAME=START:STOP:COUNT for a sweep, got {text!r}",
-                        element="--param")
-    try:
-        start, stop = float(parts[0]), float(parts[1])
-        count = int(parts[2])
-    except ValueError:
-        raise CaseError(f"START and STOP must be numbers and COUNT an integer in {text!r}",
-                        element="--param") from None
-    if count < 2 or not (math.isfinite(start) and math.isfinite(stop)) or start == stop:
-        raise CaseError(f"a sweep needs COUNT ≥ 2 and START ≠ STOP (finite), got {text!r}",
-                        element="--param")
-    return name.strip(), np.linspace(start, stop, count)
-
-
-# ---------------------------------------------------------------------------------------------
-def evaluate_point(case, config, params, *, safety=10.0, stability_rtol=1e-12, q_init=None):
-    """All eigenpairs at one parameter point, solved on its own (a pure, picklable function).
-
-    case : a :class:`~mbseig.casefile.CaseSpec` (a model factory: the case is not read again).
-    Returns the point dict of :func:`mbseig.studies.continuation.modal_point` (eigenvalues,
-    unit shapes in full coordinates, per-eigenvalue tolerances, verdict, joints outside their
-    range of motion, q), or {"params", "error"} with a one-line message.
-    """
-    try:
-        model = case.build(config, **params)
-        eq = equilibrium(model, q_init=q_init, offer_stable=False, self_stress="report")
-        pt = modal_point(eq.model, eq, params, safety=safety, stability_rtol=stability_rtol)
-        return replace(pt, statics="cold")
-    except MbseigError as exc:
-        return SweepPoint.failed(params, exc.one_line())
-
-
-def _match_cost(ref_s, ref_shapes, s, shapes, scale):
-    return match_cost(ref_s, ref_shapes, s, shapes, scale)
-
-
-def track_line(points):
-    """Track eigenvalues along a line of point results by MAC.
-
-    Returns (S, T, shapes_last) with S[k, j] the eigenvalue of track j at point k (NaN where the
-    track does not exist or the point failed) and T the matching tolerances.
-    """
-    from scipy.optimize import linear_sum_assignment
-
-    n_pts = len(points)
-    tracks_s, tracks_t = [], []  # per track: dict k → value
-    ref = []  # per track: (s, shape) at its last point
-    for k, pt in enumerate(points):
-        if pt.get("error"):
-            continue
-        s, X, tol = pt["eigenvalues"], pt["shapes"], pt["tol"]
-        if not ref:
-            for j in range(s.size):
-                tracks_s.append({k: s[j]})
-                tracks_t.append({k: tol[j]})
-                ref.append((s[j], X[:, j]))
-            continue
-        ref_s = np.array([r[0] for r in ref])
-        ref_X = np.column_stack([r[1] for r in ref])
-        scale = max(float(np.max(np.abs(ref_s), initial=0.0)),
-                    float(np.max(np.abs(s), initial=0.0)), 1e-300)
-        rows, cols = linear_sum_assignment(_match_cost(ref_s, ref_X, s, X, scale))
-        matched = set()
-        for r, c in zip(rows, cols):
-            tracks_s[r][k] = s[c]
-            tracks_t[r][k] = tol[c]
-            ref[r] = (s[c], X[:, c])
-            matched.add(int(c))
-        for c in range(s.size):
-            if c not in matched:
-                tracks_s.append({k: s[c]})
-                tracks_t.append({k: tol[c]})
-                ref.append((s[c], X[:, c]))
-    S = np.full((n_pts, len(tracks_s)), np.nan + 1j * np.nan)
-    T = np.full((n_pts, len(tracks_s)), np.nan)
-    for j, (ts, tt) in enumerate(zip(tracks_s, tracks_t)):
-        for k, v in ts.items():
-            S[k, j] = v
-            T[k, j] = tt[k]
-    return S, T, ref
-
-
-def _track_shapes(points, S):
-    """Shape of each track at each point (for boundary location), None where absent."""
-    out = {}
-    for k, pt in enumerate(points):
-        if pt.get("error"):
-            continue
-        for j in range(S.shape[1]):
-            if np.isnan(S[k, j]):
-                continue
-            c = int(np.flatnonzero(pt["eigenvalues"] == S[k, j])[0])
-            out[(k, j)] = pt["shapes"][:, c]
-    return out
-
-
-def locate_task(case, config, params, axis, lo, hi, anchors, ref_lo, ref_hi, xtol, stable_end,
-                *, safety=10.0, stability_rtol=1e-12):
-    """One boundary search (a pure function for the runners): :func:`boundaries.locate`."""
-    ev = Evaluator(case, config, params, axis, anchors, safety=safety,
-                   stability_rtol=stability_rtol)
-    try:
-        return locate(ev, lo, hi, ref_lo, ref_hi, xtol, stable_end)
-    except (MbseigError, ValueError) as exc:
-        msg = exc.one_line() if isinstance(exc, MbseigError) else str(exc)
-        return {"error": msg}
-
-
-def curve_task(case, config, fixed, axis, axis2, values2, start, span, xtol, *, safety=10.0,
-               stability_rtol=1e-12):
-    """One two-parameter boundary curve (a pure function for the runners)."""
-    return follow_boundary(case, config, fixed, axis, axis2, values2, start, span=span,
-                           xtol=xtol, safety=safety, stability_rtol=stability_rtol)
-
-
-# ---------------------------------------------------------------------------------------------
-@dataclass(frozen=True, eq=False)
-class SweepResult:
-    """A sweep: grid, per-point results, tracked eigenvalues per line, stability boundaries, and
-    the followed branches (continuation), folds and two-parameter boundary curves.
-
-    ``tracks[l]`` is (n_points × n_tracks) complex for line l (the first axis varying, the other
-    axes fixed at ``lines[l]``); ``boundaries`` lists every loss or recovery of stability;
-    ``branches[l]`` the branch points of line l for the bifurcation diagram; ``folds`` every
-    fold located on a branch; ``curves`` the boundaries followed across the second axis.
-    """
-
-    case: str
-    config: str | None
-    fixed: dict
-    axes: list  # [(name, values), ...]
-    lines: list  # per line: dict of the other axes' values
-    points: list  # per line: list of point dicts
-    tracks: list
-    tolerances_track: list
-    boundaries: list
-    tolerances: dict = field(default_factory=dict)
-    runner: str = "serial"
-    branches: list = field(default_factory=list)
-    events: list = field(default_factory=list)
-    folds: list = field(default_factory=list)
-    curves: list = field(default_factory=list)
-    records: list = field(default_factory=list)
-    diagram: dict = field(default_factory=dict)
-    units: dict = field(default_factory=dict)  # parameter → unit, for the plots' axis labels
-
-    @property
-    def axis(self):
-        return self.axes[0][0]
-
-    @property
-    def values(self):
-        return self.axes[0][1]
-
-    def abscissa_grid(self):
-        """Spectral abscissa max Re s on the grid, shape (len(axis 0), len(lines))."""
-        out = np.full((len(self.values), len(self.lines)), np.nan)
-        for l, line in enumerate(self.points):
-            for k, pt in enumerate(line):
-                if not pt.get("error") and pt["eigenvalues"].size:
-                    out[k, l] = float(np.max(pt["eigenvalues"].real))
-        return out
-
-    @staticmethod
-    def listed_tracks(S):
-        """Tracks to list: drop the mirror image (Im < 0 on average) of a complex-pair track."""
-        keep = []
-        for j in range(S.shape[1]):
-            col = S[:, j]
-            im = col.imag[~np.isnan(col)]
-            if im.size and np.mean(im) < 0 and np.any(np.abs(im) > 0):
-                continue
-            keep.append(j)
-        return keep
-
-    def mode_numbers(self, line=0) -> dict:
-        """Track → mode number along ``line``, numbered as the mode tables (``mbseig modes``)
-        at the line's first point where the track exists: listed tracks sorted by ω_n = |s|,
-        then by δ; tracks that appear later are numbered after them in order of appearance.
-        Every plot and table of the sweep uses these numbers."""
-        S = self.tracks[line]
-        listed = self.listed_tracks(S)
-        first = {}
-        for j in listed:
-            ok = np.flatnonzero(~np.isnan(S[:, j]))
-            if ok.size:
-                first[j] = int(ok[0])
-        k0 = min(first.values(), default=0)
-        at_start = sorted((j for j in first if first[j] == k0),
-                          key=lambda j: (abs(S[k0, j]), -S[k0, j].real, j))
-        later = sorted((j for j in first if first[j] != k0), key=lambda j: (first[j], abs(S[first[j], j]), j))
-        return {j: i + 1 for i, j in enumerate(at_start + later)}
-
-    def to_dataframe(self):
-        """The tracked eigenvalues as a long pandas DataFrame, one row per (line, point, mode):
-        the other axes' values, the swept parameter, ``mode`` (:meth:`mode_numbers`), ``track``,
-        ``re``, ``im``, ``delta`` [1/s], ``omega_n`` [rad/s], ``omega_d`` [rad/s], ``fn_hz``
-        (ω_n/2π), ``fd_hz`` (ω_d/2π), ``zeta``, ``stable`` (δ + tol ≥ 0), the point's
-        ``verdict`` and ``out_of_range``.  pandas is optional: it is imported here."""
-        try:
-            import pandas as pd
-        except ImportError:
-            raise MbseigError("SweepResult.to_dataframe needs pandas (pip install pandas)",
-                              element="to_dataframe") from None
-        others = [n for n, _ in self.axes[1:]]
-        rows = []
-        for l, line in enumerate(self.lines):
-            S, T = self.tracks[l], self.tolerances_track[l]
-            numbers = self.mode_numbers(l)
-            for k, v in enumerate(self.values):
-                pt = self.points[l][k]
-                for j in self.listed_tracks(S):
-                    s = S[k, j]
-                    if np.isnan(s):
-                        continue
-                    wn = abs(s)
-                    rows.append({**{n: float(line[n]) for n in others}, self.axis: float(v),
-                                 "mode": numbers.get(j), "track": int(j), "re": float(s.real),
-                                 "im": float(s.imag), "delta": float(-s.real),
-                                 "omega_n": float(wn), "omega_d": float(abs(s.imag)),
-                                 "fn_hz": float(wn / (2 * math.pi)),
-                                 "fd_hz": float(abs(s.imag) / (2 * math.pi)),
-                                 "zeta": float(-s.real / wn) if wn > 0 else 0.0,
-                                 "stable": bool(-s.real + T[k, j] >= 0),
-                                 "verdict": pt.get("verdict"),
-                                 "out_of_range": ", ".join(pt.get("out_of_range") or [])})
-        cols = others + [self.axis, "mode", "track", "re", "im", "delta", "omega_n", "omega_d",
-                         "fn_hz", "fd_hz", "zeta", "stable", "verdict", "out_of_range"]
-        return pd.DataFrame(rows, columns=cols)
-
-    def __repr__(self) -> str:
-        n_pts = sum(len(p) for p in self.points)
-        failed = sum(1 for line in self.points for pt in line if pt.get("error"))
-        axes = ", ".join(f"{n} {float(v[0]):g}…{float(v[-1]):g} ({len(v)})" for n, v in self.axes)
-        losses = [b for b in self.boundaries if b["stability"] == "loss"]
-        first = (f", first loss at {self.axis} = {min(b['value'] for b in losses):.6g}"
-                 if losses else "")
-        return (f"<SweepResult {Path(str(self.case)).stem}"
-                + (f" [{self.config}]" if self.config else "")
-                + f": {axes}; {n_pts} points ({failed} failed), {len(self.boundaries)} "
-                  f"boundaries{first}, {len(self.folds)} folds, {len(self.curves)} curves; "
-                  f"runner {self.runner}>")
-
-    __str__ = __repr__
-
-    def _repr_html_(self) -> str:
-        import html
-
-        return f"<pre>{html.escape(repr(self))}</pre>"
-
-    def to_json(self) -> dict:
-        lines = []
-        for l, fixed in enumerate(self.lines):
-            S = self.tracks[l]
-            tracks = [{"track": int(j),
-                       "eigenvalue": [[None, None] if np.isnan(v) else [float(v.real), float(v.imag)]
-                                      for v in S[:, j]]}
-                      for j in self.listed_tracks(S)]
-            pts = [{"params": {k: float(v) for k, v in pt["params"].items()},
-                    "verdict": pt.get("verdict"), "error": pt.get("error"),
-                    "out_of_range": pt.get("out_of_range", []),
-                    "statics": pt.get("statics"), "static": pt.get("static"),
-                    "iterations": pt.get("iterations"), "segment": pt.get("segment")}
-                   for pt in self.points[l]]
-            branch = [{k: b[k] for k in ("p", "kind", "segment", "static", "verdict", "angles")}
-                      | {"value": b.get("value")} for b in (self.branches[l] if self.branches else [])]
-            lines.append({"fixed": {k: float(v) for k, v in fixed.items()}, "points": pts,
-                          "tracks": tracks, "branch": branch,
-                          "continuation": self.records[l] if self.records else None})
-        bounds = [b.to_json() for b in self.boundaries]
-        return jsonable({
-            "case": self.case, "config": self.config,
-            "fixed": {k: v for k, v in self.fixed.items()},
-            "axes": [{"name": n, "values": [float(x) for x in v]} for n, v in self.axes],
-            "lines": lines, "boundaries": bounds, "folds": [f.to_json() for f in self.folds],
-            "curves": [c.to_json() for c in self.curves],
-            "diagram": self.diagram, "tolerances": self.tolerances,
-        })
 
 
 def _lines(axes, fixed):
@@ -401,18 +115,8 @@ def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None,
     n0 = len(values0)
     with Runner(jobs=jobs, scheduler=scheduler, progress=progress) as runner:
         if continuation:
-            results = runner.map(sweep_line, [((case, config, {**fixed, **line}, axis0, values0),
-                                               opts) for line in lines], "lines")
-            points, branches, events, records = [], [], [], []
-            for line, r in zip(lines, results):
-                if r.get("points") is None:  # the first point failed: every point on its own
-                    r = {"points": [evaluate_point(case, config, {**fixed, **line, axis0: float(v)},
-                                                   **opts) for v in values0],
-                         "branch": [], "events": [], "record": {"continuation": r.get("error")}}
-                points.append(r["points"])
-                branches.append(r["branch"])
-                events.append(r["events"])
-                records.append(r["record"])
+            points, branches, events, records = _followed_lines(runner, case, config, fixed,
+                                                                lines, axis0, values0, opts)
         else:
             calls = [((case, config, {**fixed, **line, axis0: float(v)}), opts)
                      for line in lines for v in values0]
@@ -424,61 +128,13 @@ def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None,
             S, T, _ = track_line(points[l])
             tracks.append(S)
             tols.append(T)
-            shapes = _track_shapes(points[l], S)
-            H = -S.real + T
-            event_ps = [e["p"] for e in events[l] if e.get("type") in ("fold", "branch point", "jump")]
-            for j in range(S.shape[1]):
-                for k in range(n0 - 1):
-                    a, b = H[k, j], H[k + 1, j]
-                    if np.isnan(a) or np.isnan(b) or (a < 0) == (b < 0):
-                        continue
-                    pa, pb = points[l][k], points[l][k + 1]
-                    if pa.get("segment") != pb.get("segment"):
-                        continue  # a jump or a switch between them: no crossing on one branch
-                    lo, hi = float(values0[k]), float(values0[k + 1])
-                    if any(min(lo, hi) <= p <= max(lo, hi) for p in event_ps):
-                        continue  # a fold or branch point: reported from the branch itself
-                    anchors = [(lo, pa["q"]), (hi, pb["q"])]
-                    refs = [(complex(S[k, j]), shapes[(k, j)]), (complex(S[k + 1, j]), shapes[(k + 1, j)])]
-                    stable_end = "lo" if a >= 0 else "hi"
-                    searches.append(((l, j, k), (case, config, {**fixed, **line}, axis0, lo, hi,
-                                                 anchors, refs[0], refs[1], xtol, stable_end), opts))
+            searches += _crossing_searches(case, config, {**fixed, **line}, axis0, values0,
+                                           points[l], S, T, events[l], l, xtol, opts)
         found = runner.map(locate_task, [(a, kw) for _, a, kw in searches], "boundaries")
-        boundaries = []
-        for ((l, j, k), _, _), res in zip(searches, found):
-            if res is None or "error" in res:
-                continue
-            S = tracks[l]
-            onset = "loss" if -S[k, j].real + tols[l][k, j] >= 0 else "recovery"
-            un = S[k + 1, j] if onset == "loss" else S[k, j]
-            real = abs(un.imag) <= max(tols[l][k + 1 if onset == "loss" else k, j], 1e-12 * abs(un))
-            boundaries.append(Boundary.crossing(
-                line=l, fixed={n: float(v) for n, v in lines[l].items()}, parameter=axis0,
-                track=int(j), bracket=[float(values0[k]), float(values0[k + 1])],
-                kind="divergence" if real else "flutter", stability=onset, xtol=xtol,
-                found=res))
-        boundaries = _merge_conjugates(boundaries, xtol)
-        folds = []
-        for l, evs in enumerate(events):
-            for e in evs:
-                if e.get("type") not in ("fold", "branch point") or e.get("located") is False:
-                    continue
-                rec = Fold(line=l, fixed={n: float(v) for n, v in lines[l].items()},
-                           parameter=axis0, value=float(e["p"]), type=e["type"],
-                           branch=("turns " + e["turns"]) if e.get("turns") else
-                                  ("switched to the stable branch" if e.get("switched") else
-                                   "continues"),
-                           before=e.get("before"), after=e.get("after"), dof=e.get("dof"),
-                           angles=e.get("angles"))
-                folds.append(rec)
-                if not e.get("dof"):
-                    continue
-                before, after = e.get("before"), e.get("after")
-                if e["type"] == "fold" and before == after:
-                    continue
-                onset = "recovery" if before == "unstable" and after != "unstable" else "loss"
-                boundaries.append(Boundary.at_event(rec, stability=onset, xtol=xtol))
-        boundaries.sort(key=lambda b: (b["line"], b["value"]))
+        boundaries = _merge_conjugates(
+            _crossings(searches, found, tracks, tols, lines, axis0, values0, xtol), xtol)
+        folds, at_events = _event_records(events, lines, axis0, xtol)
+        boundaries = sorted(boundaries + at_events, key=lambda b: (b["line"], b["value"]))
         curve_list = []
         if curves and len(axes) == 2 and continuation:
             curve_list = _curves(runner, case, config, fixed, axes, lines, boundaries, span, xtol,
@@ -495,6 +151,96 @@ def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None,
                                    "continuation": bool(continuation)},
                        runner=runner.kind, branches=branches, events=events, folds=folds,
                        curves=curve_list, records=records, diagram=diag)
+
+
+def _followed_lines(runner, case, config, fixed, lines, axis0, values0, opts):
+    """Every line followed by continuation (:func:`sweep_line`): (points, branches, events,
+    records) per line; a line whose first point fails is solved point by point instead."""
+    results = runner.map(sweep_line, [((case, config, {**fixed, **line}, axis0, values0), opts)
+                                      for line in lines], "lines")
+    points, branches, events, records = [], [], [], []
+    for line, r in zip(lines, results):
+        if r.get("points") is None:  # the first point failed: every point on its own
+            r = {"points": [evaluate_point(case, config, {**fixed, **line, axis0: float(v)},
+                                           **opts) for v in values0],
+                 "branch": [], "events": [], "record": {"continuation": r.get("error")}}
+        points.append(r["points"])
+        branches.append(r["branch"])
+        events.append(r["events"])
+        records.append(r["record"])
+    return points, branches, events, records
+
+
+def _crossing_searches(case, config, params, axis0, values0, points, S, T, events, l, xtol,
+                       opts):
+    """The boundary searches of line ``l``: every bracket where a tracked eigenvalue's
+    δ + tol changes sign on one branch segment, away from folds, branch points and jumps."""
+    shapes = track_shapes(points, S)
+    H = -S.real + T
+    event_ps = [e["p"] for e in events if e.get("type") in ("fold", "branch point", "jump")]
+    searches = []
+    for j in range(S.shape[1]):
+        for k in range(len(values0) - 1):
+            a, b = H[k, j], H[k + 1, j]
+            if np.isnan(a) or np.isnan(b) or (a < 0) == (b < 0):
+                continue
+            pa, pb = points[k], points[k + 1]
+            if pa.get("segment") != pb.get("segment"):
+                continue  # a jump or a switch between them: no crossing on one branch
+            lo, hi = float(values0[k]), float(values0[k + 1])
+            if any(min(lo, hi) <= p <= max(lo, hi) for p in event_ps):
+                continue  # a fold or branch point: reported from the branch itself
+            anchors = [(lo, pa["q"]), (hi, pb["q"])]
+            refs = [(complex(S[k, j]), shapes[(k, j)]), (complex(S[k + 1, j]), shapes[(k + 1, j)])]
+            stable_end = "lo" if a >= 0 else "hi"
+            searches.append(((l, j, k), (case, config, params, axis0, lo, hi,
+                                         anchors, refs[0], refs[1], xtol, stable_end), opts))
+    return searches
+
+
+def _crossings(searches, found, tracks, tols, lines, axis0, values0, xtol):
+    """The located crossings as :class:`Boundary` records (loss or recovery, flutter or
+    divergence by the crossing eigenvalue)."""
+    boundaries = []
+    for ((l, j, k), _, _), res in zip(searches, found):
+        if res is None or "error" in res:
+            continue
+        S = tracks[l]
+        onset = "loss" if -S[k, j].real + tols[l][k, j] >= 0 else "recovery"
+        un = S[k + 1, j] if onset == "loss" else S[k, j]
+        real = abs(un.imag) <= max(tols[l][k + 1 if onset == "loss" else k, j], 1e-12 * abs(un))
+        boundaries.append(Boundary.crossing(
+            line=l, fixed={n: float(v) for n, v in lines[l].items()}, parameter=axis0,
+            track=int(j), bracket=[float(values0[k]), float(values0[k + 1])],
+            kind="divergence" if real else "flutter", stability=onset, xtol=xtol,
+            found=res))
+    return boundaries
+
+
+def _event_records(events, lines, axis0, xtol):
+    """(folds, boundaries): every located fold and branch point of the followed branches, and
+    a divergence boundary where one changes the stability."""
+    folds, boundaries = [], []
+    for l, evs in enumerate(events):
+        for e in evs:
+            if e.get("type") not in ("fold", "branch point") or e.get("located") is False:
+                continue
+            rec = Fold(line=l, fixed={n: float(v) for n, v in lines[l].items()},
+                       parameter=axis0, value=float(e["p"]), type=e["type"],
+                       branch=("turns " + e["turns"]) if e.get("turns") else
+                              ("switched to the stable branch" if e.get("switched") else
+                               "continues"),
+                       before=e.get("before"), after=e.get("after"), dof=e.get("dof"),
+                       angles=e.get("angles"))
+            folds.append(rec)
+            if not e.get("dof"):
+                continue
+            before, after = e.get("before"), e.get("after")
+            if e["type"] == "fold" and before == after:
+                continue
+            onset = "recovery" if before == "unstable" and after != "unstable" else "loss"
+            boundaries.append(Boundary.at_event(rec, stability=onset, xtol=xtol))
+    return folds, boundaries
 
 
 def _curves(runner, case, config, fixed, axes, lines, boundaries, span, xtol, opts, values2):
@@ -561,7 +307,7 @@ def _diagram(case, config, fixed, lines, axis0, values0, branches, name):
             extra["range"] = [float(rng[0]), float(rng[1])]
     elif name in names:
         i = names.index(name)
-        unit = "m" if name.rpartition(".")[2] in ("x", "y", "z") else "rad"
+        unit = UNITS[model.coordinate_kinds[i]]
         get = (lambda b: None if b.get("q") is None else b["q"][i])
     else:
         raise CaseError(f"--diagram {name!r} is neither a named angle ({', '.join(angles) or 'none'}) "
@@ -570,87 +316,3 @@ def _diagram(case, config, fixed, lines, axis0, values0, branches, name):
         for b in br:
             b["value"] = get(b)
     return {"variable": name, "unit": unit, **extra}
-
-
-# ---------------------------------------------------------------------------------------------
-def write_outputs(res: SweepResult, out_dir, *, units=None) -> list[Path]:
-    """sweep.json, tracks.csv, boundaries.csv, root_locus.png, modes_vs_parameter.png,
-    bifurcation.png (and branch.csv) when branches were followed, and, for two swept
-    parameters, stability_map.png, with curves.csv and stability_chart.png when boundaries were
-    followed across the second.  ``units`` ({parameter: unit}) labels the plots' axes.
-    Returns the written paths."""
-    if units:
-        import dataclasses
-
-        res = dataclasses.replace(res, units={**res.units, **units})
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    paths = []
-    p = out / "sweep.json"
-    p.write_text(json.dumps(res.to_json(), indent=1, allow_nan=False) + "\n")
-    paths.append(p)
-    others = [n for n, _ in res.axes[1:]]
-    p = out / "tracks.csv"
-    with p.open("w", newline="") as fh:
-        w = csv.writer(fh, lineterminator="\n")
-        w.writerow(others + [res.axis, "track", "re", "im", "delta", "omega_n", "freq_hz", "zeta",
-                             "mode"])
-        for l, line in enumerate(res.lines):
-            S = res.tracks[l]
-            numbers = res.mode_numbers(l)
-            for j in res.listed_tracks(S):
-                for k, v in enumerate(res.values):
-                    s = S[k, j]
-                    if np.isnan(s):
-                        continue
-                    wn = abs(s)
-                    w.writerow([repr(float(line[n])) for n in others] + [
-                        repr(float(v)), j, repr(float(s.real)), repr(float(s.imag)),
-                        repr(float(-s.real)), repr(float(wn)), repr(float(abs(s.imag) / (2 * math.pi))),
-                        repr(float(-s.real / wn)) if wn > 0 else "0.0", numbers.get(j, "")])
-    paths.append(p)
-    p = out / "boundaries.csv"
-    with p.open("w", newline="") as fh:
-        w = csv.writer(fh, lineterminator="\n")
-        w.writerow(others + ["parameter", "value", "track", "re", "im", "kind", "stability", "xtol",
-                             "event", "band_lo", "band_hi", "method"])
-        for b in res.boundaries:
-            w.writerow([repr(b["fixed"][n]) for n in others] + [
-                b["parameter"], repr(b["value"]), "" if b["track"] is None else b["track"],
-                repr(b["eigenvalue"][0]), repr(b["eigenvalue"][1]), b["kind"], b["stability"],
-                repr(b["xtol"]), b.get("event", ""), repr(b["band"][0]), repr(b["band"][1]),
-                b.get("method", "")])
-    paths.append(p)
-    paths.append(plots.save(plots.root_locus(res), out / "root_locus.png"))
-    paths.append(plots.save(plots.modes_vs_parameter(res), out / "modes_vs_parameter.png"))
-    if res.diagram:
-        p = out / "branch.csv"
-        with p.open("w", newline="") as fh:
-            w = csv.writer(fh, lineterminator="\n")
-            w.writerow(others + [res.axis, res.diagram["variable"], "kind", "segment", "static",
-                                 "verdict"])
-            for l, line in enumerate(res.lines):
-                for b in res.branches[l]:
-                    w.writerow([repr(float(line[n])) for n in others] + [
-                        repr(float(b["p"])), "" if b.get("value") is None else repr(float(b["value"])),
-                        b["kind"], b["segment"], b.get("static") or "", b.get("verdict") or ""])
-        paths.append(p)
-        paths.append(plots.save(plots.bifurcation_diagram(res), out / "bifurcation.png"))
-    if len(res.axes) == 2:
-        paths.append(plots.save(plots.stability_map(res), out / "stability_map.png"))
-        if res.curves:
-            p = out / "curves.csv"
-            with p.open("w", newline="") as fh:
-                w = csv.writer(fh, lineterminator="\n")
-                w.writerow(["curve", res.curves[0]["along"], res.axis, "stability", "test",
-                            "band_lo", "band_hi"])
-                for i, c in enumerate(res.curves):
-                    for pt in c["points"]:
-                        band = pt.get("band") or [None, None]
-                        w.writerow([i, repr(pt["p2"]), "" if pt["value"] is None else repr(pt["value"]),
-                                    c["stability"], pt.get("test") or "",
-                                    "" if band[0] is None else repr(band[0]),
-                                    "" if band[1] is None else repr(band[1])])
-            paths.append(p)
-            paths.append(plots.save(plots.stability_chart(res), out / "stability_chart.png"))
-    return paths

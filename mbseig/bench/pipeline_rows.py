@@ -1,0 +1,256 @@
+"""Whole-pipeline rows of the benchmark: start-up against the import floor, sweeps in points a
+second, assembly of Jacobians, the constraint-force stiffness and the time-domain check."""
+
+from __future__ import annotations
+
+import math
+import os
+import subprocess
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from ..casefile import load_case
+from ..check import check_modes
+from ..linear import linearize
+from ..modal import modes
+from ..model.batched import spring_forces
+from ..statics import equilibrium
+from .cases import case_path
+from .dense_rows import (
+    median_times,
+)
+
+
+def bench_startup(repeats, log, case="hand_device"):
+    """Wall time of ``mbseig modes CASE`` against ``python -c "import numpy, scipy.linalg"``,
+    interleaved, medians (the start-up goal's ratio)."""
+    exe = Path(sys.executable).with_name("mbseig")
+    cli = [str(exe)] if exe.exists() else [sys.executable, "-m", "mbseig"]
+    cmds = {"import numpy, scipy.linalg (floor)": [sys.executable, "-c", "import numpy, scipy.linalg"],
+            "import mbseig": [sys.executable, "-c", "import mbseig"],
+            f"mbseig modes {case}": [*cli, "modes", str(case_path(case))],
+            # the same command through main() with Python's normal exit (teardown included):
+            # what the executable's prompt exit saves (mbseig.cli.console)
+            f"mbseig modes {case}, normal exit": [
+                sys.executable, "-c", "import sys; from mbseig.cli import main; "
+                f"sys.exit(main(['modes', {str(case_path(case))!r}]))"]}
+    # as Python runs by default, from cached bytecode: a PYTHONDONTWRITEBYTECODE in the
+    # environment (set on some CI machines) would make every run compile mbseig's modules
+    # anew (≈ 60 ms here) while numpy and scipy load theirs from the install; one untimed
+    # round writes the cache, as the first run after `pip install -e .` does (a plain
+    # `pip install .` compiles at install time)
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    for c in cmds.values():
+        subprocess.run(c, capture_output=True, check=True, env=env)
+    times = {k: [] for k in cmds}
+    for _ in range(repeats):
+        for k, c in cmds.items():
+            t = time.perf_counter()
+            subprocess.run(c, capture_output=True, check=True, env=env)
+            times[k].append(time.perf_counter() - t)
+    floor = float(np.median(times["import numpy, scipy.linalg (floor)"]))
+    rows = []
+    for k, v in times.items():
+        t = float(np.median(v))
+        rows.append({"section": "startup", "method": k, "n": 0, "time": t, "ratio": t / floor,
+                     "repeats": repeats})
+        log(f"startup {k:38s} {t:.3f} s  ({t / floor:.2f}x floor)")
+    return rows
+
+
+def bench_sweeps(lines, points, log, case="hand_device"):
+    """Device sweeps: points a second in-process (after the first line), and the speed-up of
+    ``lines`` lines of ``points`` points each (a 2-D sweep, one task per line) on local
+    processes and on a Dask ``LocalCluster`` (multi-process, a real scheduler), 1 … cores."""
+    from ..casefile import read_case
+    from ..studies import run_sweep
+
+    spec = read_case(case_path(case))
+    axes = [("k_a", np.linspace(800.0, 1200.0, points)), ("c_a", np.linspace(5.0, 9.0, lines))]
+    cores = os.cpu_count() or 1
+
+    def timed(sweep_axes=axes, **kw):
+        t = time.perf_counter()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            run_sweep(spec, sweep_axes, progress=False, curves=False, **kw)
+        return time.perf_counter() - t
+
+    rows = []
+    timed(jobs=1)  # warm: imports and caches, as "after the first" in the goal
+    # the two in-process sweeps: medians of three interleaved runs (one run of ≈ 2 s moved by
+    # ±20 % on this shared machine)
+    load_axes = [("f", np.linspace(0.0, 1.5, points)), ("c_a", np.linspace(5.0, 9.0, lines))]
+    runs = {"k_a": [], "load": []}
+    for _ in range(3):
+        runs["k_a"].append(timed(jobs=1))
+        runs["load"].append(timed(load_axes, config="C4", jobs=1))
+    base = float(np.median(runs["k_a"]))
+    total = lines * points
+    rows.append({"section": "sweeps", "method": "in-process", "n": total, "workers": 1, "time": base,
+                 "rate": total / base, "speedup": 1.0})
+    log(f"sweeps {total} points in-process: {base:.2f} s ({total / base:.1f} points/s)")
+    # the device's load study (C4: tendon load f × damping), whose inverse-statics command
+    # the swept parameters do not enter (settings reused): the rate without re-solving it
+    t = float(np.median(runs["load"]))
+    rows.append({"section": "sweeps", "method": "in-process, C4 load f × c_a (command reused)",
+                 "n": total, "workers": 1, "time": t, "rate": total / t, "speedup": base / t})
+    log(f"sweeps {total} points in-process, C4 load sweep: {t:.2f} s ({total / t:.1f} points/s)")
+    for w in range(2, cores + 1):
+        t = timed(jobs=w)
+        rows.append({"section": "sweeps", "method": "local processes", "n": total, "workers": w,
+                     "time": t, "rate": total / t, "speedup": base / t})
+        log(f"sweeps {total} points on {w} processes: {t:.2f} s (×{base / t:.2f})")
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        log("sweeps: dask.distributed not installed: Dask rows skipped")
+        return rows
+    for w in range(1, cores + 1):
+        with LocalCluster(n_workers=w, threads_per_worker=1, processes=True, dashboard_address=None) as cl, \
+                Client(cl) as client:
+            timed(scheduler=client)  # workers import mbseig once
+            t = timed(scheduler=client)
+        rows.append({"section": "sweeps", "method": "Dask LocalCluster", "n": total, "workers": w,
+                     "time": t, "rate": total / t, "speedup": base / t})
+        log(f"sweeps {total} points on a Dask LocalCluster of {w}: {t:.2f} s (×{base / t:.2f})")
+    return rows
+
+
+# ---------------------------------------------------------------------------------------------
+def _spring_net_case(n):
+    return f"""
+schema_version = 1
+dimension = 2
+source = "bench: 2-D chain of springs under a tip load"
+[parameters]
+n = {n}
+[[points]]
+name = "a"
+position = [0.0, 0.0]
+fixed = true
+[[points]]
+name = "p{{i}}"
+repeat = {{ i = [1, "n"] }}
+position = ["0.4*i", "0.05*i**1.5"]
+[[masses]]
+repeat = {{ i = [1, "n"] }}
+point = "p{{i}}"
+mass = 1.0
+[[forces]]
+type = "spring_damper"
+points = ["a", "p1"]
+stiffness = 800.0
+damping = 1.0
+free_length = 0.35
+[[forces]]
+type = "spring_damper"
+repeat = {{ i = [1, "n - 1"] }}
+points = ["p{{i}}", "p{{i + 1}}"]
+stiffness = "500 + 10*i"
+damping = 0.2
+free_length = 0.35
+"""
+
+
+def _complex_g(model):
+    """g(q) of the model's springs for complex q: mbseig's own spring law
+    (:func:`mbseig.model.batched.spring_forces`, complex-step safe: l = √(d·d)) on q + ih."""
+    singles = [f for f in model.forces if not hasattr(f, "member_forces")]
+    batches = [f for f in model.forces if hasattr(f, "member_forces")]
+
+    def g(q):
+        out = np.zeros(q.shape[0], dtype=q.dtype)
+        zero = np.zeros_like(q)
+        for f in singles:  # SpringDamper on an affine difference map
+            np.add.at(out, f.idx, -(f.diff.C.T @ spring_forces(*f.members(q, zero))[0]))
+        for b in batches:
+            fm = spring_forces(*b.members(q, zero))
+            for idx, sign in ((b.ia, 1.0), (b.ib, -1.0)):
+                ok = idx >= 0
+                np.add.at(out, idx[ok], sign * fm[ok])
+        return out
+
+    return g
+
+
+def bench_jacobians(sizes, repeats, log, tmpdir):
+    rows = []
+    for npts in sizes:
+        path = Path(tmpdir) / f"spring_net_{npts}.toml"
+        path.write_text(_spring_net_case(npts))
+        model = load_case(path)
+        rng = np.random.default_rng(0)
+        q = model.q_init + 0.02 * rng.normal(size=model.n)
+        n = model.n
+        g = lambda x: model.generalized_force(x)
+        gc = _complex_g(model)
+        E = np.eye(n)
+        fd_h, cd_h, cs_h = 1e-7 * max(1.0, np.abs(q).max()), 1e-5 * max(1.0, np.abs(q).max()), 1e-30
+        fns = {
+            "analytic": lambda: model.force_jacobians(q)[0].toarray(),
+            "forward differences": lambda: -np.column_stack([(g(q + fd_h * e) - g0) / fd_h for e in E]),
+            "central differences": lambda: -np.column_stack([(g(q + cd_h * e) - g(q - cd_h * e)) / (2 * cd_h) for e in E]),
+            "complex step": lambda: -np.column_stack([gc(q + 1j * cs_h * e).imag / cs_h for e in E]),
+        }
+        g0 = g(q)
+        t, out = median_times(fns, repeats)
+        ref = out["complex step"]
+        scale = np.abs(ref).max()
+        for name in fns:
+            err = float(np.abs(out[name] - ref).max() / scale) if name != "complex step" else \
+                float(np.abs(out[name] - out["analytic"]).max() / scale)
+            rows.append({"section": "jacobians", "method": name, "n": n, "time": t[name], "error": err})
+            log(f"jacobian n={n:5d} {name:20s} {t[name]:.5f} s  rel err {err:.1e}")
+    return rows
+
+
+def bench_constraint_stiffness(repeats, log):
+    rows = []
+    for case, exact in (("pendulum", math.sqrt(9.81)), ("four_bar", None)):
+        model = load_case(case_path(case))
+        eq = equilibrium(model)
+        fns = {"with Σλ∇²Φ": lambda: linearize(model, eq),
+               "without Σλ∇²Φ": lambda: linearize(model, eq, constraint_stiffness=False)}
+        t, out = median_times(fns, repeats)
+        w = {k: float(modes(v.M, v.P, v.Q).omega_n[0]) for k, v in out.items()}
+        ref = exact if exact is not None else w["with Σλ∇²Φ"]
+        for k in fns:
+            rows.append({"section": "constraint", "method": f"{case} {k}", "n": model.n, "time": t[k],
+                         "omega": w[k], "error": abs(w[k] - ref) / ref,
+                         "reference": "√(g/l)" if exact else "mbseig with Σλ∇²Φ (independent reduction in tests)"})
+            log(f"constraint {case:9s} {k:15s} ω = {w[k]:.6g}  rel err {rows[-1]['error']:.1e}  {t[k]:.5f} s")
+    return rows
+
+
+def bench_timedomain(log):
+    """δ error of the time-domain check against cost, for three integrator settings."""
+    rows = []
+    model = load_case(case_path("ziegler_pendulum"), config="flutter")
+    eq = equilibrium(model)
+    lin = linearize(model, eq)
+    md = modes(lin.M, lin.P, lin.Q, N=lin.N, coordinate_names=lin.coordinate_names)
+    settings = [("DOP853 rtol 1e-10 (default)", "DOP853", 1e-10),
+                ("DOP853 rtol 1e-4 (loose explicit)", "DOP853", 1e-4),
+                ("Radau rtol 1e-3 (loose implicit)", "Radau", 1e-3),
+                ("BDF rtol 1e-3 (low-order implicit)", "BDF", 1e-3)]
+    for label, method, rtol in settings:
+        try:
+            res = check_modes(model, eq, lin, md, method=method, ode_rtol=rtol)
+        except Exception as exc:  # noqa: BLE001 - a failed setting is a result to report
+            log(f"timedomain {label}: {exc}")
+            continue
+        for mc in res.modes:
+            if mc.skipped:
+                continue
+            rows.append({"section": "timedomain", "method": label, "n": int(mc.index), "time": res.elapsed,
+                         "error": float(mc.rel_error_delta), "predicted_delta": float(mc.predicted_delta),
+                         "measured_delta": float(mc.measured_delta), "passed": bool(mc.passed),
+                         "nfev": int(mc.nfev)})
+            log(f"timedomain {label:34s} mode {mc.index}: δ pred {mc.predicted_delta:+.4g} meas "
+                f"{mc.measured_delta:+.4g} rel err {mc.rel_error_delta:.1e} ({res.elapsed:.2f} s)")
+    return rows, ""

@@ -1,0 +1,211 @@
+"""The report's section of one configuration: model, equilibrium (posture, range of motion,
+inverse statics, actuator, pin reactions, constraint forces), the mode table with the stability
+margin and the rule of its tolerance, the mechanism with its mode shapes, the pole map and the
+time-domain check; all figures from :mod:`mbseig.plots`, all numbers from the study."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .. import plots
+from ..modal import tolerance_rule
+from .text import fmt
+from .units import with_unit
+
+__all__ = ["configuration_blocks", "check_blocks", "mode_label", "statics_text", "describe"]
+
+
+def configuration_blocks(case, study, out_dir, *, run_check, stem, units):
+    """Blocks of one configuration (:class:`~mbseig.studies.report_studies.ConfigurationStudy`)."""
+    config = None if study.config == "base" else study.config
+    a = study.analysis
+    model, eq, lin, md = a.model, a.eq, a.linear, a.modes
+    tag = config or "base"
+    blocks = [("h2", f"Configuration {tag}")]
+    blocks.append(("p", f"**{tag}**: " + (describe(case, config) if config else
+                                          "the case as written, no configuration applied") + "."))
+    blocks.append(("h3", "Model"))
+    blocks.append(("table", ["quantity", "value"], [
+        ["coordinates", str(model.n)],
+        ["constraints", str(model.n_constraints)],
+        ["redundant constraints", f"{eq.n_redundant}" + (f" ({'; '.join(eq.redundant)})" if eq.redundant else "")],
+        ["degrees of freedom", str(lin.dof)],
+        ["equilibrium residual", f"{eq.residual:.1e} ({eq.iterations} Newton iterations)"],
+        ["eigensolver", f"{md.solver} ({md.solver_reason})"],
+    ]))
+    raw = getattr(case, "parameters", {}) or {}
+    prow, derived = [], []
+    for k, v in model.parameters.items():
+        u = units.get(k)
+        unit = "–" if u == "1" else (u or "not given in the case")
+        if isinstance(raw.get(k), str):
+            derived.append(f"{k} = {with_unit(fmt(v, 6), u) if u else fmt(v, 6)} "
+                           f"(`{raw[k]}`" + ("" if u else ", unit not given in the case") + ")")
+        else:
+            prow.append([k, fmt(v, 6), unit])
+    if prow:
+        blocks.append(("table", ["parameter", "value", "unit"], prow))
+    if derived:
+        blocks.append(("p", "Derived parameters: " + "; ".join(derived) + "."))
+    linear_case, rep = study.linear_case, study.reactions
+    if not linear_case:
+        blocks.append(("h3", "Equilibrium"))
+        blocks.append(("p", statics_text(eq)))
+    if rep["posture"]:
+        blocks.append(("table", ["joint", "flexion [deg]", "range [deg]", "margin [deg]", "in range"],
+                       [[p["name"], fmt(p["angle_deg"], 6),
+                         "–" if p["range_deg"] is None else f"{p['range_deg'][0]:g} … {p['range_deg'][1]:g}",
+                         fmt(p["margin_deg"], 4), "yes" if p["in_range"] else "**NO**"]
+                        for p in rep["posture"]]))
+        flags = rep["out_of_range"]
+        blocks.append(("p", "Range of motion: " + ("all joints inside." if not flags else
+                                                    "OUTSIDE for " + ", ".join(flags) + ".")))
+    for d in rep["drivers"]:
+        sets = "; ".join(
+            f"{s['element']}: " + (f"free length {s['free_length'] * 1e3:.6g} mm, length "
+                                   f"{s['length'] * 1e3:.6g} mm, tension {s['tension']:.6g} N"
+                                   if "free_length" in s else f"locked at {s['length'] * 1e3:.6g} mm")
+            for s in d["sets"])
+        unloaded = d.get("unloaded") or []
+        held = (f" The command is set on the device without {', '.join(unloaded)} and held as "
+                f"that load changes (a position command)." if unloaded else "")
+        blocks.append(("p", f"Inverse statics ({d['driver']}): commanded angle "
+                            f"{math.degrees(d['angle_target']):.6g} deg needs an effort of "
+                            f"{d['effort']:.6g} {d['effort_unit']}; {sets}.{held}"))
+    if rep["actuator"]:
+        blocks.append(("table", ["actuator element", "kind", "length [mm]", "tension [N]"],
+                       [[r["element"], r["kind"], fmt(r["length"] * 1e3, 6), fmt(r["tension"], 6)]
+                        for r in rep["actuator"]]))
+    if rep["pins"]:
+        blocks.append(("table", ["pin (force on the outboard bodies)", "point", "Fx [N]", "Fy [N]", "|F| [N]"],
+                       [[p["name"], p["point"], fmt(p["force"][0], 5), fmt(p["force"][1], 5),
+                         fmt(p["magnitude"], 5)] for p in rep["pins"]]))
+    rows = []
+    for c in rep["constraints"]:
+        r = c["reaction"]
+        value = r["value"] if isinstance(r["value"], list) else [r["value"]]
+        carried = f"{r['label']} {', '.join(fmt(x, 5) for x in value)} {r['unit']}".rstrip()
+        rows.append([c["element"], ", ".join(fmt(x, 6) for x in c["multipliers"]), carried])
+    if rows:
+        blocks.append(("table", ["constraint", "multiplier λ (in the constraint's own scaling)",
+                                 "reaction"], rows))
+
+    blocks.append(("h3", f"Modes — verdict: {md.verdict}"))
+    rows = []
+    for k in range(len(md)):
+        s = md.eigenvalues[k]
+        margin = md.delta[k] - md.tolerance[k]
+        rows.append([str(k + 1), f"{s.real:.6g}", f"{s.imag:.6g}",
+                     fmt(md.omega_n[k] / (2 * math.pi), 6), fmt(abs(s.imag) / (2 * math.pi), 6),
+                     fmt(md.zeta[k], 4), fmt(md.delta[k], 5), f"{margin:.4g}", md.stability[k],
+                     md.kind[k], ", ".join(n for n, _ in md.dominant[k][:3])])
+    blocks.append(("table", ["mode", "Re s [1/s]", "Im s [rad/s]", "ω_n/2π [Hz] (undamped)",
+                             "ω_d/2π [Hz] (damped)", "ζ [–]", "δ [1/s]", "margin δ − tol [1/s]",
+                             "stability", "kind", "dominant coordinates"], rows))
+    least = study.least
+    min_margin = float(np.min(md.delta - md.tolerance)) if len(md) else math.nan
+    if least is not None:
+        blocks.append(("p", f"Stability margin: the least-damped mode is mode {least + 1} with "
+                            f"δ = {float(md.delta[least]):.5g} 1/s (ζ = {float(md.zeta[least]):.4g}); "
+                            f"δ − tol = {min_margin:.4g} 1/s (tol per mode: {tolerance_rule(md.tolerances)})."))
+    labels = [mode_label(k, md) for k in range(len(md))]
+    if not linear_case:
+        if model.dimension == 3:
+            fig = spatial_draw()(model, eq.q, md.shapes, labels,
+                                  title=f"{tag}: equilibrium (black) and mode shapes (±, red/blue)")
+        else:
+            fig = plots.mechanism_modes(
+                eq.model if eq.model is not None else model, eq.q, md.shapes, labels,
+                eigenvalues=md.eigenvalues, kinds=list(md.kind),
+                title=f"{tag}: equilibrium (black) and mode shapes, rigid bodies kept rigid")
+        img = plots.save(fig, out_dir / f"{stem}_{tag}_shapes.png")
+        blocks.append(("img", img, f"{tag}: mechanism at equilibrium with every element (bodies, "
+                                   f"springs, sliders and their guides, torsional springs, loads) "
+                                   f"and each mode shape superposed: displaced along the mode and "
+                                   f"projected back onto the constraints Φ(q) = 0, so bodies stay "
+                                   f"rigid; a real (overdamped) mode is drawn as its decay"))
+    img = plots.save(plots.pole_map(md.eigenvalues, title=f"{tag}: pole map",
+                                    stability=md.stability), out_dir / f"{stem}_{tag}_poles.png")
+    blocks.append(("img", img, f"{tag}: pole map over lines of constant ζ and circles of constant "
+                               f"ω_n; numbers are the modes of the table"))
+    blocks += check_blocks(study.check, run_check)
+    return blocks
+
+
+def mode_label(k, md):
+    """Panel title of mode k by its kind: damped frequency and ζ, the time constant of a real
+    mode, or rigid-body."""
+    s = complex(md.eigenvalues[k])
+    kind = md.kind[k]
+    if kind in ("overdamped", "divergence") and s.real != 0:
+        what = "overdamped, decays" if kind == "overdamped" else "DIVERGENCE, grows"
+        return f"mode {k + 1}: {what}, τ = 1/|s| = {1e3 / abs(s.real):.4g} ms"
+    if kind == "rigid-body":
+        return f"mode {k + 1}: rigid-body (s ≈ 0 within its tolerance)"
+    return (f"mode {k + 1}: ω_d/2π = {abs(s.imag) / (2 * math.pi):.4g} Hz, "
+            f"ζ = {float(md.zeta[k]):.3g}" + (" (FLUTTER)" if kind == "flutter" else ""))
+
+
+def spatial_draw():
+    """The three-view drawing of spatial models (mbseig.plots.spatial), imported when needed."""
+    from ..plots import spatial as plots_spatial
+
+    return plots_spatial.spatial_modes
+
+
+def statics_text(eq):
+    """One paragraph on how the equilibrium was found and whether it is statically stable."""
+    tol = eq.tolerances
+    path = eq.path or {}
+    start = ("the commanded posture of the inverse statics" if getattr(eq.model, "drivers", ())
+             else "the case's positions")
+    how = {"newton": f"Newton from {start}"}.get(eq.method, eq.method)
+    if path.get("load_steps"):
+        how += f" ({path['load_steps']} load steps; the direct Newton failed: {path.get('direct')})"
+    st = eq.static or {}
+    verdict = st.get("verdict")
+    stab = {"stable": "statically stable (the reduced tangent stiffness is positive definite)",
+            "unstable": f"statically UNSTABLE ({st.get('index')} direction(s) of negative stiffness)",
+            "neutral": "statically neutral (a zero stiffness)",
+            "undetermined": ("statics cannot decide (non-symmetric stiffness with an even number "
+                             "of negative real eigenvalues): see the modes"),
+            "not examined": "not examined (above the dense limit)"}.get(verdict, "–")
+    text = (f"Statics: {how}, {eq.iterations} Newton iterations; converged when "
+            f"{tol.get('criterion', '')} (tol = {tol.get('tol', 0):g}, xtol = "
+            f"{tol.get('xtol', 0):g}); final Newton correction {eq.correction:.2g} of the model's "
+            f"size. The equilibrium is {stab}.")
+    for note in eq.notes:
+        text += f" {note[0].upper() + note[1:]}."
+    return text
+
+
+def describe(case, config):
+    return str(case.configurations.get(config, {}).get("description", ""))
+
+
+def check_blocks(res, run_check):
+    blocks = [("h3", "Time-domain check")]
+    if not run_check:
+        blocks.append(("p", "Time-domain check not run (report built with --no-check)."))
+        return blocks
+    rows = []
+    for m in res.modes:
+        if m.skipped:
+            rows.append([str(m.index), m.kind, fmt(m.predicted_delta), "–", "–",
+                         fmt(m.predicted_omega), "–", "–", f"skipped ({m.skipped})"])
+            continue
+        rows.append([str(m.index), m.kind, fmt(m.predicted_delta), fmt(m.measured_delta),
+                     f"{m.rel_error_delta:.1e}", fmt(m.predicted_omega, 8),
+                     fmt(m.measured_omega, 8), f"{m.rel_error_omega:.1e}",
+                     "pass" if m.passed else "**FAIL**"])
+    tol = res.tolerances
+    blocks.append(("p", f"Each mode is excited alone in the nonlinear model ({res.integrator}, "
+                        f"rtol {tol['ode_rtol']:g}) and its modal coordinate fitted; tolerances: δ "
+                        f"{tol['delta_rtol']:g} relative, ω {tol['omega_rtol']:g} relative. "
+                        f"Result: {'all passed' if res.passed else 'FAILED for ' + str(res.failed)}."))
+    blocks.append(("table", ["mode", "kind", "δ predicted [1/s]", "δ measured [1/s]",
+                             "δ rel. err. [–]", "ω predicted [rad/s]", "ω measured [rad/s]",
+                             "ω rel. err. [–]", "result"], rows))
+    return blocks

@@ -1,0 +1,129 @@
+"""The family p ↦ model(p) of a continuation (:mod:`~mbseig.statics.continuation`): the branch
+equations R(y, p) = 0 with y = (q, λ on the followed constraint rows), their Newton matrix and
+∂R/∂p, evaluated through one cache per model."""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg as sla
+
+from ..numerics import constraint_rank, saddle
+from .linalg import (
+    DENSE_LIMIT,
+    StepScales,
+    multipliers,
+)
+
+CORRECTOR_ITER = 8  # Newton iterations of a continuation corrector
+
+
+FD_REL = 1e-7  # forward-difference step of ∂R/∂p, relative to p_scale
+
+
+CTOL = 1e-11  # corrector converged: correction below CTOL in the model's scales (and p_scale)
+
+
+class Family:
+    """p ↦ model(p) with the residual, Newton matrix and ∂R/∂p of the branch equations."""
+
+    def __init__(self, make, p_scale, model0, q0, *, rank_tol=1e-10):
+        self.make = make
+        self.p_scale = float(p_scale) if p_scale else 1.0
+        self._cache: dict = {}
+        self.scales = StepScales(model0)
+        self.n = model0.n
+        Phi_q = model0.phi_q(q0)
+        self.m = Phi_q.shape[0]
+        self.rows = np.arange(self.m)
+        if self.m and model0.n + self.m <= DENSE_LIMIT:
+            rank = constraint_rank(Phi_q, rank_tol)[0]
+            if rank < self.m:
+                _, _, piv = sla.qr(Phi_q.toarray().T, pivoting=True, mode="economic")
+                self.rows = np.sort(piv[:rank])
+        self.N = self.n + self.rows.size
+        # a small model's R and J from dense evaluations (mbseig.numerics.DENSE_ASSEMBLY)
+        self.dense = bool(getattr(model0, "dense_assembly", False))
+        self.evaluations = 0
+        self._memo_store: dict = {}
+
+    def model(self, p):
+        key = float(p)
+        m = self._cache.get(key)
+        if m is None:
+            m = self.make(key)
+            self.evaluations += 1
+            if len(self._cache) > 256:
+                self._cache.pop(next(iter(self._cache)))
+            self._cache[key] = m
+        return m
+
+    def lam_full(self, y):
+        lam = np.zeros(self.m)
+        lam[self.rows] = y[self.n:]
+        return lam
+
+    def start(self, q, p):
+        """y = (q, least-squares λ_S) at an equilibrium q of model(p)."""
+        model = self.model(p)
+        Phi_q = model.phi_q(q)[self.rows] if self.m else model.phi_q(q)
+        lam = multipliers(Phi_q, model.generalized_force(q), 1e-10, check=False)[0]
+        return np.concatenate([q, lam])
+
+    def _memo(self, what, y, p, compute):
+        key = (what, float(p), y.tobytes())
+        hit = self._memo_store.get(key)
+        if hit is None:
+            hit = compute()
+            if len(self._memo_store) > 16:
+                self._memo_store.pop(next(iter(self._memo_store)))
+            self._memo_store[key] = hit
+        return hit
+
+    def R(self, y, p):
+        return self._memo("R", y, p, lambda: self._R(y, p))
+
+    def J(self, y, p):
+        return self._memo("J", y, p, lambda: self._J(y, p))
+
+    def Rp(self, y, p):
+        return self._memo("Rp", y, p, lambda: self._Rp(y, p))
+
+    def _R(self, y, p):
+        model = self.model(p)
+        q, lam = y[:self.n], y[self.n:]
+        with np.errstate(all="ignore"):
+            g = model.generalized_force(q)
+            if not self.m:
+                return g
+            Phi_q = model.phi_q(q, dense=self.dense)[self.rows]
+            return np.concatenate([g - Phi_q.T @ lam, -model.phi(q)[self.rows]])
+
+    def _J(self, y, p):
+        model = self.model(p)
+        q = y[:self.n]
+        with np.errstate(all="ignore"):
+            K, _ = model.force_jacobians(q, dense=self.dense)
+            if not self.m:
+                return K if self.dense else K.tocsr()
+            Phi_q = model.phi_q(q, dense=self.dense)[self.rows]
+            H = model.constraint_hessian(q, self.lam_full(y), dense=self.dense)
+            return saddle(K + H, Phi_q)
+
+    def _Rp(self, y, p):
+        h = FD_REL * self.p_scale
+        return (self.R(y, p + h) - self.R(y, p)) / h
+
+    def Rp_back(self, y, p, p_prev):
+        """∂R/∂p by the difference to the previous point's parameter, whose model is built
+        already: (R(y, p) − R(y, p_prev)) / (p − p_prev), accurate to O(p − p_prev).  Used for
+        the tangent at a grid point reached directly (the predictor of the next one and the
+        sense of p); an exact tangent replaces it wherever the sense of p or the sign of det J
+        changes (folds, branch points)."""
+        return (self.R(y, p) - self.R(y, p_prev)) / (p - p_prev)
+
+    def weights(self):
+        """W of z = (q, λ, p): 1/ℓ² on q, 0 on λ, 1/p_scale² on p."""
+        w = np.zeros(self.N + 1)
+        w[:self.n] = 1.0 / self.scales.ell**2
+        w[-1] = 1.0 / self.p_scale**2
+        return w

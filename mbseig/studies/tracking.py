@@ -1,0 +1,140 @@
+"""Points of a sweep solved on their own, and the eigenvalues tracked along a line by MAC (with
+the conjugate and distance penalties of :mod:`mbseig.studies.boundaries`)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from ..errors import CaseError, MbseigError
+from ..statics import equilibrium
+from .boundaries import (
+    Evaluator,
+    follow_boundary,
+    locate,
+    match_cost,
+)
+from .continuation import modal_point
+from .records import SweepPoint
+
+
+def parse_range(text: str):
+    """``"k_a=1e3:1e4:10"`` → ("k_a", array of 10 values from 1e3 to 1e4 inclusive)."""
+    name, sep, rng = text.partition("=")
+    parts = rng.split(":")
+    if not sep or not name.strip() or len(parts) != 3:
+        raise CaseError(f"--param expects NAME=START:STOP:COUNT for a sweep, got {text!r}",
+                        element="--param")
+    try:
+        start, stop = float(parts[0]), float(parts[1])
+        count = int(parts[2])
+    except ValueError:
+        raise CaseError(f"START and STOP must be numbers and COUNT an integer in {text!r}",
+                        element="--param") from None
+    if count < 2 or not (math.isfinite(start) and math.isfinite(stop)) or start == stop:
+        raise CaseError(f"a sweep needs COUNT ≥ 2 and START ≠ STOP (finite), got {text!r}",
+                        element="--param")
+    return name.strip(), np.linspace(start, stop, count)
+
+
+# ---------------------------------------------------------------------------------------------
+def evaluate_point(case, config, params, *, safety=10.0, stability_rtol=1e-12, q_init=None):
+    """All eigenpairs at one parameter point, solved on its own (a pure, picklable function).
+
+    case : a :class:`~mbseig.casefile.CaseSpec` (a model factory: the case is not read again).
+    Returns the point dict of :func:`mbseig.studies.continuation.modal_point` (eigenvalues,
+    unit shapes in full coordinates, per-eigenvalue tolerances, verdict, joints outside their
+    range of motion, q), or {"params", "error"} with a one-line message.
+    """
+    try:
+        model = case.build(config, **params)
+        eq = equilibrium(model, q_init=q_init, offer_stable=False, self_stress="report")
+        pt = modal_point(eq.model, eq, params, safety=safety, stability_rtol=stability_rtol)
+        return replace(pt, statics="cold")
+    except MbseigError as exc:
+        return SweepPoint.failed(params, exc.one_line())
+
+
+def _match_cost(ref_s, ref_shapes, s, shapes, scale):
+    return match_cost(ref_s, ref_shapes, s, shapes, scale)
+
+
+def track_line(points):
+    """Track eigenvalues along a line of point results by MAC.
+
+    Returns (S, T, shapes_last) with S[k, j] the eigenvalue of track j at point k (NaN where the
+    track does not exist or the point failed) and T the matching tolerances.
+    """
+    from scipy.optimize import linear_sum_assignment
+
+    n_pts = len(points)
+    tracks_s, tracks_t = [], []  # per track: dict k → value
+    ref = []  # per track: (s, shape) at its last point
+    for k, pt in enumerate(points):
+        if pt.get("error"):
+            continue
+        s, X, tol = pt["eigenvalues"], pt["shapes"], pt["tol"]
+        if not ref:
+            for j in range(s.size):
+                tracks_s.append({k: s[j]})
+                tracks_t.append({k: tol[j]})
+                ref.append((s[j], X[:, j]))
+            continue
+        ref_s = np.array([r[0] for r in ref])
+        ref_X = np.column_stack([r[1] for r in ref])
+        scale = max(float(np.max(np.abs(ref_s), initial=0.0)),
+                    float(np.max(np.abs(s), initial=0.0)), 1e-300)
+        rows, cols = linear_sum_assignment(_match_cost(ref_s, ref_X, s, X, scale))
+        matched = set()
+        for r, c in zip(rows, cols):
+            tracks_s[r][k] = s[c]
+            tracks_t[r][k] = tol[c]
+            ref[r] = (s[c], X[:, c])
+            matched.add(int(c))
+        for c in range(s.size):
+            if c not in matched:
+                tracks_s.append({k: s[c]})
+                tracks_t.append({k: tol[c]})
+                ref.append((s[c], X[:, c]))
+    S = np.full((n_pts, len(tracks_s)), np.nan + 1j * np.nan)
+    T = np.full((n_pts, len(tracks_s)), np.nan)
+    for j, (ts, tt) in enumerate(zip(tracks_s, tracks_t)):
+        for k, v in ts.items():
+            S[k, j] = v
+            T[k, j] = tt[k]
+    return S, T, ref
+
+
+def track_shapes(points, S):
+    """Shape of each track at each point (for boundary location), None where absent."""
+    out = {}
+    for k, pt in enumerate(points):
+        if pt.get("error"):
+            continue
+        for j in range(S.shape[1]):
+            if np.isnan(S[k, j]):
+                continue
+            c = int(np.flatnonzero(pt["eigenvalues"] == S[k, j])[0])
+            out[(k, j)] = pt["shapes"][:, c]
+    return out
+
+
+def locate_task(case, config, params, axis, lo, hi, anchors, ref_lo, ref_hi, xtol, stable_end,
+                *, safety=10.0, stability_rtol=1e-12):
+    """One boundary search (a pure function for the runners): :func:`boundaries.locate`."""
+    ev = Evaluator(case, config, params, axis, anchors, safety=safety,
+                   stability_rtol=stability_rtol)
+    try:
+        return locate(ev, lo, hi, ref_lo, ref_hi, xtol, stable_end)
+    except (MbseigError, ValueError) as exc:
+        msg = exc.one_line() if isinstance(exc, MbseigError) else str(exc)
+        return {"error": msg}
+
+
+def curve_task(case, config, fixed, axis, axis2, values2, start, span, xtol, *, safety=10.0,
+               stability_rtol=1e-12):
+    """One two-parameter boundary curve (a pure function for the runners)."""
+    return follow_boundary(case, config, fixed, axis, axis2, values2, start, span=span,
+                           xtol=xtol, safety=safety, stability_rtol=stability_rtol)
