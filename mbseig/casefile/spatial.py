@@ -31,49 +31,35 @@ import dataclasses
 
 import numpy as np
 
-from ..model.affine import Affine, combine
+from ..model.affine import Affine
 from ..model.elements import LinearConstraint
 from ..model.spatial_body import (
-    FRAME_SIZE,
     GROUND,
     frame_gravity,
     frame_of,
     frame_point,
-    frame_vector,
     inertia_problem,
     spatial_mass_matrix,
 )
 from ..model.spatial_forces import (
-    BodyMoment,
-    PointFollowerForce,
-    QuadraticSpringDamper,
     Rotor,
-    SpatialTorsional,
-    bushing_rows,
 )
 from ..model.spatial_joints import (
-    JOINT_ROWS,
-    QuadraticConstraint,
-    SpatialAngleDriver,
-    angle_rows,
-    joint_rows,
     triad_constraint,
 )
 from ..numerics import scatter
 from .batch import LazyPoints
 from .builder import Builder
 from .fields import REQUIRED, Fields, expand, template
+from .spatial_readers import (
+    UNIT_TOL,
+    SpatialElementReaders,
+)
 
 __all__ = ["UNIT_TOL", "SpatialBuilder"]
 
-UNIT_TOL = 1e-9  # |‖axis‖ − 1| allowed, and the tolerance of perpendicular / coincident axes
-_FORCES = ("spring", "damper", "spring_damper", "force", "torque", "torsional", "bushing", "rotor")
-_JOINTS = (*JOINT_ROWS, "distance", "fixed", "slider", "angle_driver")
-_AXIS_KEY = {"revolute": "axis", "cylindrical": "axis", "prismatic": "axis",
-             "point_on_line": "axis", "point_on_plane": "normal"}
 
-
-class SpatialBuilder(Builder):
+class SpatialBuilder(SpatialElementReaders, Builder):
     """Reader of ``dimension = 3`` cases (module docstring)."""
 
     def __init__(self, *args, **kwargs):
@@ -274,163 +260,3 @@ class SpatialBuilder(Builder):
 
     def _inertia(self, f):
         return self._matrix(f, "inertia", 3, REQUIRED)
-
-    # -- joints ------------------------------------------------------------------------------
-    def _joint(self, f, constraints):
-        kind = f.raw("type", None)
-        if not isinstance(kind, str):
-            raise f.error(f"type must be a string, got {kind!r}")
-        if kind in JOINT_ROWS and (kind != "point_on_line" or f.has("bodies")):
-            self._spatial_joint(f, kind, constraints)
-        elif kind == "angle_driver":
-            self._angle_driver3(f, constraints)
-        elif kind in ("distance", "fixed", "slider", "point_on_line"):
-            self._bind()
-            super()._joint(f, constraints)
-        else:
-            raise f.error(f"unknown joint type {kind!r} ({', '.join(_JOINTS)})")
-
-    def _spatial_joint(self, f, kind, constraints):
-        f.text("type")
-        name = f.text("name", None)
-        b1, b2 = self._two_bodies(f)
-        at = f.vec("at", 3)
-        if kind == "universal":
-            axes = f.raw("axes")
-            if not isinstance(axes, list) or len(axes) != 2:
-                raise f.error("axes must be [axis in body1, axis in body2]")
-            axes = tuple(self._unit(f, f"axes[{k}]", Fields({"a": a}, f.label, f.names).vec("a", 3))
-                         for k, a in enumerate(axes))
-            if abs(axes[0] @ axes[1]) > UNIT_TOL:
-                raise f.error(f"the axes of a universal joint must be perpendicular, got "
-                              f"axes[0]·axes[1] = {axes[0] @ axes[1]:.6g}")
-        elif kind in _AXIS_KEY:
-            axes = (self._unit(f, _AXIS_KEY[kind]),)
-        else:
-            axes = ()
-        f.done()
-        frames = (self.frame(f, b1), self.frame(f, b2))
-        locals_ = (self.local(b1, at), self.local(b2, at))
-        rows = joint_rows(kind, frames, locals_, axes, self.length_scale)
-        on = (FRAME_SIZE, locals_[1], b2) if b2 != "ground" else (0, locals_[0], b1)
-        self._coincident_axes(f, kind, b1, b2, at, axes)
-        self.add_constraint(constraints, QuadraticConstraint(f.label, rows, 1.0, on), f)
-        for b, fr, loc in zip((b1, b2), frames, locals_):
-            self._station(b, f.label, frame_point(fr, loc))
-        if name is not None:
-            self.spatial_joints[name] = (kind, b1, b2, at, axes[0] if axes else None, f.label)
-
-    def _coincident_axes(self, f, kind, b1, b2, at, axes):
-        """Two revolute or cylindrical joints between the same bodies must share their axis."""
-        if kind not in ("revolute", "cylindrical"):
-            return
-        for okind, o1, o2, oat, oaxis, olabel in self.spatial_joints.values():
-            if okind in ("revolute", "cylindrical") and {o1, o2} == {b1, b2}:
-                apart = np.linalg.norm(np.cross(oat - at, axes[0])) / self.length_scale
-                if np.linalg.norm(np.cross(oaxis, axes[0])) > UNIT_TOL or apart > UNIT_TOL:
-                    raise f.error(f"its axis does not coincide with that of {olabel} between "
-                                  f"the same bodies (the pair would be locked)")
-
-    def _revolute(self, f):
-        """(frames, axis) of the revolute or cylindrical joint named by ``joint``."""
-        jname = f.text("joint")
-        j = self.spatial_joints.get(jname)
-        if j is None or j[0] not in ("revolute", "cylindrical"):
-            raise f.error(f"joint {jname!r} is not a revolute or cylindrical joint declared before")
-        return (self.frame(f, j[1]), self.frame(f, j[2])), j[4]
-
-    def _angle_driver3(self, f, constraints):
-        """A prescribed angle about a revolute axis; with ``sets`` an inverse-statics command."""
-        f.text("type")
-        f.text("name", None)
-        frames, axis = self._revolute(f)
-        rows = angle_rows(frames, axis)
-        driver = SpatialAngleDriver(f.label, rows.aff, f.num("angle"), 1.0, rows=rows)
-        sets = _names(f, f.raw("sets", []))
-        f.done()
-        if sets:
-            self.drivers.append((driver, sets, f))
-        else:
-            constraints.append(driver)
-
-    # -- forces ------------------------------------------------------------------------------
-    def _force(self, f, forces, g_const):
-        self._bind()
-        kind = f.raw("type", None)
-        if not isinstance(kind, str):
-            raise f.error(f"type must be a string, got {kind!r}")
-        if kind in ("spring", "damper", "spring_damper"):
-            return super()._force(f, forces, g_const)
-        if kind not in _FORCES:
-            raise f.error(f"unknown force type {kind!r} ({', '.join(_FORCES)})")
-        f.text("type")
-        f.text("name", None)
-        read = {"force": self._point_force, "torque": self._torque, "torsional": self._torsional,
-                "bushing": self._bushing, "rotor": self._rotor}[kind]
-        read(f, forces, g_const)
-
-    def _point_force(self, f, forces, g_const):
-        p, body = self._point_and_body(f, "point")
-        vec = f.vec("vector", 3)
-        follower = f.flag("follower", False)
-        f.done()
-        if not follower:
-            np.add.at(g_const, p.idx, p.C.T @ vec)
-            if isinstance(f.t.get("name"), str):
-                self.point_forces[f.t["name"]] = (p, vec, f.label)
-            return
-        if body is None:
-            raise f.error("a follower force needs a point on a body ({body, at} or a point the "
-                          "body carries)")
-        F = frame_vector(self.frames[body], vec)
-        forces.append(PointFollowerForce(f.label, combine([(1.0, p), (1.0, F)], stack=True)))
-
-    def _torque(self, f, forces, g_const):
-        body = self.body(f, f.text("body"))
-        vec = f.vec("vector", 3)
-        follower = f.flag("follower", False)
-        f.done()
-        frame = self.frames[body]
-        T = frame_vector(frame, vec) if follower else Affine.constant(vec)
-        forces.append(BodyMoment(f.label, combine([(1.0, frame), (1.0, T)], stack=True)))
-
-    def _torsional(self, f, forces, g_const):
-        frames, axis = self._revolute(f)
-        k = f.num("stiffness", 0.0, nonnegative=True)
-        c = f.num("damping", 0.0, nonnegative=True)
-        a0 = f.num("angle0", 0.0)
-        f.done()
-        rows = angle_rows(frames, axis)
-        if rows.aff.idx.size:
-            forces.append(SpatialTorsional(f.label, rows.aff, k, c, a0, 1.0, rows=rows))
-
-    def _bushing(self, f, forces, g_const):
-        b1, b2 = self._two_bodies(f)
-        at = f.vec("at", 3)
-        K = self._matrix(f, "stiffness", 6, REQUIRED)
-        D = self._matrix(f, "damping", 6)
-        f.done()
-        if not (np.all(np.isfinite(K)) and np.all(np.isfinite(D))):
-            raise f.error("stiffness and damping must be finite")
-        frames = (self.frame(f, b1), self.frame(f, b2))
-        locals_ = (self.local(b1, at), self.local(b2, at))
-        for b, fr, loc in zip((b1, b2), frames, locals_):
-            self._station(b, f.label, frame_point(fr, loc))
-        forces.append(QuadraticSpringDamper(f.label, bushing_rows(frames, locals_), K, D))
-
-    def _rotor(self, f, forces, g_const):
-        body = self.body(f, f.text("body"))
-        axis = self._unit(f, "axis")
-        jp = f.num("polar_inertia", positive=True)
-        speed = f.num("speed")
-        f.done()
-        forces.append(Rotor(f.label, self.frames[body], axis, jp, speed, body=body))
-
-
-
-def _names(f, value):
-    """An element name or a list of names (``sets``)."""
-    names = [value] if isinstance(value, str) else value
-    if not isinstance(names, list) or not all(isinstance(x, str) for x in names):
-        raise f.error("sets must be an element name or a list of names")
-    return names
