@@ -16,7 +16,7 @@ from ..eigen import solve_qep
 
 
 # ---------------------------------------------------------------------------------------------
-def threads(n):
+def capped_threads(n):
     if not n:
         return nullcontext()
     try:

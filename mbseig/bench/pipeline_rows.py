@@ -17,6 +17,7 @@ from ..casefile import load_case
 from ..check import check_modes
 from ..linear import linearize
 from ..modal import modes
+from ..model.base import BatchForce
 from ..model.batched import spring_forces
 from ..statics import equilibrium
 from .cases import case_path
@@ -160,8 +161,8 @@ free_length = 0.35
 def _complex_g(model):
     """g(q) of the model's springs for complex q: mbseig's own spring law
     (:func:`mbseig.model.batched.spring_forces`, complex-step safe: l = √(d·d)) on q + ih."""
-    singles = [f for f in model.forces if not hasattr(f, "member_forces")]
-    batches = [f for f in model.forces if hasattr(f, "member_forces")]
+    singles = [f for f in model.forces if not isinstance(f, BatchForce)]
+    batches = [f for f in model.forces if isinstance(f, BatchForce)]
 
     def g(q):
         out = np.zeros(q.shape[0], dtype=q.dtype)

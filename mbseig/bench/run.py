@@ -51,6 +51,7 @@ from .dense_rows import (
     bench_dense,
     bench_left_vectors,
     bench_structured,
+    capped_threads,
     json_default,
 )
 from .failcases import run_all
@@ -95,7 +96,7 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
     }
     res = {"config": cfg, "rows": [], "machine": _machine()}
     t_start = time.perf_counter()
-    with threads(threads), warnings.catch_warnings():
+    with capped_threads(threads), warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         if "dense" in sections:
             res["rows"] += bench_dense(cfg["dense_sizes"], repeats, cfg["qz_max"], cfg["naive_max"],

@@ -84,28 +84,18 @@ from .contract import (
     structured_applies,
 )
 from .measures import (
-    backward_errors,
-    better_half,
-    colnorm,
-    componentwise,
-    conditions,
-    expand_pairs,
     fro,
     is_symmetric,
     rayleigh_fit,
-    unit_columns,
 )
+from .partial_pairs import general_pairs, symmetric_pairs
 from .searches import companion_search, slepc_search, symmetric_search
-from .selection import (
-    partner_columns,
-)
 from .shift_invert import (
     SHIFT_OFFSETS,
     Search,
     bordered,
-    left_vectors,
 )
-from .undamped import proportional_real_error, undamped_roots
+from .undamped import proportional_real_error
 
 __all__ = ["solve_partial", "sparse_structure"]
 
@@ -217,80 +207,16 @@ def solve_partial(M, P, Q, *, n_modes: int | None = None, target: float | None =
                           "0); for a band or a target use partial-companion")
     found = None
     if name == "partial-projected" or auto_projected:
-        why = None
-        try:
-            found = SOLVERS["partial-projected"].kernel(run, want, omega_t, band, max_modes,
-                                                        verify_tol)
-            if auto_projected and not found["coverage"]["verified"]:
-                why = f"its coverage is not verified: {found['projected']['certificate']['why']}"
-                extras["projected_attempt"] = found.pop("projected")
-                found = None
-        except SolverError as exc:
-            if not auto_projected:
-                raise
-            why = str(exc)
-        if found is not None:
-            name = "partial-projected"
-            reason = ("general damping, lowest modes, symmetric M, P, Q: undamped Lanczos, "
-                      "projection and refinement with one LU, count certificate"
-                      + (reason[reason.index(";"):] if ";" in reason else ""))
-            extras["projected"] = found.pop("projected")
-        else:
-            reason += f"; partial-projected tried first and not used ({why})"
-            extras["projected_fallback"] = why
+        found, name, reason = _projected_first(run, want, omega_t, band, max_modes, verify_tol,
+                                               auto_projected, name, reason, extras)
     if found is None:
         found = SOLVERS[name].kernel(run, want, omega_t, band, max_modes, verify_tol)
     if symmetric_path:
-        w, V = found["w"], found["V"]
-        alpha, beta = extras.get("alpha", 0.0), extras.get("beta", 0.0)
-        s = undamped_roots(w, alpha, beta)
-        V = np.divide(V, colnorm(V), order="C")  # row-major: the measures run over blocks of rows
-        X = np.concatenate([V, V], axis=1)
-        if m and beta != 0.0:  # multipliers of the damped mode: μ = (1 + βs) λ (module doc)
-            X = X.astype(complex)
-            X[n:, :] *= (1.0 + beta * s)[None, :]
-            X = unit_columns(X)
-        eta, MX, PX = backward_errors((Mb, Pb, Qb), s, X, norms)
-        Yc = X
-        kappa = conditions(s, X, Yc, MX, PX, norms)
-        n_second = 0
+        s, Xq, Yq, eta, kappa, lazy, n_second = symmetric_pairs(
+            found, extras, (Mb, Pb, Qb), norms, n, m, verify_tol, name)
     else:
-        # a conjugate partner (s̄, x̄) of real M, P, Q has the η, κ, η_c, κ_c of (s, x): the
-        # measures are formed on one column per pair (half the work) and copied to the partner
-        s_all, X1, X2 = found["s"], found["X1"], found["X2"]
-        src = partner_columns(s_all, X1)
-        uniq = np.flatnonzero(src == np.arange(s_all.size))
-        s = s_all[uniq]
-        if uniq.size < s_all.size:
-            X1, X2 = X1[:, uniq], (None if X2 is X1 else X2[:, uniq])
-            X2 = X1 if X2 is None else X2
-        del found["X1"], found["X2"]
-        X, eta, MX, PX, n_second = better_half((Mb, Pb, Qb), s, X1, X2, norms)
-        del X1, X2
-        symmetric_all = all(is_symmetric(A, sym_tol) for A in (Mb, Pb, Qb))
-        Yc = X if symmetric_all or not left else left_vectors(Mb, Pb, Qb, s)
-        kappa = conditions(s, X, Yc, MX, PX, norms)
-        del MX, PX
-    if not symmetric_path:
-        pos = np.searchsorted(uniq, src)  # the measured column of each returned pair
-        partner = src != np.arange(s_all.size)
-    bad = ~(eta <= verify_tol)
-    if np.any(bad):
-        worst = ", ".join(f"{z.real:.6g}{z.imag:+.6g}j (η={e:.1e})" for z, e in zip(s[bad][:5], eta[bad][:5]))
-        raise SolverError(f"{name}: {int(bad.sum())} returned pairs fail the backward-error check "
-                          f"η ≤ {verify_tol:g}: {worst}")
-    # the componentwise measures on demand (the listing asks for the few pairs the normwise
-    # bound leaves undecided; at 10⁶ coordinates all of them cost ≈ 4 s)
-    lazy = _Componentwise((Mb, Pb, Qb), s, X, Yc,
-                          None if symmetric_path else pos, None if symmetric_path else partner)
-    Xq = unit_columns(X[:n]) if m else X
-    Yq = Xq if Yc is X else (unit_columns(Yc[:n]) if m else Yc)
-    del X, Yc
-    if not symmetric_path:  # back to every returned pair: partners conjugated
-        s, eta, kappa = s_all, eta[pos], kappa[pos]
-        same = Yq is None or Yq is Xq  # y = x̄: the left vectors are the right ones, expanded once
-        Xq = expand_pairs(Xq, pos, partner)
-        Yq = Xq if same else expand_pairs(Yq, pos, partner)
+        s, Xq, Yq, eta, kappa, lazy, n_second = general_pairs(
+            found, (Mb, Pb, Qb), norms, n, m, verify_tol, name, sym_tol, left)
     real_error = None
     if name == "partial-proportional":
         a, b = extras["alpha"], extras["beta"]
@@ -307,23 +233,31 @@ def solve_partial(M, P, Q, *, n_modes: int | None = None, target: float | None =
                        n_dof=n - m, coverage=coverage, problem=lazy)
 
 
-class _Componentwise:
-    """(η_c, κ_c) of returned pairs on demand (:meth:`QEPSolution.componentwise`), from the
-    bordered pencil and the bordered vectors they were verified with; ``pos``/``partner`` map a
-    returned pair to its measured column (a conjugate partner has the same measures).  A plain
-    object (not a closure), so a solution stays picklable."""
-
-    def __init__(self, pencil, s, X, Y, pos=None, partner=None):
-        self.pencil, self.s, self.X, self.Y, self.pos, self.partner = pencil, s, X, Y, pos, partner
-
-    def __call__(self, idx):
-        cols = np.asarray(idx) if self.pos is None else np.unique(self.pos[np.asarray(idx)])
-        Y = None if self.Y is None else self.Y[:, cols]
-        eta_c, kappa_c = componentwise(self.pencil, self.s[cols], self.X[:, cols], Y)
-        if self.pos is None:
-            return eta_c, kappa_c
-        where = np.searchsorted(cols, self.pos[np.asarray(idx)])
-        return eta_c[where], kappa_c[where]
+def _projected_first(run, want, omega_t, band, max_modes, verify_tol, auto_projected, name,
+                     reason, extras):
+    """The projected path, asked for or tried first by ``auto`` (general damping, lowest modes,
+    symmetric M, P, Q): (found or None, path, reason); ``auto`` falls back, saying why, when its
+    coverage is not verified or it fails (module docstring)."""
+    why = None
+    try:
+        found = SOLVERS["partial-projected"].kernel(run, want, omega_t, band, max_modes,
+                                                    verify_tol)
+        if auto_projected and not found["coverage"]["verified"]:
+            why = f"its coverage is not verified: {found['projected']['certificate']['why']}"
+            extras["projected_attempt"] = found.pop("projected")
+            found = None
+    except SolverError as exc:
+        if not auto_projected:
+            raise
+        found, why = None, str(exc)
+    if found is not None:
+        reason = ("general damping, lowest modes, symmetric M, P, Q: undamped Lanczos, "
+                  "projection and refinement with one LU, count certificate"
+                  + (reason[reason.index(";"):] if ";" in reason else ""))
+        extras["projected"] = found.pop("projected")
+        return found, "partial-projected", reason
+    extras["projected_fallback"] = why
+    return None, name, reason + f"; partial-projected tried first and not used ({why})"
 
 
 def partial_driver(problem, request) -> QEPSolution:

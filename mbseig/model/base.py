@@ -20,16 +20,32 @@ Force (generalized force g_e(q, q̇) on q[idx])::
     force(q, q̇)       g_e                                       (|idx|,)
     jacobians(q, q̇)   (K_e, C_e) = (−∂g_e/∂q, −∂g_e/∂q̇)         (|idx|, |idx|) each
 
-A batch of identical elements (:class:`~mbseig.model.batched.SpringDamperSet`) may instead offer
-``add_force(g, q, q̇)`` and ``jacobian_coo(q, q̇)`` on the full vectors; the model uses those when
-present.  A configuration-dependent mass (a co-rotational beam) also provides ``mass(q)`` on idx.
+A batch of identical elements (:class:`BatchForce`, e.g.
+:class:`~mbseig.model.batched.SpringDamperSet`) offers ``add_force(g, q, q̇)`` and
+``jacobian_coo(q, q̇)`` on the full vectors instead; the model uses those when present.  A
+configuration-dependent mass (:class:`ConfigurationMass`: a co-rotational beam) provides
+``mass(q)`` on idx.
+
+Velocity constraint (m_e non-holonomic rows A(q) q̇ = 0, :class:`VelocityConstraint`: a wheel
+rolling without slip)::
+
+    rows(q)           A_e(q)                                 (m_e, |idx|)
+    rows_q(q, q̇)      ∂(A_e(q) q̇)/∂q at the velocities q̇     (m_e, |idx|)
+
+``rows_q`` is what a linearization about a moving reference must keep (it vanishes at rest).
+The assembled model holds them apart from the holonomic constraints
+(``Model.velocity_constraints``); the static path has none to satisfy.
+
+A new element is one subclass here (or in the element modules) plus one reader entry
+(:mod:`mbseig.casefile.element_readers`, :mod:`mbseig.casefile.spatial_readers`) that builds
+it through :class:`mbseig.model.assembly.Assembly`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["Constraint", "Force"]
+__all__ = ["Constraint", "Force", "VelocityConstraint", "ConfigurationMass", "BatchForce"]
 
 
 class _Element:
@@ -80,4 +96,35 @@ class Force(_Element):
         raise NotImplementedError
 
     def jacobians(self, q, qd):
+        raise NotImplementedError
+
+
+class VelocityConstraint(_Element):
+    """Base class of velocity-level (non-holonomic) constraints (module docstring)."""
+
+    n_eq: int = 1
+
+    def rows(self, q):
+        raise NotImplementedError
+
+    def rows_q(self, q, qd):
+        raise NotImplementedError
+
+
+class ConfigurationMass(_Element):
+    """An element whose mass matrix depends on the configuration: ``mass(q)`` on ``idx``."""
+
+    def mass(self, q):
+        raise NotImplementedError
+
+
+class BatchForce:
+    """A batch of identical force elements acting on the full vectors (module docstring)."""
+
+    name: str
+
+    def add_force(self, g, q, qd):
+        raise NotImplementedError
+
+    def jacobian_coo(self, q, qd):
         raise NotImplementedError

@@ -23,7 +23,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import EquilibriumError
-from .base import Force
+from .base import BatchForce, Force
 
 __all__ = ["SpringDamperSet", "spring_forces", "spring_tangents"]
 
@@ -77,7 +77,7 @@ def spring_tangents(d, dd, k, l0, c, label):
 
 
 @dataclass(frozen=True, eq=False)
-class SpringDamperSet(Force):
+class SpringDamperSet(BatchForce, Force):
     """Springs/dashpots k, l0, c between points a and b, one row per member.
 
     ia, ib : (nb, dim) coordinate indices of the two points (−1: a fixed component whose value

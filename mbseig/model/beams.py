@@ -38,7 +38,7 @@ import numpy as np
 
 from ..errors import EquilibriumError
 from .affine import Affine
-from .base import Constraint, Force
+from .base import ConfigurationMass, Constraint, Force
 
 __all__ = [
     "BeamSection",
@@ -129,7 +129,7 @@ def _wrap(a):
 
 
 @dataclass(frozen=True, eq=False)
-class BeamElement(Force):
+class BeamElement(Force, ConfigurationMass):
     """One co-rotational planar beam element on w = [x₁, y₁, θ₁, x₂, y₂, θ₂] (module docstring)."""
 
     name: str

@@ -35,7 +35,7 @@ from .affine import Affine, combine
 from .base import Force
 from .elements import TorsionalSpringDamper
 from .spatial_body import FRAME_SIZE, point_matrix, vector_matrix
-from .spatial_joints import QuadraticMap, Rows, selectors, axis_angle
+from .spatial_joints import QuadraticMap, Rows, axis_angle, selectors
 
 __all__ = [
     "BodyMoment",

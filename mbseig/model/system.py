@@ -15,7 +15,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..numerics import DENSE_ASSEMBLY, coo_sum, scatter
+from .base import BatchForce
 from .batched import spring_tangents
+from .cache import KeptValues
 
 __all__ = ["Model"]
 
@@ -80,11 +82,13 @@ class Model:
     gravity_force: np.ndarray = None
     mass_parts: tuple = ()
     coordinate_kinds: tuple = ()  # per coordinate: length, direction, angle, modal (assembly)
+    velocity_constraints: tuple = ()  # non-holonomic rows A(q) q̇ = 0 (model.base)
     element_ends: dict = field(default_factory=dict)  # element → the points it acts between
     # the last dense evaluations (K and C, Φ_q, H(λ)) of a small model, keyed by q (and λ):
     # a sweep point's corrector, force scale, static stability and linearization ask for the
     # same matrices at one q; read-only arrays, so that a caller cannot change a kept one
-    _dense_kept: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    _dense_kept: KeptValues = field(default_factory=lambda: KeptValues(8, readonly=True),
+                                    init=False, repr=False, compare=False)
 
     # ---- sizes ---------------------------------------------------------------------------
     @property
@@ -110,20 +114,13 @@ class Model:
         return (self.mass + scatter(self.n, self.n, blocks)).tocsr()
 
     def _kept(self, key, compute):
-        """compute() once per key among the last few dense evaluations (read-only arrays); a
-        model above the dense-assembly size keeps nothing (a dense K of a model examined up to
-        the dense limit of 4000 unknowns would hold 128 MB)."""
+        """compute() once per key among the last few dense evaluations (read-only arrays,
+        :class:`~mbseig.model.cache.KeptValues`); a model above the dense-assembly size keeps
+        nothing (a dense K of a model examined up to the dense limit of 4000 unknowns would
+        hold 128 MB)."""
         if not self.dense_assembly:
             return compute()
-        hit = self._dense_kept.get(key)
-        if hit is None:
-            hit = compute()
-            for a in (hit if isinstance(hit, tuple) else (hit,)):
-                a.setflags(write=False)
-            if len(self._dense_kept) >= 8:
-                self._dense_kept.pop(next(iter(self._dense_kept)))
-            self._dense_kept[key] = hit
-        return hit
+        return self._dense_kept.get(key, compute)
 
     # ---- forces --------------------------------------------------------------------------
     def generalized_force(self, q, qd=None, u=None) -> np.ndarray:
@@ -136,7 +133,7 @@ class Model:
             for nm, value in u.items():
                 g += value * known[nm].generalized_force(self, q)
         for f in self.forces:
-            if hasattr(f, "add_force"):  # a batch of identical elements (model/batched.py)
+            if isinstance(f, BatchForce):  # a batch of identical elements (model/batched.py)
                 f.add_force(g, q, qd)
             else:
                 np.add.at(g, f.idx, f.force(q, qd))
@@ -152,7 +149,7 @@ class Model:
         qd = np.zeros(self.n) if qd is None else qd
         kb, cb, kt, ct = [], [], [], []
         for f in self.forces:
-            if hasattr(f, "jacobian_coo"):  # batches give COO triplets
+            if isinstance(f, BatchForce):  # batches give COO triplets
                 Kt, Ct = f.jacobian_coo(q, qd)
                 kt.append(Kt)
                 ct.append(Ct)
@@ -223,7 +220,7 @@ class Model:
         # evaluated under errstate "ignore": an overflow is judged by the results below
         with np.errstate(all="ignore"):
             for f in self.forces:
-                if hasattr(f, "member_forces"):  # a batch: name the member
+                if isinstance(f, BatchForce):  # a batch: name the member
                     d, dd, k, l0, c, label = f.members(q, qd)
                     parts = (f.member_forces(q, qd), *spring_tangents(d, dd, k, l0, c, label))
                     rows = [np.reshape(~np.isfinite(p), (len(f), -1)).any(axis=1) for p in parts]

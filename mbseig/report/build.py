@@ -30,6 +30,7 @@ from ..studies.point import as_spec
 from ..studies.report_studies import study_configuration
 from .render import render_html, render_markdown
 from .sections import configuration_blocks
+from .study_blocks import study_section
 from .summary import comparison_blocks, summary_blocks
 from .text import clean
 from .units import parameter_units
@@ -94,7 +95,7 @@ def build_report(case, *, configs=None, out_dir, run_check=True, jobs=None, stud
         for st in getattr(base, "report", {}).get("studies", []):  # a linear case has no [report]
             if st.get("config") not in configs and not (len(configs) > 1):
                 continue
-            b, s = study_blocks(case, st, out_dir, stem, jobs, units)
+            b, s = study_section(case, st, out_dir, stem, jobs, units)
             study_blocks += b
             study_sums.append(s)
     body = summary_blocks(case, summaries, study_sums, units, sensitivities)

@@ -10,10 +10,10 @@ from ..studies import write_outputs
 from ..studies.report_studies import compare_study, sweep_study
 from .units import with_unit
 
-__all__ = ["study_blocks", "compare_blocks"]
+__all__ = ["study_section", "compare_blocks"]
 
 
-def study_blocks(case, study, out_dir, stem, jobs, units):
+def study_section(case, study, out_dir, stem, jobs, units):
     kind = "compare" if "compare" in study else "sweep"
     config = study.get("config")
     title = study.get("title", f"{kind} on {config}")

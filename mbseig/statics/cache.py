@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..model.cache import KeptValues
+
 
 class Memo:
     """The model seen through a small cache of its assembled quantities at the last few q (the
@@ -15,7 +17,7 @@ class Memo:
 
     def __init__(self, model):
         self._model = model
-        self._cache: dict = {}
+        self._cache = KeptValues(self.SIZE)
         # a small model's Jacobians as dense arrays (mbseig.numerics.DENSE_ASSEMBLY)
         self._dense = bool(getattr(model, "dense_assembly", False))
 
@@ -28,13 +30,7 @@ class Memo:
         return self._model
 
     def _get(self, key, compute):
-        hit = self._cache.get(key)
-        if hit is None:
-            hit = compute()
-            if len(self._cache) >= self.SIZE:
-                self._cache.pop(next(iter(self._cache)))
-            self._cache[key] = hit
-        return hit
+        return self._cache.get(key, compute)
 
     def phi(self, q):
         return self._get(("phi", q.tobytes()), lambda: self._model.phi(q))

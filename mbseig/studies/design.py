@@ -42,6 +42,7 @@ import numpy as np
 
 from ..errors import CaseError
 from ..linear import linearize
+from ..model.base import BatchForce
 from ..numerics import element_name
 from .pipeline import analyze, as_spec
 from .point import equilibrium_stage
@@ -171,7 +172,7 @@ def modal_energy(model, eq, lin, modes_obj) -> list:
     # potential: force elements, gravity through the constraints, constraints
     pot_parts = []
     for f in model.forces:
-        if hasattr(f, "jacobian_coo"):
+        if isinstance(f, BatchForce):
             import scipy.sparse as sp
 
             Kt, _ = f.jacobian_coo(q0, zero)
