@@ -12,7 +12,7 @@ from contextlib import nullcontext
 import numpy as np
 import scipy.linalg as sla
 
-from ..eigen import solve_qep
+from ..eigen import Problem, Request, solve
 
 
 # ---------------------------------------------------------------------------------------------
@@ -86,13 +86,13 @@ def bench_dense(sizes, repeats, qz_max, naive_max, general_max, log):
         fns = {}
         if n <= general_max:
             fns["LAPACK geev (floor)"] = lambda: g * sla.eig(A, check_finite=False)[0]
-            fns["mbseig companion"] = lambda: solve_qep(M, C, K, solver="companion")
+            fns["mbseig companion"] = lambda: solve(Problem(M, C, K), Request("companion"))
         if n <= naive_max:
             fns["naive companion"] = lambda: _naive_with_vectors(M, C, K)
         if n <= qz_max:
-            fns["QZ unscaled"] = lambda: solve_qep(M, C, K, solver="qz", scale=False)
-            fns["QZ scaled"] = lambda: solve_qep(M, C, K, solver="qz")
-        fns["mbseig default"] = lambda: solve_qep(M, C, K)
+            fns["QZ unscaled"] = lambda: solve(Problem(M, C, K), Request("qz", options={"scale": False}))
+            fns["QZ scaled"] = lambda: solve(Problem(M, C, K), Request("qz"))
+        fns["mbseig default"] = lambda: solve(Problem(M, C, K), Request())
         t, out = median_times(fns, reps)
         for name, res in out.items():
             s = res if isinstance(res, np.ndarray) else res.eigenvalues
@@ -114,8 +114,8 @@ def _naive_with_vectors(M, C, K):
 def bench_left_vectors(n, repeats, log):
     """Cost of LAPACK's left eigenvectors on the dense companion path (non-symmetric P)."""
     M, C, K = chain_matrices(n)
-    fns = {"right only": lambda: solve_qep(M, C, K, solver="companion", left=False),
-           "left and right": lambda: solve_qep(M, C, K, solver="companion", left=True)}
+    fns = {"right only": lambda: solve(Problem(M, C, K), Request("companion", options={"left": False})),
+           "left and right": lambda: solve(Problem(M, C, K), Request("companion", options={"left": True}))}
     t, _ = median_times(fns, repeats)
     log(f"left vectors n={n}: {t}")
     return {"n": n, **t}
@@ -127,9 +127,9 @@ def bench_structured(sizes, repeats, general_max, log):
         for damped, label in ((False, "eigh"), (True, "proportional")):
             M, C, K = chain_matrices(n, damped=damped)
             exact = chain_exact(n, damped=damped)
-            fns = {"floor": lambda: sla.eigh(K, M, check_finite=False), label: lambda: solve_qep(M, C, K)}
+            fns = {"floor": lambda: sla.eigh(K, M, check_finite=False), label: lambda: solve(Problem(M, C, K), Request())}
             if n <= general_max:
-                fns["general"] = lambda: solve_qep(M, C, K, solver="companion")
+                fns["general"] = lambda: solve(Problem(M, C, K), Request("companion"))
             t, out = median_times(fns, repeats if n <= 1000 else 1)
             row = {"section": "structured", "method": f"mbseig {label}", "n": n, "time": t[label],
                    "error": rel_error(out[label].eigenvalues, exact),

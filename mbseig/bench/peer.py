@@ -61,14 +61,19 @@ from __future__ import annotations
 
 import math
 import tempfile
-import time
 import warnings
 from pathlib import Path
 
 import numpy as np
 
 from .peer_cases import double_case, pendulum_case
-from .peer_chain import chain_rows, eigenvalue_backward_error, exudyn_available
+from .peer_chain import (
+    chain_rows,
+    eigenvalue_backward_error,
+    exudyn_available,
+    interleaved,
+    linearized_modes,
+)
 
 __all__ = ["bench_peer", "bench_peer_spatial", "exudyn_available", "peer_lines"]
 
@@ -243,15 +248,9 @@ def bench_peer_spatial(repeats, log, models=tuple(SPATIAL_MODELS)):
             eq = equilibrium(model)
             SC, mbs = _exudyn_spatial(key, p)
             s_stock = _exudyn_stock(mbs)
-            t_m, t_e = [], []
-            for _ in range(repeats):  # interleaved
-                t = time.perf_counter()
-                lin = linearize(model, eq)
-                md = modes(lin.M, lin.P, lin.Q)
-                t_m.append(time.perf_counter() - t)
-                t = time.perf_counter()
-                s_e = _exudyn_eigenvalues(mbs)
-                t_e.append(time.perf_counter() - t)
+            t_m, t_e, (lin, md), s_e = interleaved(
+                repeats, lambda: linearized_modes(model, eq, linearize, modes),
+                lambda m=mbs: _exudyn_eigenvalues(m))
             s_m = np.asarray(md.eigenvalues)
             s_m = np.concatenate([s_m, np.conj(s_m[np.abs(s_m.imag) > 0])])  # listed once per pair
             ref = exact(p)

@@ -20,6 +20,26 @@ def exudyn_available():
     return True
 
 
+def interleaved(repeats, ours, theirs):
+    """Times of ``ours()`` and ``theirs()`` run alternately ``repeats`` times (a shared machine's
+    load falls on both alike), and the last result of each."""
+    t_m, t_e = [], []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        a = ours()
+        t_m.append(time.perf_counter() - t)
+        t = time.perf_counter()
+        b = theirs()
+        t_e.append(time.perf_counter() - t)
+    return t_m, t_e, a, b
+
+
+def linearized_modes(model, eq, linearize, modes):
+    """mbseig's timed part of a peer row: linearize and modes (the equilibrium is shared)."""
+    lin = linearize(model, eq)
+    return lin, modes(lin.M, lin.P, lin.Q)
+
+
 def _case(n, k=1000.0, c=0.5, c0=2.0):
     return f"""
 schema_version = 1
@@ -133,16 +153,10 @@ def chain_rows(sizes, repeats, log, n_check=20):
             model = load_case(path)
             eq = equilibrium(model)
             SC, mbs = _exudyn_model(n)
-            t_m, t_e = [], []
-            for _ in range(repeats):  # interleaved
-                t = time.perf_counter()
-                lin = linearize(model, eq)
-                md = modes(lin.M, lin.P, lin.Q)
-                t_m.append(time.perf_counter() - t)
-                t = time.perf_counter()
-                ev = exu.solver.ComputeODE2Eigenvalues(mbs, computeComplexEigenvalues=True,
-                                                       useAbsoluteValues=False)
-                t_e.append(time.perf_counter() - t)
+            t_m, t_e, (lin, md), ev = interleaved(
+                repeats, lambda: linearized_modes(model, eq, linearize, modes),
+                lambda m=mbs: exu.solver.ComputeODE2Eigenvalues(m, computeComplexEigenvalues=True,
+                                                                useAbsoluteValues=False))
             M, C, K = (np.asarray(A.toarray() if hasattr(A, "toarray") else A) for A in (lin.M, lin.P, lin.Q))
             s_m = np.asarray(md.eigenvalues)
             s_m = np.concatenate([s_m, np.conj(s_m[np.abs(s_m.imag) > 0])])  # listed once per pair

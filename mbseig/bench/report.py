@@ -122,6 +122,12 @@ def _nlevp_lines(rows):
     return out
 
 
+def _table(L, title, intro, header, rows, row):
+    """A section: title, intro paragraph, a table with one line per row (``row(r)``)."""
+    L += ["", f"## {title}", "", intro, "", header, "|" + "---|" * (header.count("|") - 1)]
+    L.extend(row(r) for r in rows)
+
+
 def write_report(res, out_dir):
     out_dir = Path(out_dir)
     cfg = res["config"]
@@ -163,26 +169,24 @@ def write_report(res, out_dir):
                   "vector is the conjugate of the right one, exactly, so κ costs nothing there."]
     st = _rows(res, "structured")
     if st:
-        L += ["", "## Structured fast paths against eigh(Q, M) and the dense general path", "",
-              "Floor: `scipy.linalg.eigh(Q, M)` with vectors on the same matrices, interleaved.", "",
-              "| path | n | time | eigh(Q, M) floor | / floor | general path | speed-up | error | η |",
-              "|---|---|---|---|---|---|---|---|---|"]
-        for r in st:
-            L.append(f"| {r['method']} | {r['n']} | {_f(r['time'])} s | {_f(r.get('floor_time'))} s | "
-                     f"{_f(r.get('floor_ratio'), '.2f')} | {_f(r.get('general_time'))} s | "
-                     f"{_f(r.get('speedup'), '.0f')}× | {_f(r['error'], '.0e')} | {_f(r['eta'], '.0e')} |")
+        _table(L, "Structured fast paths against eigh(Q, M) and the dense general path",
+               "Floor: `scipy.linalg.eigh(Q, M)` with vectors on the same matrices, interleaved.",
+               "| path | n | time | eigh(Q, M) floor | / floor | general path | speed-up | error | η |",
+               st, lambda r: f"| {r['method']} | {r['n']} | {_f(r['time'])} s | "
+               f"{_f(r.get('floor_time'))} s | {_f(r.get('floor_ratio'), '.2f')} | "
+               f"{_f(r.get('general_time'))} s | {_f(r.get('speedup'), '.0f')}× | "
+               f"{_f(r['error'], '.0e')} | {_f(r['eta'], '.0e')} |")
     part = _rows(res, "partial")
     if part:
-        L += ["", "## Partial spectrum of large sparse models (lowest 20 modes, whole pipeline)", "",
-              "Each run in a fresh process (peak resident memory of that process). `general`: one "
-              "extra dashpot makes the damping non-proportional (shift-invert Arnoldi on the "
-              "companion pencil); its error column is empty (no closed form), η verifies it.", "",
-              "| path | n | load | equilibrium | linearize | modes | total | peak RSS | error | η | runs |",
-              "|---|---|---|---|---|---|---|---|---|---|---|"]
-        for r in part:
-            L.append(f"| {r['solver']} | {r['n']:.0e} | {r['load']:.2f} | {r['equilibrium']:.2f} | "
-                     f"{r['linearize']:.2f} | {r['modes']:.2f} | {r['total']:.2f} s | "
-                     f"{r['rss_mb']:.0f} MB | {_f(r['error'], '.0e')} | {r['eta']:.0e} | {r['repeats']} |")
+        _table(L, "Partial spectrum of large sparse models (lowest 20 modes, whole pipeline)",
+               "Each run in a fresh process (peak resident memory of that process). `general`: one "
+               "extra dashpot makes the damping non-proportional (shift-invert Arnoldi on the "
+               "companion pencil); its error column is empty (no closed form), η verifies it.",
+               "| path | n | load | equilibrium | linearize | modes | total | peak RSS | error | η | runs |",
+               part, lambda r: f"| {r['solver']} | {r['n']:.0e} | {r['load']:.2f} | "
+               f"{r['equilibrium']:.2f} | {r['linearize']:.2f} | {r['modes']:.2f} | "
+               f"{r['total']:.2f} s | {r['rss_mb']:.0f} MB | {_f(r['error'], '.0e')} | "
+               f"{r['eta']:.0e} | {r['repeats']} |")
     large = _rows(res, "large")
     if large:
         L += ["", "## Large constrained model, general damping (lowest 20 modes)", "",
@@ -194,10 +198,9 @@ def write_report(res, out_dir):
               "shift-and-invert, UMFPACK LU) in a worker process.", "",
               "| path | n | constraints | time | / floor | peak RSS | η | coverage verified | runs |",
               "|---|---|---|---|---|---|---|---|---|"]
-        for r in large:
-            L.append(f"| {r['method']} | {r['n']:.0e} | {r['m']} | {r['time']:.2f} s | {r['ratio']:.2f}× | "
-                     f"{r['rss_mb']:.0f} MB | {_f(r['eta'], '.0e')} | {_f(r.get('verified'), '')} | "
-                     f"{r['repeats']} |")
+        L.extend(f"| {r['method']} | {r['n']:.0e} | {r['m']} | {r['time']:.2f} s | {r['ratio']:.2f}× | "
+                 f"{r['rss_mb']:.0f} MB | {_f(r['eta'], '.0e')} | {_f(r.get('verified'), '')} | "
+                 f"{r['repeats']} |" for r in large)
         L += ["", "Peak RSS of `partial-slepc` is that of the mbseig process only; the worker's own peak "
               "is reported in docs/scaling.md."]
     su = _rows(res, "startup")
@@ -226,12 +229,11 @@ def write_report(res, out_dir):
         L.extend(peer_lines(_rows(res, "peer"), res.get("peer_note")))
     jac = _rows(res, "jacobians")
     if jac:
-        L += ["", "## Jacobians of a 2-D spring network", "",
-              "Error: max |K − K_ref| / max |K_ref| with K_ref the complex-step Jacobian (exact to "
-              "rounding); for the complex step itself, its difference from the analytic K.", "",
-              "| method | coordinates | time | error |", "|---|---|---|---|"]
-        for r in jac:
-            L.append(f"| {r['method']} | {r['n']} | {r['time']:.2e} s | {r['error']:.1e} |")
+        _table(L, "Jacobians of a 2-D spring network",
+               "Error: max |K − K_ref| / max |K_ref| with K_ref the complex-step Jacobian (exact to "
+               "rounding); for the complex step itself, its difference from the analytic K.",
+               "| method | coordinates | time | error |", jac,
+               lambda r: f"| {r['method']} | {r['n']} | {r['time']:.2e} s | {r['error']:.1e} |")
     cs = _rows(res, "constraint")
     if cs:
         L += ["", "## Linearization with and without the constraint-force stiffness", "",
@@ -254,13 +256,12 @@ def write_report(res, out_dir):
     L.extend(_nlevp_lines(_rows(res, "nlevp")))
     fails = res.get("failures")
     if fails:
-        L += ["", "## Stability where methods fail", "",
-              "Each row: the naive method, its answer, mbseig's answer, and the reference that decides "
-              "(asserted in tests/test_failures.py).", "",
-              "| case | naive method | naive answer | mbseig | reference | naive wrong | mbseig right |",
-              "|---|---|---|---|---|---|---|"]
-        for c in fails:
-            L.append(f"| {c['name']} | {c['naive_method']} | {c['naive']} | {c['mbseig']} | {c['reference']} | "
-                     f"{'yes' if c['naive_wrong'] else 'no'} | {'yes' if c['mbseig_right'] else '**no**'} |")
+        _table(L, "Stability where methods fail",
+               "Each row: the naive method, its answer, mbseig's answer, and the reference that "
+               "decides (asserted in tests/test_failures.py).",
+               "| case | naive method | naive answer | mbseig | reference | naive wrong | mbseig right |",
+               fails, lambda c: f"| {c['name']} | {c['naive_method']} | {c['naive']} | {c['mbseig']} | "
+               f"{c['reference']} | {'yes' if c['naive_wrong'] else 'no'} | "
+               f"{'yes' if c['mbseig_right'] else '**no**'} |")
     (out_dir / "benchmarks.md").write_text("\n".join(L) + "\n")
     plots.save(plots.speed_accuracy(res), out_dir / "speed_accuracy.png", dpi=120)

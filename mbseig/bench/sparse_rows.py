@@ -123,7 +123,7 @@ def large_worker(kind, n, n_modes):
 
     import scipy.sparse.linalg as spla
 
-    from ..eigen import solve_partial
+    from ..eigen import Problem, Request, solve
     from ..eigen.shift_invert import bordered as _bordered
 
     t0 = time.perf_counter()
@@ -137,7 +137,7 @@ def large_worker(kind, n, n_modes):
         w, _ = spla.eigsh(Qb, k=n_modes, M=Mb, sigma=0.0, OPinv=op)  # with vectors, as mbseig
         out.update(eta=math.nan, omega_1=float(np.sqrt(np.min(np.abs(w)))))
     else:
-        sol = solve_partial(M, C, K, G=G, n_modes=n_modes, solver=kind)
+        sol = solve(Problem(M, C, K, G=G), Request(kind, n_modes=n_modes))
         out.update(eta=float(np.max(sol.backward_error)), verified=bool(sol.coverage["verified"]),
                    omega_1=float(np.min(np.abs(sol.eigenvalues))), slepc=sol.details.get("slepc"),
                    solver=sol.solver, arpack_k=sol.details.get("arpack_k"))

@@ -81,12 +81,16 @@ def _element(builder, f, forces, constraints):
     raise f.error(f"unknown element {ename!r} (a named joint or force)")
 
 
-def _inputs(builder, forces):
+def _signal_items(builder, what, ways):
+    """(fields, label, unique name, way) of each ``[[inputs]]`` or ``[[outputs]]`` entry."""
     seen = set()
-    for item, label, names in expand("inputs", builder.data.get("inputs", []), builder.params):
+    for item, label, names in expand(what + "s", builder.data.get(what + "s", []), builder.params):
         f = Fields(item, label, names)
-        name = _name(f, seen, "input")
-        way = _way(f, _INPUT_WAYS)
+        yield f, label, _name(f, seen, what), _way(f, ways)
+
+
+def _inputs(builder, forces):
+    for f, label, name, way in _signal_items(builder, "input", _INPUT_WAYS):
         if way == "element":
             kind, el = _element(builder, f, forces, ())
             f.done()
@@ -150,17 +154,13 @@ def _quantity(f, kind):
 
 
 def _outputs(builder, forces, constraints, inputs):
-    seen = set()
-    for item, label, names in expand("outputs", builder.data.get("outputs", []), builder.params):
-        f = Fields(item, label, names)
-        name = _name(f, seen, "output")
-        way = _way(f, _OUTPUT_WAYS)
+    for f, label, name, way in _signal_items(builder, "output", _OUTPUT_WAYS):
         if way == "point":
             quantity = _quantity(f, "point")
             p = builder.point_ref(f, "point")
             d = _unit(f, "direction", builder.dim)
             f.done()
-            yield Output(name, "point", quantity, label, point=p, direction=d)
+            yield Output(name, "point", label, quantity=quantity, point=p, direction=d)
         elif way == "bodies":
             quantity = _quantity(f, "angle")
             if builder.dim != 2:
@@ -168,14 +168,14 @@ def _outputs(builder, forces, constraints, inputs):
                               "element = a torsional element)")
             dirs, sense = builder.angle_pair(f)
             f.done()
-            yield Output(name, "angle", quantity, label, dirs=dirs, sense=sense)
+            yield Output(name, "angle", label, quantity=quantity, dirs=dirs, sense=sense)
         else:
             kind, el = _element(builder, f, forces, constraints)
             if kind == "joint":
                 quantity = _quantity(f, "constraint")
                 d = _unit(f, "direction", builder.dim) if f.has("direction") else None
                 f.done()
-                yield Output(name, "constraint", quantity, label, element=el.name, direction=d)
+                yield Output(name, "constraint", label, quantity=quantity, element=el.name, direction=d)
                 continue
             if kind == "force" and isinstance(el, SpringDamper):
                 okind = "spring"
@@ -187,4 +187,4 @@ def _outputs(builder, forces, constraints, inputs):
             quantity = _quantity(f, okind)
             f.done()
             acting = tuple(i.name for i in inputs if i.kind == "element" and i.element == el.name)
-            yield Output(name, okind, quantity, label, element=el.name, inputs=acting)
+            yield Output(name, okind, label, quantity=quantity, element=el.name, inputs=acting)

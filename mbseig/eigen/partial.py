@@ -74,15 +74,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import SolverError
+from . import contract
 from .base import QEPSolution
-from .contract import (
-    SOLVERS,
-    Structure,
-    register,
-    register_family,
-    select_path,
-    structured_applies,
-)
 from .measures import (
     fro,
     is_symmetric,
@@ -176,7 +169,7 @@ def solve_partial(M, P, Q, *, n_modes: int | None = None, target: float | None =
     if target is not None and not (np.isfinite(target) and target >= 0):
         raise SolverError(f"target must be a finite angular frequency ≥ 0, got {target!r}")
     name, reason, extras = sparse_structure(M, P, Q, sym_tol=sym_tol, rayleigh_tol=rayleigh_tol)
-    name, reason, extras = select_path(solver, Structure(name, reason, extras), "partial",
+    name, reason, extras = contract.select_path(solver, contract.Structure(name, reason, extras), "partial",
                                        "partial solver")
     m = 0 if G is None else G.shape[0]
     if m:
@@ -210,7 +203,7 @@ def solve_partial(M, P, Q, *, n_modes: int | None = None, target: float | None =
         found, name, reason = _projected_first(run, want, omega_t, band, max_modes, verify_tol,
                                                auto_projected, name, reason, extras)
     if found is None:
-        found = SOLVERS[name].kernel(run, want, omega_t, band, max_modes, verify_tol)
+        found = contract.SOLVERS[name].kernel(run, want, omega_t, band, max_modes, verify_tol)
     if symmetric_path:
         s, Xq, Yq, eta, kappa, lazy, n_second = symmetric_pairs(
             found, extras, (Mb, Pb, Qb), norms, n, m, verify_tol, name)
@@ -240,7 +233,7 @@ def _projected_first(run, want, omega_t, band, max_modes, verify_tol, auto_proje
     coverage is not verified or it fails (module docstring)."""
     why = None
     try:
-        found = SOLVERS["partial-projected"].kernel(run, want, omega_t, band, max_modes,
+        found = contract.SOLVERS["partial-projected"].kernel(run, want, omega_t, band, max_modes,
                                                     verify_tol)
         if auto_projected and not found["coverage"]["verified"]:
             why = f"its coverage is not verified: {found['projected']['certificate']['why']}"
@@ -275,20 +268,20 @@ def _projected(run, want, omega_t, band, max_modes, verify_tol):
     return projected_search(run, want, verify_tol=verify_tol)
 
 
-register_family("partial", partial_driver)
-register("partial-eigh", family="partial", needs="P = 0, M and Q symmetric",
+contract.register_family("partial", partial_driver)
+contract.register("partial-eigh", family="partial", needs="P = 0, M and Q symmetric",
          kernel=lambda run, want, omega_t, band, max_modes, verify_tol: symmetric_search(
-             run, want, omega_t, band, max_modes), applies=structured_applies("eigh"))
-register("partial-proportional", family="partial", needs="P = αM + βQ with M and Q symmetric",
+             run, want, omega_t, band, max_modes), applies=contract.structured_applies("eigh"))
+contract.register("partial-proportional", family="partial", needs="P = αM + βQ with M and Q symmetric",
          kernel=lambda run, want, omega_t, band, max_modes, verify_tol: symmetric_search(
-             run, want, omega_t, band, max_modes), applies=structured_applies("proportional"))
-register("partial-companion", family="partial", needs="nothing (any sparse M, P, Q)",
+             run, want, omega_t, band, max_modes), applies=contract.structured_applies("proportional"))
+contract.register("partial-companion", family="partial", needs="nothing (any sparse M, P, Q)",
          kernel=lambda run, want, omega_t, band, max_modes, verify_tol: companion_search(
              run, want, omega_t, band, max_modes))
-register("partial-slepc", family="partial",
+contract.register("partial-slepc", family="partial",
          needs="slepc4py (optional backend: SLEPc's TOAR, lowest modes)",
          kernel=lambda run, want, omega_t, band, max_modes, verify_tol: slepc_search(
              run, want, omega_t, band))
-register("partial-projected", family="partial",
+contract.register("partial-projected", family="partial",
          needs=("M and Q symmetric (lowest modes; the coverage certificate also needs P "
                 "symmetric, M and Q > 0 on the constraints)"), kernel=_projected)

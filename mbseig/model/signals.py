@@ -57,10 +57,9 @@ UNITS = {"position": "m", "velocity": "m/s", "length": "m", "force": "N", "momen
 
 
 @dataclass(frozen=True, eq=False)
-class Input:
-    """One named input; ``kind`` is ``element`` (``element`` = a force element's label),
-    ``point`` (``point`` Affine, unit ``direction``), ``moment2`` (``dirs`` [a; b] of the two
-    bodies, ``sense``) or ``moment3`` (``frames`` (frame of b1 or None, frame of b2), ``axis``)."""
+class Signal:
+    """What an input or an output acts on: its ``name``, ``kind`` and the element, point,
+    direction or bodies (``dirs`` [a; b], ``sense``) of that kind."""
 
     name: str
     kind: str
@@ -70,6 +69,14 @@ class Input:
     direction: np.ndarray = None
     dirs: Affine = None
     sense: float = 1.0
+
+
+@dataclass(frozen=True, eq=False)
+class Input(Signal):
+    """One named input; ``kind`` is ``element`` (``element`` = a force element's label),
+    ``point`` (``point`` Affine, unit ``direction``), ``moment2`` (``dirs`` [a; b] of the two
+    bodies, ``sense``) or ``moment3`` (``frames`` (frame of b1 or None, frame of b2), ``axis``)."""
+
     frames: tuple = ()
     axis: np.ndarray = None
 
@@ -139,21 +146,13 @@ def _norm(v, label):
 
 
 @dataclass(frozen=True, eq=False)
-class Output:
+class Output(Signal):
     """One named output; ``kind`` is ``point`` (``point``, unit ``direction``), ``spring`` or
     ``torsional`` (``element`` = the force element's label), ``constraint`` (``element`` = the
     constraint's label; ``direction`` picks a component of a vector reaction) or ``angle``
     (``dirs``, ``sense``: a relative angle of two planar bodies)."""
 
-    name: str
-    kind: str
-    quantity: str
-    label: str = ""
-    element: str = ""
-    point: Affine = None
-    direction: np.ndarray = None
-    dirs: Affine = None
-    sense: float = 1.0
+    quantity: str = ""
     inputs: tuple = field(default=())  # names of the inputs acting on the same element
 
     @property

@@ -20,6 +20,32 @@ from .common import (
 )
 
 
+def _tracks(res):
+    """(line style, track, mode number, colour) of every listed track of every line: one colour
+    a mode numbered as the mode tables at the first point, one line style a line."""
+    cmap = colormap("tab10")
+    for l, S in enumerate(res.tracks):
+        numbers = mode_numbers(res, l)
+        ls = LINESTYLES[l % len(LINESTYLES)]
+        for j in res.listed_tracks(S):
+            m = numbers.get(j, j + 1)
+            yield ls, S[:, j], m, cmap((m - 1) % 10)
+
+
+def _mode_legend(ax, res, modes_seen, extra):
+    """The legend outside the axes: a colour per mode (numbered at the first value), a line
+    style per line of the other axes, then ``extra`` handles."""
+    from matplotlib.lines import Line2D
+
+    handles = [Line2D([], [], color=c, lw=1.5, label=f"mode {m}") for m, c in sorted(modes_seen.items())]
+    if len(res.tracks) > 1:
+        handles += [Line2D([], [], color="0.3", linestyle=LINESTYLES[l % len(LINESTYLES)],
+                           label=line_label(res, l)) for l in range(len(res.tracks))]
+    ax.legend(handles=handles + extra, fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0),
+              borderaxespad=0.0, title=f"modes numbered at {res.axis} = {res.values[0]:g}",
+              title_fontsize=7)
+
+
 @styled
 def root_locus(res):
     """Tracked eigenvalues in the s-plane along the first axis: one colour a mode (numbered as
@@ -30,24 +56,16 @@ def root_locus(res):
 
     fig = figure(figsize=(8.5, 5))
     ax = fig.subplots()
-    cmap = colormap("tab10")
     modes_seen = {}
-    for l, S in enumerate(res.tracks):
-        numbers = mode_numbers(res, l)
-        ls = LINESTYLES[l % len(LINESTYLES)]
-        for j in res.listed_tracks(S):
-            col = S[:, j]
-            ok = ~np.isnan(col)
-            if not ok.any():
-                continue
-            m = numbers.get(j, j + 1)
-            c = cmap((m - 1) % 10)
-            modes_seen.setdefault(m, c)
-            for sign in ((1, -1) if np.any(col.imag[ok] != 0) else (1,)):
-                ax.plot(col.real[ok], sign * col.imag[ok], linestyle=ls, color=c, lw=1.1,
-                        alpha=0.85)
-            first = np.flatnonzero(ok)[0]
-            ax.plot(col.real[first], col.imag[first], "o", color=c, ms=3.5)
+    for ls, col, m, c in _tracks(res):
+        ok = ~np.isnan(col)
+        if not ok.any():
+            continue
+        modes_seen.setdefault(m, c)
+        for sign in ((1, -1) if np.any(col.imag[ok] != 0) else (1,)):
+            ax.plot(col.real[ok], sign * col.imag[ok], linestyle=ls, color=c, lw=1.1, alpha=0.85)
+        first = np.flatnonzero(ok)[0]
+        ax.plot(col.real[first], col.imag[first], "o", color=c, ms=3.5)
     for b in res.boundaries:
         ax.plot(b["eigenvalue"][0], b["eigenvalue"][1], "kx", ms=8, mew=1.5)
         ax.plot(b["eigenvalue"][0], -b["eigenvalue"][1], "kx", ms=8, mew=1.5)
@@ -57,16 +75,10 @@ def root_locus(res):
     title = f"root locus of {Path(res.case).stem}" + (f" ({res.config})" if res.config else "")
     ax.set_title(f"{title}: {res.axis} from {res.values[0]:g} to {res.values[-1]:g}")
     ax.grid(True, lw=0.3)
-    handles = [Line2D([], [], color=c, lw=1.5, label=f"mode {m}") for m, c in sorted(modes_seen.items())]
-    if len(res.tracks) > 1:
-        handles += [Line2D([], [], color="0.3", linestyle=LINESTYLES[l % len(LINESTYLES)],
-                           label=line_label(res, l)) for l in range(len(res.tracks))]
-    handles += [Line2D([], [], ls="none", marker="o", color="0.3", ms=3.5,
-                       label=f"{res.axis} = {res.values[0]:g}"),
-                Line2D([], [], ls="none", marker="x", color="k", ms=7, label="stability boundary")]
-    ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0),
-              borderaxespad=0.0, title=f"modes numbered at {res.axis} = {res.values[0]:g}",
-              title_fontsize=7)
+    _mode_legend(ax, res, modes_seen, [
+        Line2D([], [], ls="none", marker="o", color="0.3", ms=3.5,
+               label=f"{res.axis} = {res.values[0]:g}"),
+        Line2D([], [], ls="none", marker="x", color="k", ms=7, label="stability boundary")])
     fig.tight_layout()
     return fig
 
@@ -80,19 +92,12 @@ def modes_vs_parameter(res):
 
     fig = figure(figsize=(8.5, 6))
     a1, a2 = fig.subplots(2, 1, sharex=True)
-    cmap = colormap("tab10")
     x = np.asarray(res.values, float)
     modes_seen = {}
-    for l, S in enumerate(res.tracks):
-        numbers = mode_numbers(res, l)
-        ls = LINESTYLES[l % len(LINESTYLES)]
-        for j in res.listed_tracks(S):
-            col = S[:, j]
-            m = numbers.get(j, j + 1)
-            c = cmap((m - 1) % 10)
-            modes_seen.setdefault(m, c)
-            a1.plot(x, np.abs(col.imag) / (2 * math.pi), linestyle=ls, color=c, lw=1.1)
-            a2.plot(x, -col.real, linestyle=ls, color=c, lw=1.1)
+    for ls, col, m, c in _tracks(res):
+        modes_seen.setdefault(m, c)
+        a1.plot(x, np.abs(col.imag) / (2 * math.pi), linestyle=ls, color=c, lw=1.1)
+        a2.plot(x, -col.real, linestyle=ls, color=c, lw=1.1)
     for b in res.boundaries:
         a2.axvline(b["value"], color="r", lw=0.8, ls="--")
     a2.axhline(0.0, color="k", lw=0.8)
@@ -104,14 +109,8 @@ def modes_vs_parameter(res):
     a1.grid(True, lw=0.3)
     a2.grid(True, lw=0.3)
     a1.set_title("modes tracked by MAC; red dashed: stability boundaries")
-    handles = [Line2D([], [], color=c, lw=1.5, label=f"mode {m}") for m, c in sorted(modes_seen.items())]
-    if len(res.tracks) > 1:
-        handles += [Line2D([], [], color="0.3", linestyle=LINESTYLES[l % len(LINESTYLES)],
-                           label=line_label(res, l)) for l in range(len(res.tracks))]
-    handles.append(Line2D([], [], color="r", ls="--", lw=0.8, label="stability boundary"))
-    a1.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0),
-              borderaxespad=0.0, title=f"modes numbered at {res.axis} = {res.values[0]:g}",
-              title_fontsize=7)
+    _mode_legend(a1, res, modes_seen, [
+        Line2D([], [], color="r", ls="--", lw=0.8, label="stability boundary")])
     fig.tight_layout()
     return fig
 

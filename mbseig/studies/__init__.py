@@ -11,7 +11,7 @@ A study reads its case once (:func:`mbseig.casefile.read_case`) and passes the p
 :class:`~mbseig.casefile.CaseSpec`, a picklable model factory, to its points.
 """
 
-import importlib
+from ..lazy import lazy_names
 
 # PEP 562: `from ..studies import analyze` does not import the sweep machinery (plots,
 # boundaries, continuation) that `mbseig modes` never uses
@@ -23,10 +23,4 @@ _LAZY = {"Analysis": "pipeline", "analyze": "pipeline", "analyze_model": "pipeli
 __all__ = list(_LAZY)
 
 
-def __getattr__(name):
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f".{module}", __name__), name)
-    globals()[name] = value
-    return value
+__getattr__, __dir__ = lazy_names(__name__, globals(), _LAZY)

@@ -29,7 +29,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..eigen import solve_qep
+from ..eigen import Problem, Request, solve
 from ..errors import MbseigError
 from ..linear import linearize
 from ..modal import stability, tolerances, worst
@@ -82,7 +82,7 @@ def modal_point(model, eq, params, *, safety, stability_rtol):
         s, X, tol, verdict, solver = (np.zeros(0, complex), np.zeros((model.n, 0), complex),
                                       np.zeros(0), "stable", "none (no degree of freedom)")
     else:
-        sol = solve_qep(lin.M, lin.P, lin.Q)
+        sol = solve(Problem(lin.M, lin.P, lin.Q), Request())
         s, solver = sol.eigenvalues, sol.solver
         _, _, tol, rigid = tolerances(sol, safety=safety, stability_rtol=stability_rtol)
         X = lin.N @ sol.vectors

@@ -72,9 +72,9 @@ def dc_gain(lin, input_name, output_name):
 
 def poles(lin):
     """Every finite eigenvalue of M s² + P s + Q (conjugates included), sorted by |s|, Re s."""
-    from ..eigen import solve_qep
+    from ..eigen import Problem, Request, solve
 
-    s = np.asarray(solve_qep(lin.M, lin.P, lin.Q).eigenvalues, complex)
+    s = np.asarray(solve(Problem(lin.M, lin.P, lin.Q), Request()).eigenvalues, complex)
     return s[np.lexsort((s.imag, s.real, np.abs(s)))]
 
 

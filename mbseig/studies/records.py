@@ -19,7 +19,19 @@ __all__ = ["SweepPoint", "CampbellPoint", "Boundary", "Fold", "BoundaryCurve"]
 
 
 @dataclass(frozen=True, eq=False)
-class SweepPoint(Record):
+class PointRecord(Record):
+    """What every study point has: its parameters, the one-line error of a failed point, and
+    (when it did not fail) its eigenvalues, their unit shapes and stability tolerances."""
+
+    params: dict
+    error: str | None = None
+    eigenvalues: object = optional()
+    shapes: object = optional()
+    tol: object = optional()
+
+
+@dataclass(frozen=True, eq=False)
+class SweepPoint(PointRecord):
     """One point of a sweep.  A failed point has ``params`` and the one-line ``error`` only.
 
     eigenvalues, shapes (unit, full coordinates), tol : every eigenpair and the stability
@@ -29,11 +41,6 @@ class SweepPoint(Record):
         corrector_iterations : where the followed branch put it.
     """
 
-    params: dict
-    error: str | None = None
-    eigenvalues: object = optional()
-    shapes: object = optional()
-    tol: object = optional()
     verdict: str | None = optional()
     out_of_range: list | None = optional()
     solver: str | None = optional()
@@ -51,14 +58,9 @@ class SweepPoint(Record):
 
 
 @dataclass(frozen=True, eq=False)
-class CampbellPoint(Record):
+class CampbellPoint(PointRecord):
     """One speed of a Campbell diagram: the listed modes, their kinds, stability and whirl."""
 
-    params: dict
-    error: str | None = None
-    eigenvalues: object = optional()
-    shapes: object = optional()
-    tol: object = optional()
     kind: list | None = optional()
     stability: list | None = optional()
     speed: float | None = optional()
