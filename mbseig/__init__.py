@@ -37,6 +37,7 @@ __version__ = "0.1.0"
 #: costs nothing beyond the package itself, so ``mbseig modes`` loads only what it runs
 _LAZY = {
     "load_case": "casefile", "read_case": "casefile", "CaseSpec": "casefile",
+    "CaseBuilder": "casefile.writer", "to_toml": "casefile.writer", "import_urdf": "casefile.urdf",
     "equilibrium": "statics", "Equilibrium": "statics",
     "linearize": "linear", "LinearModel": "linear",
     "modes": "modal", "Modes": "modal",

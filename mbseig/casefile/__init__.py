@@ -40,7 +40,25 @@ _TOP_KEYS = {
     "schema_version", "title", "description", "source", "kind", "dimension", "gravity",
     "parameters", "points", "masses", "bodies", "joints", "forces", "matrices", "expected",
     "configurations", "report", "beams", "fe_bodies", "refinement", "inputs", "outputs",
+    "urdf", "motion",
 }
+
+
+def motion_kind(data) -> str | None:
+    """What a case's ``[motion]`` table asks for (DESIGN §8): ``"periodic"`` (``period``),
+    ``"steady"`` (``speed`` or ``yaw_rate``), or None without a ``[motion]`` table (a static
+    equilibrium).  Commands hand a moving case to the analysis of its kind."""
+    motion = data.get("motion")
+    if motion is None:
+        return None
+    if not isinstance(motion, dict):
+        raise CaseError("[motion] must be a table", element="motion")
+    if "period" in motion:
+        return "periodic"
+    if "speed" in motion or "yaw_rate" in motion:
+        return "steady"
+    raise CaseError("[motion] needs period (a periodic motion) or speed (a steady motion)",
+                    element="motion")
 
 
 def parse_param_overrides(items) -> dict:
@@ -98,7 +116,13 @@ class CaseSpec:
 
 
 def read_case(path) -> CaseSpec:
-    """Read and parse a case file (one line naming the file on any problem)."""
+    """Read and parse a case file (one line naming the file on any problem), or take a case
+    given as a Python dict with the structure of the TOML (validated when built, with the same
+    messages; exceptions instead of exit codes)."""
+    if isinstance(path, dict):
+        title = path.get("title")
+        name = title if isinstance(title, str) and title else "case"
+        return CaseSpec(path, name, "<dict>", Path.cwd())
     path = Path(path)
     try:
         text = path.read_bytes().decode("utf-8")
@@ -131,6 +155,10 @@ def _build(spec, config, overrides, mesh):
     version = data.get("schema_version", None)
     if version != SCHEMA_VERSION or isinstance(version, bool):
         raise CaseError(f"schema_version must be {SCHEMA_VERSION}, got {version!r}", element="case")
+    if "urdf" in data:  # bodies, joints and springs from a robot description (DESIGN §8)
+        from .urdf import expand_urdf
+
+        data = expand_urdf(data, Path(spec.source))
     params = _parameters(data.get("parameters", {}), data.get("configurations", {}), config,
                          dict(overrides or {}))
     kind = data.get("kind", "multibody")

@@ -31,7 +31,8 @@ from .fields import REQUIRED, Fields
 
 UNIT_TOL = 1e-9  # |‖axis‖ − 1| allowed, and the tolerance of perpendicular / coincident axes
 FORCE_TYPES = ("spring", "damper", "spring_damper", "force", "torque", "torsional", "bushing", "rotor")
-JOINT_TYPES = (*JOINT_ROWS, "distance", "fixed", "slider", "angle_driver")
+JOINT_TYPES = (*JOINT_ROWS, "distance", "fixed", "slider", "angle_driver", "rolling", "contact",
+               "mimic")
 AXIS_KEY = {"revolute": "axis", "cylindrical": "axis", "prismatic": "axis",
              "point_on_line": "axis", "point_on_plane": "normal"}
 
@@ -51,6 +52,16 @@ class SpatialElementReaders:
         elif kind in ("distance", "fixed", "slider", "point_on_line"):
             self._bind()
             super()._joint(f, constraints)
+        elif kind == "mimic":  # a coupled joint of a robot description (casefile.urdf)
+            from .urdf import read_mimic
+
+            self._bind()
+            read_mimic(self, f, constraints)
+        elif kind in ("rolling", "contact"):  # DESIGN §8, steady motions and contact
+            from .motion_readers import read_motion_joint
+
+            self._bind()
+            read_motion_joint(self, f, kind, constraints)
         else:
             raise f.error(f"unknown joint type {kind!r} ({', '.join(JOINT_TYPES)})")
 
@@ -171,8 +182,8 @@ class SpatialElementReaders:
     def _bushing(self, f, forces, g_const):
         b1, b2 = self._two_bodies(f)
         at = f.vec("at", 3)
-        K = self._matrix(f, "stiffness", 6, REQUIRED)
-        D = self._matrix(f, "damping", 6)
+        K = self._coefficients(f, "stiffness", REQUIRED)
+        D = self._coefficients(f, "damping")
         f.done()
         if not (np.all(np.isfinite(K)) and np.all(np.isfinite(D))):
             raise f.error("stiffness and damping must be finite")
@@ -181,6 +192,15 @@ class SpatialElementReaders:
         for b, fr, loc in zip((b1, b2), frames, locals_):
             self._station(b, f.label, frame_point(fr, loc))
         forces.append(QuadraticSpringDamper(f.label, bushing_rows(frames, locals_), K, D))
+
+    def _coefficients(self, f, key, default=None):
+        """A bushing's 6×6 stiffness or damping: 6 numbers, a 6×6 matrix, or a table over a
+        parameter ``{parameter, at, values}`` interpolated at its value (casefile.tables)."""
+        if isinstance(f.t.get(key), dict):
+            from .tables import interpolated_matrix
+
+            return interpolated_matrix(self, f, key, 6)
+        return self._matrix(f, key, 6, default)
 
     def _rotor(self, f, forces, g_const):
         body = self.body(f, f.text("body"))

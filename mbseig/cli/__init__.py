@@ -53,7 +53,7 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in SUBCOMMANDS:
         if only is None or name == only:
-            importlib.import_module(f".{name}", __name__).register(sub)
+            importlib.import_module(f".{name.replace('-', '_')}", __name__).register(sub)
         else:
             sub.add_parser(name, help=SUBCOMMAND_HELP[name])
     return parser

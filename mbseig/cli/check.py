@@ -14,8 +14,16 @@ from ..eigen import dense_solvers
 from ..errors import CaseError, MbseigError, NumericalError
 from ..numerics import DOUBLE_RANGE, watched
 from ..studies import analyze
-from .common import (add_case_arguments, case_kwargs, number_option, output_notes, print_json,
-                     print_reactions)
+from ..studies.point import as_spec
+from .common import (
+    add_case_arguments,
+    case_kwargs,
+    moving_case,
+    number_option,
+    output_notes,
+    print_json,
+    print_reactions,
+)
 
 CHECK_CAUSE = (f"the simulation left {DOUBLE_RANGE} (an amplitude too large for the model, or "
                f"values of the case too large or too small together)")
@@ -87,6 +95,10 @@ def _checked(a, args):
 
 
 def run(args) -> int:
+    spec = as_spec(args.case)
+    moving = moving_case("check", spec)
+    if moving is not None:
+        return moving.run(args, spec)
     _options(args)
     a = analyze(args.case, solver=args.solver, **case_kwargs(args))
     res = _checked(a, args)

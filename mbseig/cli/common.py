@@ -11,7 +11,7 @@ from ..errors import CaseError
 from ..numerics import jsonable
 
 __all__ = ["add_case_arguments", "case_kwargs", "print_json", "print_reactions", "number_option",
-           "output_notes", "equilibrium_notes"]
+           "output_notes", "equilibrium_notes", "moving_case"]
 
 
 def add_case_arguments(parser):
@@ -74,3 +74,25 @@ def output_notes(model, eq):
 def equilibrium_notes(eq):
     """The equilibrium's notes (static stability, self-stress), as strings."""
     return [str(n) for n in (getattr(eq, "notes", None) or ())]
+
+
+def moving_case(command, spec):
+    """The module that runs ``command`` on a case with a ``[motion]`` table (DESIGN §8), or None
+    for a static case: ``mbseig.cli.{kind}_{command}`` with kind ``steady`` or ``periodic``
+    (:func:`mbseig.casefile.motion_kind`).  A command that has none for that kind is refused in
+    one line, never run as if the case were at rest."""
+    import importlib
+
+    from ..casefile import motion_kind
+
+    kind = motion_kind(spec.data)
+    if kind is None:
+        return None
+    try:
+        return importlib.import_module(f".{kind}_{command}", __package__)
+    except ModuleNotFoundError as exc:
+        if exc.name != f"{__package__}.{kind}_{command}":
+            raise
+        raise CaseError(f"mbseig {command} does not analyse {kind} motions ([motion] with "
+                        f"{'period' if kind == 'periodic' else 'speed'})", element="motion",
+                        file=spec.source) from None

@@ -10,7 +10,13 @@ from ..errors import CaseError, MbseigError
 from ..studies.frf import frf, frf_json, write_frf
 from ..studies.pipeline import as_spec
 from ..studies.point import linear_stage
-from .common import add_case_arguments, case_kwargs, number_option, print_json
+from .common import (
+    add_case_arguments,
+    case_kwargs,
+    moving_case,
+    number_option,
+    print_json,
+)
 
 
 def register(sub):
@@ -47,6 +53,10 @@ def parse_hz(text):
 
 
 def run(args) -> int:
+    spec = as_spec(args.case)
+    moving = moving_case("frf", spec)
+    if moving is not None:
+        return moving.run(args, spec)
     freq = parse_hz(args.hz) if args.hz is not None else None
     kw = case_kwargs(args)
     spec = as_spec(args.case)

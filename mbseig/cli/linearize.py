@@ -16,8 +16,14 @@ from ..casefile import load_case
 from ..errors import CaseError, MbseigError
 from ..numerics import jsonable, require_finite
 from ..statics import solved
-from ..studies.point import linear_stage
-from .common import add_case_arguments, case_kwargs, output_notes, print_json
+from ..studies.point import as_spec, linear_stage
+from .common import (
+    add_case_arguments,
+    case_kwargs,
+    moving_case,
+    output_notes,
+    print_json,
+)
 
 STATE_CAUSE = ("M is nearly singular against P and Q (a negligible mass or inertia): "
                "A = [0 I; -M^-1 Q  -M^-1 P] overflows")
@@ -78,6 +84,10 @@ def _npz_arrays(arrays):
 
 
 def run(args) -> int:
+    spec = as_spec(args.case)
+    moving = moving_case("linearize", spec)
+    if moving is not None:
+        return moving.run(args, spec)
     kwargs = case_kwargs(args)
     model = load_case(args.case, config=kwargs["config"], **kwargs["params"])
     try:

@@ -13,6 +13,7 @@ from .common import (
     add_case_arguments,
     case_kwargs,
     equilibrium_notes,
+    moving_case,
     number_option,
     print_json,
     print_reactions,
@@ -125,6 +126,9 @@ def _design(args, spec, a):
 
 def run(args) -> int:
     spec = as_spec(args.case)
+    moving = moving_case("modes", spec)
+    if moving is not None:
+        return moving.run(args, spec)
     a = analyze(spec, solver=args.solver, modes_options=_partial_options(args) or None,
                 refine=_refine_request(args), **case_kwargs(args))
     sens, energy = _design(args, spec, a)

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from ..studies.point import as_spec
+from .common import moving_case
+
 
 def register(sub):
     p = sub.add_parser("report", help="write a stability report (Markdown and self-contained HTML)")
@@ -23,6 +26,10 @@ def register(sub):
 
 
 def run(args) -> int:
+    spec = as_spec(args.case)
+    moving = moving_case("report", spec)
+    if moving is not None:
+        return moving.run(args, spec)
     from ..report import write_report
 
     md, page = write_report(args.case, out_dir=args.out, configs=args.config,

@@ -8,7 +8,8 @@ from pathlib import Path
 
 from ..casefile import parse_param_overrides
 from ..errors import CaseError
-from .common import add_case_arguments, print_json
+from ..studies.point import as_spec
+from .common import add_case_arguments, moving_case, print_json
 
 
 def register(sub):
@@ -46,6 +47,10 @@ def register(sub):
 def run(args) -> int:
     from ..studies.sweep import parse_range, progress_bar, run_sweep, write_outputs
 
+    spec = as_spec(args.case)
+    moving = moving_case("sweep", spec)
+    if moving is not None:
+        return moving.run(args, spec)
     ranges = [parse_range(item) for item in args.param if ":" in item]
     fixed = parse_param_overrides([item for item in args.param if ":" not in item])
     if not ranges:

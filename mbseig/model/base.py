@@ -65,6 +65,9 @@ class Constraint(_Element):
     least ``name`` and the methods below."""
 
     n_eq: int = 1
+    #: a single-sided constraint (a contact) pushes only: the statics release it where its
+    #: multiplier would pull (mbseig.statics.contacts)
+    single_sided: bool = False
 
     def phi(self, q):
         raise NotImplementedError

@@ -18,7 +18,7 @@ from .failures import (
 )
 from .linalg import DENSE_LIMIT
 from .newton import static_multipliers
-from .result import reaction_records
+from .result import StaticStability, reaction_records
 
 
 def examine(eq, *, offer_stable=True, self_stress="refuse", compliance=None, opts=None):
@@ -35,8 +35,8 @@ def examine(eq, *, offer_stable=True, self_stress="refuse", compliance=None, opt
     if isinstance(model, LinearCase) or model is None:
         return eq
     if model.n + model.n_constraints > DENSE_LIMIT:
-        return dataclasses.replace(eq, static={"verdict": "not examined",
-                                               "reason": f"above the dense limit of {DENSE_LIMIT}"})
+        return dataclasses.replace(eq, static=StaticStability(
+            verdict="not examined", reason=f"above the dense limit of {DENSE_LIMIT}"))
     rank_tol = eq.tolerances.get("rank_tol", 1e-10)
     notes, states, lam = list(eq.notes), [], eq.lam
     if eq.n_redundant:
@@ -68,7 +68,7 @@ def examine(eq, *, offer_stable=True, self_stress="refuse", compliance=None, opt
     alt = None
     if static["verdict"] == "unstable":
         gyro = _gyroscopic(model, eq.q)
-        static["gyroscopic"] = gyro
+        static = dataclasses.replace(static, gyroscopic=gyro)
         what = ("gyroscopic forces may stabilize it" if gyro else
                 "a divergence for any mass and damping" if static["index"] % 2 or
                 not static["symmetric"] else "a divergence: the potential energy is not a minimum")
@@ -82,10 +82,10 @@ def examine(eq, *, offer_stable=True, self_stress="refuse", compliance=None, opt
         notes.append(msg)
         if not gyro:
             warnings.warn(msg, StaticInstabilityWarning, stacklevel=3)
-    record = {k: v for k, v in static.items() if k != "direction"}
-    if static.get("direction") is not None:
-        record["direction"] = [float(x) for x in static["direction"]]
-    record["self_stress_tol"] = SELF_STRESS_TOL
+    direction = static.get("direction")
+    record = dataclasses.replace(
+        static, direction=None if direction is None else [float(x) for x in direction],
+        self_stress_tol=SELF_STRESS_TOL)
     return dataclasses.replace(eq, static=record, notes=tuple(notes), stable_alternative=alt,
                                self_stress=tuple({"constraints": s["constraints"],
                                                   "stiffness_change": s["stiffness_change"]}
@@ -123,7 +123,7 @@ def stable_alternative(model, eq, opts):
             return None
         alt = finish(model, sol.q, s, iterations=sol.iterations, correction=sol.correction,
                      method=how, path={"start": "stable alternative"})
-        return dataclasses.replace(alt, static={k: v for k, v in st.items() if k != "direction"})
+        return dataclasses.replace(alt, static=dataclasses.replace(st, direction=None))
 
     if has_loads(model):
         try:
@@ -133,7 +133,7 @@ def stable_alternative(model, eq, opts):
                 return found
         except (Stall, MbseigError):
             pass
-    v = np.asarray(eq.static.get("direction") if isinstance(eq.static, dict) and
+    v = np.asarray(eq.static.get("direction") if eq.static and
                    eq.static.get("direction") is not None else
                    static_stability(model, eq.q, eq.lam, rank_tol=s.rank_tol)["direction"])
     for sign in (1.0, -1.0):

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..numerics import dense
+from ..records import Record, optional
 from .linalg import (
     DENSE_LIMIT,
     multipliers,
@@ -46,6 +47,33 @@ class Equilibrium:
     stable_alternative: object = None
     path: dict = field(default_factory=dict)
     notes: tuple = ()
+    contacts: tuple = ()  # single-sided contacts: ({"name", "force", "active"}, ...) (DESIGN §8)
+
+
+@dataclass(frozen=True, eq=False)
+class StaticStability(Record):
+    """The static stability of an equilibrium (:func:`mbseig.statics.stiffness.static_stability`):
+    the verdict (stable, neutral, unstable, undetermined, not examined) from the reduced tangent
+    stiffness K_r = Nᵀ(K + H(λ))N, its size ``dof``, whether it is symmetric (``asymmetry``
+    relative to ‖K_r‖ against ``symmetry_tol``), the number of negative (``index``) and zero
+    (``zero``) eigenvalues beyond ``stiffness_tol``·‖K_r‖, the smallest eigenvalue and its
+    direction in full coordinates; ``gyroscopic``: an unstable equilibrium whose velocity
+    Jacobian has a skew part (gyroscopic forces may stabilize it); ``self_stress_tol`` and
+    ``reason`` (why it was not examined) as recorded."""
+
+    verdict: str
+    dof: int | None = optional()
+    stiffness_tol: float | None = optional()
+    symmetry_tol: float | None = optional()
+    symmetric: bool | None = optional()
+    asymmetry: float | None = optional()
+    min_eigenvalue: float | None = optional()
+    index: int | None = optional()
+    zero: int | None = optional()
+    direction: object = optional()
+    gyroscopic: bool | None = optional()
+    self_stress_tol: float | None = optional()
+    reason: str | None = optional()
 
 
 def solved(model, eq):

@@ -27,6 +27,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from ..numerics import dense
+from .result import StaticStability
 
 __all__ = ["reduced_stiffness", "static_stability", "self_stress_states", "compliant_multipliers",
            "STIFFNESS_TOL", "SYMMETRY_TOL", "SELF_STRESS_TOL"]
@@ -56,8 +57,12 @@ def reduced_stiffness(model, q, lam, rank_tol=1e-10):
 
 
 def static_stability(model, q, lam, *, rank_tol=1e-10, stiffness_tol=STIFFNESS_TOL,
-                     symmetry_tol=SYMMETRY_TOL) -> dict:
+                     symmetry_tol=SYMMETRY_TOL) -> StaticStability:
     """The static-stability record (module docstring)."""
+    return StaticStability(**_stability(model, q, lam, rank_tol, stiffness_tol, symmetry_tol))
+
+
+def _stability(model, q, lam, rank_tol, stiffness_tol, symmetry_tol) -> dict:
     Kr, N = reduced_stiffness(model, q, lam, rank_tol)
     rec = {"dof": int(Kr.shape[0]), "stiffness_tol": stiffness_tol, "symmetry_tol": symmetry_tol}
     if Kr.shape[0] == 0:

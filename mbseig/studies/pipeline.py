@@ -68,6 +68,8 @@ def modes_json(a: Analysis) -> dict:
         "redundant_constraints": list(eq.redundant),
         "tolerances": {k: float(v) for k, v in md.tolerances.items() if isinstance(v, (int, float))},
     }
+    if eq.contacts:  # DESIGN §8: each single-sided contact's force and state
+        out["contacts"] = [dict(c) for c in eq.contacts]
     flexible = (getattr(model, "flexible", None) or {}).get("bodies")
     if flexible:  # extension: theory, slenderness and mesh of each beam / FE body
         out["flexible_bodies"] = {nm: dict(r) for nm, r in flexible.items()}
