@@ -18,7 +18,7 @@ from ..errors import CaseError, MbseigError, ReportedWarning
 
 __all__ = ["main", "console", "SUBCOMMANDS"]
 
-SUBCOMMANDS = ["linearize", "modes", "frf", "check", "sweep", "report", "bench"]
+SUBCOMMANDS = ["linearize", "modes", "frf", "check", "sweep", "report", "bench", "import-urdf"]
 # one line each for ``mbseig --help`` without importing every command's module
 SUBCOMMAND_HELP = {
     "linearize": "equilibrium and reduced linear model M, P, Q (and B, C, D of named signals)",
@@ -28,6 +28,7 @@ SUBCOMMAND_HELP = {
     "sweep": "sweep parameters and track modes and stability boundaries",
     "report": "write a stability report (Markdown and self-contained HTML)",
     "bench": "measure speed against accuracy; write reports/benchmarks.md",
+    "import-urdf": "write the plain 3-D case of a URDF robot",
 }
 # commands whose output carries the text of every ReportedWarning (beam-theory guidance, notes on
 # the equilibrium: mbseig.cli.common.output_notes), so the warning would only repeat it on stderr
