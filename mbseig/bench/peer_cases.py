@@ -1,62 +1,34 @@
 """The case files of the spatial peer models, written for mbseig as a user would (the same
-bodies, joints and dashpots EXUDYN is given)."""
+bodies, joints and dashpots EXUDYN is given), through :class:`mbseig.CaseBuilder`."""
 
 from __future__ import annotations
 
+from ..casefile.writer import CaseBuilder
+
+
+def _builder(p, source):
+    case = CaseBuilder(dimension=3, source=source, gravity=[0.0, 0.0, -p["g"]])
+    return case.point("O", [0.0, 0.0, 0.0], fixed=True)
+
 
 def pendulum_case(p):
-    return f"""
-schema_version = 1
-dimension = 3
-source = "bench: spherical pendulum with rotational dashpots at the pivot (non-proportional)"
-gravity = [0.0, 0.0, {-p['g']!r}]
-[[points]]
-name = "O"
-position = [0.0, 0.0, 0.0]
-fixed = true
-[[bodies]]
-name = "bob"
-mass = {p['m']!r}
-com = [0.0, 0.0, {-p['l']!r}]
-inertia = [{p['Jx']!r}, {p['Jy']!r}, {p['Jz']!r}]
-[[joints]]
-name = "pivot"
-type = "spherical"
-bodies = ["ground", "bob"]
-at = [0.0, 0.0, 0.0]
-[[forces]]
-name = "pivot dashpots"
-type = "bushing"
-bodies = ["ground", "bob"]
-at = [0.0, 0.0, 0.0]
-stiffness = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
-damping = [0.0, 0.0, 0.0, {p['cx']!r}, {p['cy']!r}, {p['cz']!r}]
-"""
+    """A body hung from the fixed point O by a spherical joint, rotational dashpots there."""
+    case = _builder(p, "bench: spherical pendulum with rotational dashpots at the pivot "
+                       "(non-proportional)")
+    case.body("bob", mass=p["m"], com=[0.0, 0.0, -p["l"]], inertia=[p["Jx"], p["Jy"], p["Jz"]])
+    pivot = {"bodies": ["ground", "bob"], "at": [0.0, 0.0, 0.0]}
+    case.joint("spherical", "pivot", **pivot)
+    case.force("bushing", "pivot dashpots", **pivot, stiffness=[0.0] * 6,
+               damping=[0.0, 0.0, 0.0, p["cx"], p["cy"], p["cz"]])
+    return case.to_toml()
 
 
 def double_case(p):
-    return f"""
-schema_version = 1
-dimension = 3
-source = "bench: spatial double pendulum (cases/spatial_double_pendulum.toml)"
-gravity = [0.0, 0.0, {-p['g']!r}]
-[[points]]
-name = "O"
-position = [0.0, 0.0, 0.0]
-fixed = true
-[[points]]
-name = "A"
-position = [0.0, 0.0, {-p['l1']!r}]
-[[bodies]]
-name = "upper"
-mass = {p['m1']!r}
-com = [0.0, 0.0, {-p['c1']!r}]
-inertia = [{p['J1']!r}, {p['J1']!r}, {p['Ja']!r}]
-points = ["O", "A"]
-[[bodies]]
-name = "lower"
-mass = {p['m2']!r}
-com = [0.0, 0.0, {-(p['l1'] + p['c2'])!r}]
-inertia = [{p['J2']!r}, {p['J2']!r}, {p['Ja']!r}]
-points = ["A"]
-"""
+    """Two links sharing basic points O (fixed) and A: spherical joints without [[joints]]."""
+    case = _builder(p, "bench: spatial double pendulum (cases/spatial_double_pendulum.toml)")
+    case.point("A", [0.0, 0.0, -p["l1"]])
+    case.body("upper", mass=p["m1"], com=[0.0, 0.0, -p["c1"]], inertia=[p["J1"], p["J1"], p["Ja"]],
+              points=["O", "A"])
+    case.body("lower", mass=p["m2"], com=[0.0, 0.0, -(p["l1"] + p["c2"])],
+              inertia=[p["J2"], p["J2"], p["Ja"]], points=["A"])
+    return case.to_toml()

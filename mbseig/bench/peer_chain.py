@@ -41,50 +41,25 @@ def linearized_modes(model, eq, linearize, modes):
 
 
 def _case(n, k=1000.0, c=0.5, c0=2.0):
-    return f"""
-schema_version = 1
-dimension = 1
-source = "bench: damped chain with one extra dashpot to the wall (non-proportional)"
-[parameters]
-n = {n}
-[[points]]
-name = "wall_left"
-position = [0.0]
-fixed = true
-[[points]]
-name = "m{{i}}"
-repeat = {{ i = [1, "n"] }}
-position = ["0.1*i"]
-[[points]]
-name = "wall_right"
-position = ["(n + 1)*0.1"]
-fixed = true
-[[masses]]
-repeat = {{ i = [1, "n"] }}
-point = "m{{i}}"
-mass = 1.0
-[[forces]]
-type = "spring_damper"
-points = ["wall_left", "m1"]
-stiffness = {k}
-damping = {c}
-[[forces]]
-type = "spring_damper"
-repeat = {{ i = [1, "n - 1"] }}
-points = ["m{{i}}", "m{{i + 1}}"]
-stiffness = {k}
-damping = {c}
-[[forces]]
-type = "spring_damper"
-points = ["m{{n}}", "wall_right"]
-stiffness = {k}
-damping = {c}
-[[forces]]
-type = "spring_damper"
-points = ["wall_left", "m1"]
-stiffness = 0.0
-damping = {c0}
-"""
+    """The chain as a case file: n unit masses between two walls, springs k with dampers c, one
+    extra dashpot c0 to the left wall."""
+    from ..casefile.writer import CaseBuilder
+
+    chain = CaseBuilder(dimension=1, source="bench: damped chain with one extra dashpot to the "
+                        "wall (non-proportional)")
+    every = {"i": [1, "n"]}
+    chain.parameter("n", n)
+    chain.point("wall_left", [0.0], fixed=True)
+    chain.point("m{i}", ["0.1*i"], repeat=every)
+    chain.point("wall_right", ["(n + 1)*0.1"], fixed=True)
+    chain.mass("m{i}", 1.0, repeat=every)
+    for ends, repeat, gains in ((["wall_left", "m1"], None, (k, c)),
+                                (["m{i}", "m{i + 1}"], {"i": [1, "n - 1"]}, (k, c)),
+                                (["m{n}", "wall_right"], None, (k, c)),
+                                (["wall_left", "m1"], None, (0.0, c0))):
+        chain.force("spring_damper", repeat=repeat, points=ends, stiffness=gains[0],
+                    damping=gains[1])
+    return chain.to_toml()
 
 
 def _exudyn_model(n, k=1000.0, c=0.5, c0=2.0):

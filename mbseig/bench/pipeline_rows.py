@@ -124,38 +124,20 @@ def bench_sweeps(lines, points, log, case="hand_device"):
 
 # ---------------------------------------------------------------------------------------------
 def _spring_net_case(n):
-    return f"""
-schema_version = 1
-dimension = 2
-source = "bench: 2-D chain of springs under a tip load"
-[parameters]
-n = {n}
-[[points]]
-name = "a"
-position = [0.0, 0.0]
-fixed = true
-[[points]]
-name = "p{{i}}"
-repeat = {{ i = [1, "n"] }}
-position = ["0.4*i", "0.05*i**1.5"]
-[[masses]]
-repeat = {{ i = [1, "n"] }}
-point = "p{{i}}"
-mass = 1.0
-[[forces]]
-type = "spring_damper"
-points = ["a", "p1"]
-stiffness = 800.0
-damping = 1.0
-free_length = 0.35
-[[forces]]
-type = "spring_damper"
-repeat = {{ i = [1, "n - 1"] }}
-points = ["p{{i}}", "p{{i + 1}}"]
-stiffness = "500 + 10*i"
-damping = 0.2
-free_length = 0.35
-"""
+    """A 2-D chain of n unit masses on springs (stiffness growing along it), under its own
+    free lengths' preload."""
+    from ..casefile.writer import CaseBuilder
+
+    net = CaseBuilder(dimension=2, source="bench: 2-D chain of springs under a tip load")
+    net.parameter("n", n)
+    net.point("a", [0.0, 0.0], fixed=True)
+    net.point("p{i}", ["0.4*i", "0.05*i**1.5"], repeat={"i": [1, "n"]})
+    net.mass("p{i}", 1.0, repeat={"i": [1, "n"]})
+    net.force("spring_damper", points=["a", "p1"], stiffness=800.0, damping=1.0,
+              free_length=0.35)
+    net.force("spring_damper", repeat={"i": [1, "n - 1"]}, points=["p{i}", "p{i + 1}"],
+              stiffness="500 + 10*i", damping=0.2, free_length=0.35)
+    return net.to_toml()
 
 
 def _complex_g(model):

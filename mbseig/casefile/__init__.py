@@ -122,7 +122,7 @@ def read_case(path) -> CaseSpec:
     if isinstance(path, dict):
         title = path.get("title")
         name = title if isinstance(title, str) and title else "case"
-        return CaseSpec(path, name, "<dict>", Path.cwd())
+        return CaseSpec(_expanded(path, Path.cwd() / name), name, "<dict>", Path.cwd())
     path = Path(path)
     try:
         text = path.read_bytes().decode("utf-8")
@@ -134,7 +134,17 @@ def read_case(path) -> CaseSpec:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise CaseError(f"malformed TOML: {exc}", file=str(path)) from None
-    return CaseSpec(data, path.stem, str(path), path.parent)
+    return CaseSpec(_expanded(data, path), path.stem, str(path), path.parent)
+
+
+def _expanded(data, path):
+    """The case with its ``[urdf]`` table read into bodies, joints and springs (DESIGN §8),
+    once per read: the parsed case carries the plain tables (files relative to ``path``)."""
+    if "urdf" not in data:
+        return data
+    from .urdf import expand_urdf
+
+    return expand_urdf(data, path)
 
 
 def load_case(path, config: str | None = None, **params):
@@ -155,10 +165,6 @@ def _build(spec, config, overrides, mesh):
     version = data.get("schema_version", None)
     if version != SCHEMA_VERSION or isinstance(version, bool):
         raise CaseError(f"schema_version must be {SCHEMA_VERSION}, got {version!r}", element="case")
-    if "urdf" in data:  # bodies, joints and springs from a robot description (DESIGN §8)
-        from .urdf import expand_urdf
-
-        data = expand_urdf(data, Path(spec.source))
     params = _parameters(data.get("parameters", {}), data.get("configurations", {}), config,
                          dict(overrides or {}))
     kind = data.get("kind", "multibody")

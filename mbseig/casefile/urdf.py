@@ -1,0 +1,387 @@
+"""Robots from URDF: a URDF file → the plain 3-D case tables (design notes §8, "Robots from
+URDF" and "3-D case format").
+
+The URDF is read with :mod:`xml.etree.ElementTree` as data (no entity, include or macro is
+expanded; xacro files must be expanded beforehand; meshes, collision and visual elements,
+transmissions and ``<gazebo>`` blocks are ignored).  Only the ``<link>`` and ``<joint>``
+children of ``<robot>`` are read.
+
+What a URDF becomes (every ``at``, ``axis``, ``com`` and ``inertia`` in global axes at the
+reference configuration, as the 3-D format wants):
+
+- reference configuration: the joint values ``positions = {JOINT = value}`` (rad or m; others 0;
+  a ``<mimic>`` follower takes multiplier·leader + offset).  Link frames follow by forward
+  kinematics from the root at the origin: child = parent · origin(xyz, rpy) · motion(q), with
+  rpy the fixed-axis roll-pitch-yaw of URDF, R = Rz(yaw) Ry(pitch) Rx(roll), and motion a
+  rotation by q about ``<axis>`` (revolute, continuous) or a translation by q along it
+  (prismatic);
+- a link with mass → ``[[bodies]]`` (name = the link): ``com`` = link origin + R_link·xyz of
+  ``<inertial><origin>``, ``inertia`` = R I Rᵀ with R = R_link·R(rpy of the inertial origin) and
+  I the tensor of ``<inertia>`` (products included: I = [[ixx, ixy, ixz], [ixy, iyy, iyz],
+  [ixz, iyz, izz]]);
+- ``revolute`` / ``continuous`` → ``revolute`` (``at`` = the joint frame's origin, ``axis`` its
+  ``<axis>`` in global axes), ``prismatic`` → ``prismatic``, ``fixed`` → ``weld``;
+  joint names are element names;
+- massless links (no ``<inertial>``, or mass 0; their inertia is then ignored) are merged into
+  a link with mass rigidly attached to them (through ``fixed`` joints): their parent's body,
+  or, for a link moved by a joint (and a floating root), the first link with mass found below
+  it through fixed joints (document order), which then carries the moving joint.  A massless
+  link with no mass fixed to it that a joint moves is an error (its motion has no inertia);
+  the same for a floating root;
+- ``floating = false``: the root link is welded to the ground (a massless root *is* the
+  ground, and so is everything massless fixed to it); ``true``: the root body is free;
+- ``stiffness = {default = k, JOINT = k}`` and ``damping`` (the same, or ``"urdf"``: each
+  joint's ``<dynamics damping>``): a ``torsional`` force ``JOINT_spring`` on a revolute joint
+  (zero torque at the reference), on a prismatic joint a ``spring`` / ``damper`` /
+  ``spring_damper`` ``JOINT_spring`` between ``{body = parent, at = at}`` and ``{body = child,
+  at = at + ℓ·axis}`` (free length ℓ = the distance at the reference, so zero force there; the
+  prismatic joint keeps the line along the axis, so the force is k·s exactly).  ``default``
+  applies to every moving joint, ``<mimic>`` followers included (``JOINT = 0`` removes one);
+  values may be numbers or expressions of the case's parameters;
+- ``<mimic joint="L" multiplier="r" offset="o">`` on joint F → ``[[joints]] type = "mimic"``,
+  ``name = "F_mimic"``, ``joint = "F"``, ``leader = "L"``, ``multiplier = r``: θ_F = r θ_L with
+  both measured from the reference (which satisfies the URDF relation, so no offset remains);
+  the element is :class:`mbseig.model.mimic.MimicConstraint`, read by :func:`read_mimic`.
+
+Every problem raises :class:`~mbseig.errors.CaseError` naming the URDF file and the element
+(``link 'fore'``, ``joint 'elbow'``) or the case's ``urdf`` table.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import CaseError
+from ..model.mimic import MimicConstraint, joint_coordinate
+from ..model.spatial_body import inertia_problem
+from .urdf_read import (  # noqa: F401
+    MOVING,
+    Joint,
+    Link,
+    UrdfRobot,
+    axis_rotation,
+    read_urdf,
+    rpy_matrix,
+)
+
+__all__ = ["UrdfRobot", "expand_urdf", "import_urdf", "read_mimic", "read_urdf", "urdf_tables"]
+
+_URDF_KEYS = {"file", "positions", "stiffness", "damping", "floating"}
+
+
+# ---------------------------------------------------------------------------------------------
+# URDF → case tables
+# ---------------------------------------------------------------------------------------------
+def _tree(robot: UrdfRobot):
+    """(root, joints in breadth-first order from the root): one root, one parent per link."""
+    parent_joint = {}
+    for j in robot.joints.values():
+        if j.child in parent_joint:
+            raise robot.error(f"joint {j.name!r}", f"link {j.child!r} has two parents (joints "
+                              f"{parent_joint[j.child]!r} and {j.name!r}): kinematic loops are "
+                              f"not supported")
+        if j.child == j.parent:
+            raise robot.error(f"joint {j.name!r}", "parent and child are the same link")
+        parent_joint[j.child] = j.name
+    roots = [n for n in robot.links if n not in parent_joint]
+    if not roots:
+        raise robot.error("robot", "no root link: the joints form a kinematic loop")
+    children: dict[str, list] = {}
+    for j in robot.joints.values():
+        children.setdefault(j.parent, []).append(j)
+    order, queue, seen = [], [roots[0]], {roots[0]}
+    while queue:
+        link = queue.pop(0)
+        for j in children.get(link, []):
+            order.append(j)
+            seen.add(j.child)
+            queue.append(j.child)
+    if len(roots) > 1:
+        raise robot.error(f"link {roots[1]!r}", f"the robot has several root links "
+                          f"({', '.join(map(repr, roots))}): links must form one tree")
+    unreached = [n for n in robot.links if n not in seen]
+    if unreached:  # one root, but a cycle not reachable from it
+        raise robot.error(f"joint {parent_joint[unreached[0]]!r}",
+                          "it closes a kinematic loop (not supported)")
+    return roots[0], order, children
+
+
+def _joint_positions(robot, positions, where):
+    """Joint values of the reference: the given ones, mimic followers from their leaders."""
+    q = {}
+    for name, value in positions.items():
+        if name not in robot.joints:
+            raise CaseError(f"unknown joint {name!r}", file=where[0], element=where[1])
+        if robot.joints[name].type == "fixed":
+            raise CaseError(f"joint {name!r} is fixed: it has no position", file=where[0],
+                            element=where[1])
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise CaseError(f"{name} must be a finite number (rad or m), got {value!r}",
+                            file=where[0], element=where[1])
+        q[name] = float(value)
+    done: dict[str, float] = {}
+
+    def value(name, chain=()):
+        if name in done:
+            return done[name]
+        j = robot.joints[name]
+        if j.mimic is None:
+            done[name] = q.get(name, 0.0)
+            return done[name]
+        leader, mult, off = j.mimic
+        if leader not in robot.joints or robot.joints[leader].type == "fixed":
+            raise robot.error(f"joint {name!r}", f"<mimic> refers to {leader!r}, which is not a "
+                              f"moving joint of the robot")
+        if leader in chain or leader == name:
+            raise robot.error(f"joint {name!r}", "<mimic> joints follow each other in a cycle")
+        v = mult * value(leader, (*chain, name)) + off
+        if name in q and abs(q[name] - v) > 1e-12 * max(1.0, abs(v)):
+            raise CaseError(f"{name} = {q[name]!r} contradicts its <mimic> of {leader!r} "
+                            f"({v!r}); leave it out", file=where[0], element=where[1])
+        done[name] = v
+        return v
+
+    for name, j in robot.joints.items():
+        if j.type != "fixed":
+            value(name)
+    return done
+
+
+def _massive_below(robot, children, link):
+    """The first link with mass rigidly attached below ``link`` (itself included), or None."""
+    if robot.links[link].mass > 0:
+        return link
+    for j in children.get(link, []):
+        if j.type == "fixed":
+            found = _massive_below(robot, children, j.child)
+            if found:
+                return found
+    return None
+
+
+def _gains(robot, table, key, moving, where):
+    """{joint: value} of a stiffness or damping table (numbers ≥ 0 or expressions)."""
+    if table is None:
+        return {}
+    if table == "urdf" and key == "damping":
+        return {n: robot.joints[n].damping for n in moving if robot.joints[n].damping > 0}
+    if not isinstance(table, dict):
+        alt = ' or "urdf"' if key == "damping" else ""
+        raise CaseError(f"{key} must be a table {{default = ..., JOINT = ...}}{alt}, got "
+                        f"{table!r}", file=where[0], element=where[1])
+    for name, v in table.items():
+        if name != "default" and name not in moving:
+            raise CaseError(f"{key}: {name!r} is not a moving joint of the robot", file=where[0],
+                            element=where[1])
+        ok = isinstance(v, str) or (isinstance(v, (int, float)) and not isinstance(v, bool)
+                                    and math.isfinite(v) and v >= 0)
+        if not ok:
+            raise CaseError(f"{key}.{name} must be a number >= 0 or an expression, got {v!r}",
+                            file=where[0], element=where[1])
+    out = {}
+    for name in moving:
+        v = table.get(name, table.get("default"))
+        if v is not None and v != 0:
+            out[name] = float(v) if isinstance(v, int) else v
+    return out
+
+
+def urdf_tables(robot: UrdfRobot, *, positions=None, stiffness=None, damping=None,
+                floating: bool = False, where=("", "urdf")) -> dict:
+    """``{"bodies", "joints", "forces"}`` of the 3-D format for a robot (module docstring).
+    ``where`` = (file, element) names the case table that gave the options, for errors."""
+    root, order, children = _tree(robot)
+    q = _joint_positions(robot, positions or {}, where)
+    moving = [j.name for j in robot.joints.values() if j.type != "fixed"]
+    k = _gains(robot, stiffness, "stiffness", moving, where)
+    c = _gains(robot, damping, "damping", moving, where)
+
+    # forward kinematics: link frames (R, p) and joint frames at the reference
+    frames = {root: (np.eye(3), np.zeros(3))}
+    jframes = {}
+    for j in order:
+        Rp, pp = frames[j.parent]
+        Rj, pj = Rp @ rpy_matrix(j.rpy), pp + Rp @ j.xyz
+        jframes[j.name] = (Rj, pj)
+        if j.type in ("revolute", "continuous"):
+            frames[j.child] = (Rj @ axis_rotation(j.axis, q[j.name]), pj)
+        elif j.type == "prismatic":
+            frames[j.child] = (Rj, pj + Rj @ j.axis * q[j.name])
+        else:
+            frames[j.child] = (Rj, pj)
+
+    # bodies: every link with mass; massless links merged (module docstring)
+    body_of: dict[str, str] = {}
+    if robot.links[root].mass > 0:
+        body_of[root] = root
+    elif not floating:
+        body_of[root] = "ground"
+    else:
+        body = _massive_below(robot, children, root)
+        if body is None:
+            raise robot.error(f"link {root!r}", "the floating root link has no <inertial> mass "
+                              "and no link with mass is fixed to it")
+        body_of[root] = body
+    joints, forces = [], []
+    if robot.links[root].mass > 0 and not floating:
+        joints.append({"type": "weld", "name": f"{root}_to_ground", "bodies": ["ground", root],
+                       "at": [0.0, 0.0, 0.0]})
+    for j in order:
+        b1 = body_of[j.parent]
+        at = _list(jframes[j.name][1])
+        if j.type == "fixed":
+            if j.child in body_of:  # the massive link that a massless parent merged into
+                continue
+            if robot.links[j.child].mass == 0:
+                body_of[j.child] = b1
+                continue
+            body_of[j.child] = j.child
+            joints.append({"type": "weld", "name": j.name, "bodies": [b1, j.child], "at": at})
+            continue
+        b2 = _massive_below(robot, children, j.child)
+        if b2 is None:
+            raise robot.error(f"link {j.child!r}", f"it has no <inertial> mass (nor a link with "
+                              f"mass fixed to it) but joint {j.name!r} moves it")
+        body_of[j.child] = b2
+        body_of[b2] = b2
+        axis = _list(jframes[j.name][0] @ j.axis)
+        joints.append({"type": MOVING[j.type], "name": j.name, "bodies": [b1, b2], "at": at,
+                       "axis": axis})
+        if j.mimic is not None:
+            joints.append({"type": "mimic", "name": f"{j.name}_mimic", "joint": j.name,
+                           "leader": j.mimic[0], "multiplier": j.mimic[1]})
+        forces += _spring(j, b1, b2, at, axis, k.get(j.name, 0), c.get(j.name, 0))
+    bodies = [_body(robot, name, *frames[name]) for name in robot.links
+              if robot.links[name].mass > 0]
+    names = [e["name"] for e in joints + forces]
+    clash = sorted({n for n in names if names.count(n) > 1})
+    if clash:
+        raise robot.error("robot", f"element name {clash[0]!r} of the expanded case is used "
+                          f"twice (a joint of that name exists)")
+    return {"bodies": bodies, "joints": joints, "forces": forces}
+
+
+def _list(v):
+    return [float(x) + 0.0 for x in v]
+
+
+def _body(robot, name, R, p):
+    link = robot.links[name]
+    problem = inertia_problem(link.inertia)
+    if problem:
+        raise robot.error(f"link {name!r} <inertia>", problem)
+    Ri = R @ rpy_matrix(link.rpy)
+    I = Ri @ link.inertia @ Ri.T
+    I = 0.5 * (I + I.T)
+    return {"name": name, "mass": link.mass, "com": _list(p + R @ link.xyz),
+            "inertia": [_list(row) for row in I]}
+
+
+def _spring(j, b1, b2, at, axis, k, c):
+    """The joint spring-damper (module docstring); none when k = c = 0."""
+    if not k and not c:
+        return []
+    gains = {**({"stiffness": k} if k else {}), **({"damping": c} if c else {})}
+    if j.type != "prismatic":
+        return [{"type": "torsional", "name": f"{j.name}_spring", "joint": j.name, **gains}]
+    ell = 1.0 + max(abs(j.limit[0]), abs(j.limit[1]))  # longer than any stroke of the joint
+    tip = _list(np.array(at) + ell * np.array(axis))
+    kind = "spring_damper" if k and c else ("spring" if k else "damper")
+    return [{"type": kind, "name": f"{j.name}_spring",
+             "points": [{"body": b1, "at": at}, {"body": b2, "at": tip}], **gains}]
+
+
+# ---------------------------------------------------------------------------------------------
+# Entry points
+# ---------------------------------------------------------------------------------------------
+def expand_urdf(case: dict, case_path) -> dict:
+    """The case dict with its ``[urdf]`` table replaced by the robot's bodies, joints and
+    forces (placed before the case's own entries, which may refer to link and joint names).
+    A case without ``[urdf]`` is returned unchanged."""
+    if "urdf" not in case:
+        return case
+    case_path = Path(case_path)
+    file = str(case_path)
+    table = case["urdf"]
+    if not isinstance(table, dict):
+        raise CaseError("[urdf] must be a table", file=file, element="urdf")
+    unknown = sorted(set(table) - _URDF_KEYS)
+    if unknown:
+        raise CaseError(f"unknown field {unknown[0]!r} ({', '.join(sorted(_URDF_KEYS))})",
+                        file=file, element="urdf")
+    if case.get("dimension") != 3:
+        raise CaseError("a case with [urdf] needs dimension = 3", file=file, element="urdf")
+    fname = table.get("file")
+    if not isinstance(fname, str) or not fname:
+        raise CaseError("file must name the URDF file (relative to the case)", file=file,
+                        element="urdf")
+    floating = table.get("floating", False)
+    if not isinstance(floating, bool):
+        raise CaseError(f"floating must be true or false, got {floating!r}", file=file,
+                        element="urdf")
+    positions = table.get("positions", {})
+    if not isinstance(positions, dict):
+        raise CaseError("positions must be a table {JOINT = value}", file=file,
+                        element="urdf.positions")
+    robot = read_urdf(case_path.parent / fname)
+    tables = urdf_tables(robot, positions=positions, stiffness=table.get("stiffness"),
+                         damping=table.get("damping"), floating=floating, where=(file, "urdf"))
+    out = {key: value for key, value in case.items() if key != "urdf"}
+    for key in ("bodies", "joints", "forces"):
+        own = case.get(key, [])
+        if not isinstance(own, list):
+            raise CaseError(f"{key} must be an array of tables", file=file, element=key)
+        if tables[key] or own:
+            out[key] = tables[key] + list(own)
+    return out
+
+
+def import_urdf(urdf_path, out_toml=None, *, positions=None, stiffness=None, damping=None,
+                floating: bool = False, gravity=(0.0, 0.0, -9.81), title: str | None = None) -> dict:
+    """The plain 3-D case equivalent to a URDF (``mbseig import-urdf ROBOT.urdf --out
+    CASE.toml``): written to ``out_toml`` when given, and returned as a dict."""
+    from .writer import to_toml
+
+    urdf_path = Path(urdf_path)
+    robot = read_urdf(urdf_path)
+    tables = urdf_tables(robot, positions=positions, stiffness=stiffness, damping=damping,
+                         floating=floating, where=(str(urdf_path), "import-urdf options"))
+    case = {"schema_version": 1,
+            "title": title or f"{robot.name} (imported from {urdf_path.name})",
+            "dimension": 3}
+    if gravity is not None:
+        case["gravity"] = [float(g) if not isinstance(g, str) else g for g in gravity]
+    case.update({k: v for k, v in tables.items() if v})
+    if out_toml is not None:
+        Path(out_toml).write_text(to_toml(case), encoding="utf-8")
+    return case
+
+
+def read_mimic(builder, f, constraints):
+    """Reader entry for ``type = "mimic"`` in the 3-D reader
+    (:class:`mbseig.casefile.spatial.SpatialBuilder`; the case format is in
+    :mod:`mbseig.model.mimic`): both joints are declared before it."""
+    f.text("type")
+    f.text("name", None)
+    coords = []
+    for key in ("joint", "leader"):
+        jname = f.text(key)
+        j = builder.spatial_joints.get(jname)
+        if j is None or j[0] not in ("revolute", "cylindrical", "prismatic"):
+            raise f.error(f"{key} {jname!r} is not a revolute, cylindrical or prismatic joint "
+                          f"declared before")
+        kind, b1, b2, at, axis = j[:5]
+        frames = (builder.frame(f, b1), builder.frame(f, b2))
+        locals_ = (builder.local(b1, at), builder.local(b2, at))
+        coords.append(joint_coordinate(kind, frames, locals_, axis))
+    if f.raw("joint") == f.raw("leader"):
+        raise f.error("a joint cannot follow itself")
+    r = f.num("multiplier", 1.0)
+    o = f.num("offset", 0.0)
+    f.done()
+    units = "N m" if coords[0].kind == "angle" else "N"
+    c = MimicConstraint(f.label, coords[0], coords[1], r, o, units)
+    builder.add_constraint(constraints, c, f)
