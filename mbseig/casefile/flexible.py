@@ -39,9 +39,8 @@ from ..model.beams import (
     RotationLock,
     section_properties,
 )
-from ..model.fe_body import LinearFEBody
+from .fe_bodies import assemble_fe, fe_spec
 from .fields import Fields, check_range, expand, template
-from .matrices import matrix_value
 
 __all__ = ["BeamTheoryWarning", "EB_SLENDERNESS", "MIN_SLENDERNESS", "AUTO_START_ELEMENTS",
            "allocate", "assemble", "parse_refinement"]
@@ -55,6 +54,12 @@ MIN_NORMAL = float(np.finfo(float).tiny)  # smallest normal double
 
 class BeamTheoryWarning(ReportedWarning):
     """A beam theory used outside the slenderness range where it is accurate."""
+
+
+def _flexible3d():
+    from . import flexible3d  # 3-D cases only
+
+    return flexible3d
 
 
 @dataclass
@@ -185,8 +190,13 @@ def allocate(b, mesh=None):
     mesh = mesh or {}
     b.beam_specs, b.fe_specs = [], []
     items = b.data.get("beams", [])
-    if items and b.dim != 2:
-        raise CaseError("beams need dimension = 2", element="beams")
+    if items and b.dim == 3:  # spatial beams: their own reader (DESIGN §8, 3-D flexible bodies)
+        _flexible3d().allocate(b, mesh, auto_start=AUTO_START_ELEMENTS, max_elements=MAX_ELEMENTS,
+                               eb_slenderness=EB_SLENDERNESS, min_slenderness=MIN_SLENDERNESS,
+                               warning=BeamTheoryWarning)
+        items = []
+    elif items and b.dim != 2:
+        raise CaseError("beams need dimension = 2 or 3", element="beams")
     names = set()
     for k, (item, label, params) in enumerate(expand("beams", items, b.params)):
         f = Fields(item, label, params)
@@ -222,45 +232,7 @@ def allocate(b, mesh=None):
     if items and b.dim != 2:
         raise CaseError("fe_bodies need dimension = 2", element="fe_bodies")
     for item, label, params in expand("fe_bodies", items, b.params):
-        b.fe_specs.append(_fe_spec(b, Fields(item, label, params)))
-
-
-def _fe_spec(b, f):
-    name = f.text("name")
-    if "." in name or name in b.point_index:
-        raise f.error(f"FE body name {name!r} is used already or contains '.'")
-    M = matrix_value(f.raw("mass"), f"{f.label}.mass", f.names, b.files)
-    K = matrix_value(f.raw("stiffness"), f"{f.label}.stiffness", f.names, b.files)
-    f.formed("the mass and stiffness matrices", lambda: (M, K))
-    if M.shape != K.shape:
-        raise f.error(f"mass is {M.shape[0]}×{M.shape[0]} but stiffness {K.shape[0]}×{K.shape[0]}")
-    iface = f.raw("interface")
-    if not isinstance(iface, list) or not iface or not all(isinstance(p, str) for p in iface):
-        raise f.error("interface must be a non-empty list of point names (matrix node order)")
-    iface = [template(p, f.names, f) for p in iface]
-    for p in iface:
-        if p not in b.point_index:
-            raise f.error(f"unknown interface point {p!r}")
-    ndof = f.num("interface_dofs", 3.0)
-    if ndof not in (2.0, 3.0):
-        raise f.error("interface_dofs must be 2 (u_x, u_y) or 3 (u_x, u_y, θ)")
-    ndof = int(ndof)
-    rots = f.raw("rotations", ["free"] * len(iface)) if ndof == 3 else []
-    if ndof == 3 and (not isinstance(rots, list) or len(rots) != len(iface)):
-        raise f.error("rotations must list one of \"free\", \"clamped\" or a body per interface point")
-    f.done()
-    n_if = ndof * len(iface)
-    if M.shape[0] < n_if:
-        raise f.error(f"matrices are {M.shape[0]}×{M.shape[0]}, fewer than the {n_if} interface dofs")
-    for key, A in (("mass", M), ("stiffness", K)):
-        if not np.allclose(A, A.T, rtol=1e-9, atol=1e-12 * np.abs(A).max()):
-            raise f.error(f"{key} matrix is not symmetric")
-    theta_idx = []
-    for p, rot in zip(iface, rots):
-        theta_idx.append(-1 if rot == "clamped" else _new_coord(b, f"{name}.{p}.theta", 0.0, "angle"))
-    eta_idx = [_new_coord(b, f"{name}.eta{k + 1}", 0.0, "modal") for k in range(M.shape[0] - n_if)]
-    return {"name": name, "label": f.label, "M": M, "K": K, "interface": iface, "ndof": ndof,
-            "rotations": list(rots), "theta_idx": theta_idx, "eta_idx": eta_idx}
+        b.fe_specs.append(fe_spec(b, Fields(item, label, params), _new_coord))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -271,14 +243,19 @@ def assemble(b, forces, constraints, mass_blocks, mass_elements, g_const, gravit
     refinement = parse_refinement(b.data.get("refinement"), b.params)
     if refinement and not any(s.auto for s in b.beam_specs):
         raise CaseError('[refinement] needs a beam with elements = "auto"', element="refinement")
-    for spec in b.beam_specs:
+    shafts = []  # spinning 3-D beams: whirl stations (mbseig.model.spatial_whirl.rotors)
+    if b.dim == 3 and b.beam_specs:
+        record, shafts = _flexible3d().assemble(b, forces, constraints, mass_elements,
+                                                mass_blocks, g_const, gravity)
+    for spec in (b.beam_specs if b.dim == 2 else ()):
         record[spec.name] = _assemble_beam(b, spec, q_init, forces, constraints, mass_blocks,
                                            mass_elements, g_const, gravity)
     for spec in b.fe_specs:
-        record[spec["name"]] = _assemble_fe(b, spec, constraints, forces, mass_blocks, q_init)
+        record[spec["name"]] = assemble_fe(b, spec, constraints, forces, mass_blocks, _lock, _ErrorOnly)
     if not record:
         return {}
-    return {"bodies": record, "refinement": refinement}
+    out = {"bodies": record, "refinement": refinement}
+    return {**out, "shafts": tuple(shafts)} if shafts else out
 
 
 def parse_refinement(table, params):
@@ -366,30 +343,3 @@ class _ErrorOnly(Fields):
 
     def __init__(self, label):
         super().__init__({}, label, {})
-
-
-def _assemble_fe(b, spec, constraints, forces, mass_blocks, q_init):
-    terms = []
-    for p, t in zip(spec["interface"], spec["theta_idx"] or [None] * len(spec["interface"])):
-        pos0 = b.point_pos[p]
-        terms.append((1.0, b.affine_of(p) - Affine.constant(pos0)))
-        if spec["ndof"] == 3:
-            terms.append((1.0, Affine.select([t], [0.0])))
-    if spec["eta_idx"]:
-        terms.append((1.0, Affine.select(spec["eta_idx"])))
-    z = combine(terms, stack=True)
-    body = LinearFEBody(spec["label"], z, spec["K"])
-    if body.idx.size:
-        forces.append(body)
-        mass_blocks.append((z.idx, z.idx, z.C.T @ spec["M"] @ z.C))
-    for p, rot, t in zip(spec["interface"], spec["rotations"], spec["theta_idx"]):
-        if rot in ("free", "clamped"):
-            continue
-        theta = Affine.select([t], [0.0])
-        c = _lock(b, spec["label"], rot, theta)
-        b.add_constraint(constraints, c, _ErrorOnly(spec["label"]))
-    return {"type": "fe_body", "interface": list(spec["interface"]),
-            "interface_dofs": spec["ndof"], "modal_coordinates": len(spec["eta_idx"]),
-            "size": int(spec["M"].shape[0])}
-
-

@@ -68,6 +68,7 @@ class SpatialBuilder(SpatialElementReaders, Builder):
         self.frames: dict[str, Affine] = {}
         self.stations: dict[str, list] = {}  # body → [(label, Affine)] where elements act on it
         self.spatial_joints: dict[str, tuple] = {}  # joint name → (kind, b1, b2, at, axis)
+        self.station_origin: dict[str, np.ndarray] = {}  # beam station "BEAM.NAME" → its node
         self._bound = False
 
     # -- the build ---------------------------------------------------------------------------
@@ -176,9 +177,37 @@ class SpatialBuilder(SpatialElementReaders, Builder):
             length_scale=self.length_scale)
 
     def _with_stations(self, rotor):
-        b = self.bodies[rotor.body]
-        com = ("centre of mass", frame_point(self.frames[rotor.body], self.local(rotor.body, b["com"])))
-        return dataclasses.replace(rotor, stations=(com, *self.stations.get(rotor.body, [])))
+        if rotor.body in self.station_origin:  # a rotor on a beam station: its node's point
+            own = ("station", self.markers[rotor.body])
+        else:
+            b = self.bodies[rotor.body]
+            own = ("centre of mass",
+                   frame_point(self.frames[rotor.body], self.local(rotor.body, b["com"])))
+        return dataclasses.replace(rotor, stations=(own, *self.stations.get(rotor.body, [])))
+
+    # -- beam stations (casefile.flexible3d) -------------------------------------------------
+    def register_station(self, name, frame, origin, point):
+        """A beam station ``"BEAM.NAME"``: a frame wherever a body name is allowed (local
+        coordinates from the node's reference position ``origin``) and a point."""
+        self.frames[name] = frame
+        self.station_origin[name] = np.asarray(origin, float)
+        self.markers[name] = point
+
+    def body(self, f, bname):
+        if bname in self.station_origin:
+            return bname
+        return super().body(f, bname)
+
+    def _bushing(self, f, forces, g_const):
+        """A bushing's ``at`` defaults to the beam station it acts on (DESIGN §8)."""
+        if not f.has("at"):
+            bodies = f.t.get("bodies")
+            names = ([template(x, f.names, f) for x in bodies if isinstance(x, str)]
+                     if isinstance(bodies, list) else [])
+            at = next((self.station_origin[x] for x in names if x in self.station_origin), None)
+            if at is not None:
+                f.t = {**f.t, "at": [float(c) for c in at]}
+        return super()._bushing(f, forces, g_const)
 
     # -- references --------------------------------------------------------------------------
     def frame(self, f, bname):
@@ -190,6 +219,8 @@ class SpatialBuilder(SpatialElementReaders, Builder):
 
     def local(self, bname, x):
         """Local coordinates of the reference-global point x in a body (or the ground)."""
+        if bname in self.station_origin:
+            return np.asarray(x, float) - self.station_origin[bname]
         return np.asarray(x, float) - (0.0 if bname == "ground" else self.bodies[bname]["origin"])
 
     def _station(self, bname, label, aff):

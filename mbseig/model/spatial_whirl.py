@@ -10,7 +10,8 @@ clockwise of radius r_b = |X₁ − iX₂|/2; its semi-axes are r_f + r_b and |r
 
 is ROSS's signed ratio of minor to major axis: κ > 0 turns with the spin, κ < 0 against it,
 |κ| = 1 is a circle and κ = 0 a straight line.  The stations are the rotor body's centre of mass
-and every point where a joint, bushing or spring acts on that body (``Rotor.stations``).
+and every point where a joint, bushing or spring acts on that body (``Rotor.stations``), and
+every node of a spinning beam (``SpinningShaft.stations``, casefile.flexible3d).
 
 Whirl of the mode: ``none`` when no station moves laterally (lateral amplitude ≤ ``none_tol``
 times the body's largest motion: axial and torsional modes); otherwise the stations whose orbit
@@ -34,8 +35,10 @@ WHIRLS = ("forward", "backward", "mixed", "none")
 
 
 def rotors(model) -> list:
-    """The rotor elements of a model (empty for a model without one)."""
-    return [f for f in getattr(model, "forces", ()) if isinstance(f, Rotor)]
+    """The rotor elements of a model, then its spinning 3-D beams
+    (:class:`mbseig.model.beam3d.SpinningShaft`: the same fields) (empty without either)."""
+    shafts = (getattr(model, "flexible", None) or {}).get("shafts", ())
+    return [f for f in getattr(model, "forces", ()) if isinstance(f, Rotor)] + list(shafts)
 
 
 def station_orbits(model, q0, shape, s=1j) -> list[dict]:
@@ -52,17 +55,23 @@ def station_orbits(model, q0, shape, s=1j) -> list[dict]:
         a = a / np.linalg.norm(a)
         e1, e2 = normal_pair(a)
         sigma = -1.0 if r.speed < 0 else 1.0
-        frame = r.frame.C @ x[r.frame.idx]
-        for label, aff in r.stations:
-            X = aff.C @ x[aff.idx]
+        smap = getattr(r, "station_map", None)  # a spinning beam: (idx, sparse rows) of all
+        if smap is None:                         # its stations, its nodes' coordinates
+            frame = r.frame.C @ x[r.frame.idx]
+            body_motion = float(model.length_scale * np.max(np.abs(frame[3:]), initial=0.0))
+            X_all = None
+        else:
+            body_motion = float(model.length_scale * np.max(np.abs(x[r.motion_idx]), initial=0.0))
+            X_all = (smap[1] @ x[smap[0]]).reshape(-1, 3)
+        for j, (label, aff) in enumerate(r.stations):
+            X = aff.C @ x[aff.idx] if X_all is None else X_all[j]
             X1, X2 = e1 @ X, e2 @ X
             rf, rb = abs(X1 + 1j * X2) / 2, abs(X1 - 1j * X2) / 2
             out.append({"rotor": r.name, "station": label,
                         "kappa": sigma * (rf - rb) / (rf + rb) if rf + rb > 0 else 0.0,
                         "lateral": float(abs(X1) + abs(X2)),
                         "amplitude": float(np.linalg.norm(X)),
-                        "body_motion": float(model.length_scale * np.max(np.abs(frame[3:]),
-                                                                        initial=0.0))})
+                        "body_motion": body_motion})
     return out
 
 

@@ -1,0 +1,79 @@
+"""FE bodies in case files (``[[fe_bodies]]``, planar): reduced mass and stiffness matrices
+on [interface dofs; modal coordinates] (:mod:`mbseig.casefile.flexible`, its module docstring).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..model.affine import Affine, combine
+from ..model.fe_body import LinearFEBody
+from .fields import template
+from .matrices import matrix_value
+
+__all__ = ["assemble_fe", "fe_spec"]
+
+
+def fe_spec(b, f, new_coord):
+    name = f.text("name")
+    if "." in name or name in b.point_index:
+        raise f.error(f"FE body name {name!r} is used already or contains '.'")
+    M = matrix_value(f.raw("mass"), f"{f.label}.mass", f.names, b.files)
+    K = matrix_value(f.raw("stiffness"), f"{f.label}.stiffness", f.names, b.files)
+    f.formed("the mass and stiffness matrices", lambda: (M, K))
+    if M.shape != K.shape:
+        raise f.error(f"mass is {M.shape[0]}×{M.shape[0]} but stiffness {K.shape[0]}×{K.shape[0]}")
+    iface = f.raw("interface")
+    if not isinstance(iface, list) or not iface or not all(isinstance(p, str) for p in iface):
+        raise f.error("interface must be a non-empty list of point names (matrix node order)")
+    iface = [template(p, f.names, f) for p in iface]
+    for p in iface:
+        if p not in b.point_index:
+            raise f.error(f"unknown interface point {p!r}")
+    ndof = f.num("interface_dofs", 3.0)
+    if ndof not in (2.0, 3.0):
+        raise f.error("interface_dofs must be 2 (u_x, u_y) or 3 (u_x, u_y, θ)")
+    ndof = int(ndof)
+    rots = f.raw("rotations", ["free"] * len(iface)) if ndof == 3 else []
+    if ndof == 3 and (not isinstance(rots, list) or len(rots) != len(iface)):
+        raise f.error("rotations must list one of \"free\", \"clamped\" or a body per interface point")
+    f.done()
+    n_if = ndof * len(iface)
+    if M.shape[0] < n_if:
+        raise f.error(f"matrices are {M.shape[0]}×{M.shape[0]}, fewer than the {n_if} interface dofs")
+    for key, A in (("mass", M), ("stiffness", K)):
+        if not np.allclose(A, A.T, rtol=1e-9, atol=1e-12 * np.abs(A).max()):
+            raise f.error(f"{key} matrix is not symmetric")
+    theta_idx = []
+    for p, rot in zip(iface, rots):
+        theta_idx.append(-1 if rot == "clamped" else new_coord(b, f"{name}.{p}.theta", 0.0, "angle"))
+    eta_idx = [new_coord(b, f"{name}.eta{k + 1}", 0.0, "modal") for k in range(M.shape[0] - n_if)]
+    return {"name": name, "label": f.label, "M": M, "K": K, "interface": iface, "ndof": ndof,
+            "rotations": list(rots), "theta_idx": theta_idx, "eta_idx": eta_idx}
+
+
+def assemble_fe(b, spec, constraints, forces, mass_blocks, lock, error_only):
+    terms = []
+    for p, t in zip(spec["interface"], spec["theta_idx"] or [None] * len(spec["interface"])):
+        pos0 = b.point_pos[p]
+        terms.append((1.0, b.affine_of(p) - Affine.constant(pos0)))
+        if spec["ndof"] == 3:
+            terms.append((1.0, Affine.select([t], [0.0])))
+    if spec["eta_idx"]:
+        terms.append((1.0, Affine.select(spec["eta_idx"])))
+    z = combine(terms, stack=True)
+    body = LinearFEBody(spec["label"], z, spec["K"])
+    if body.idx.size:
+        forces.append(body)
+        mass_blocks.append((z.idx, z.idx, z.C.T @ spec["M"] @ z.C))
+    for p, rot, t in zip(spec["interface"], spec["rotations"], spec["theta_idx"]):
+        if rot in ("free", "clamped"):
+            continue
+        theta = Affine.select([t], [0.0])
+        c = lock(b, spec["label"], rot, theta)
+        b.add_constraint(constraints, c, error_only(spec["label"]))
+    return {"type": "fe_body", "interface": list(spec["interface"]),
+            "interface_dofs": spec["ndof"], "modal_coordinates": len(spec["eta_idx"]),
+            "size": int(spec["M"].shape[0])}
+
+

@@ -1,0 +1,396 @@
+"""Spatial beams and shafts: the 3-D Timoshenko / Euler–Bernoulli element, linear and co-rotational.
+
+Two layers.
+
+1. The standard local element (:func:`element_matrices`): 12×12 matrices on the local DOFs
+
+       d = [u₁, v₁, w₁, θx₁, θy₁, θz₁, u₂, v₂, w₂, θx₂, θy₂, θz₂]      (x along the beam)
+
+   of a uniform shaft element (Nelson 1980; Friswell et al., *Dynamics of Rotating Machines*,
+   2010, ch. 5; the element ROSS uses), with
+
+       M d̈ + Ω G d̈ + (K + N K_g) d = f          (G skew: spin Ω about +x; N axial force, tension > 0)
+
+   Bending in the xy-plane acts on (v, θz) with v′ ≈ θz, in the xz-plane on (w, θy) with
+   w′ ≈ −θy; each plane uses the interdependent Timoshenko interpolation (Friedman & Kosmatka
+   1993, :func:`mbseig.model.beams.timoshenko_shape_functions`) with its own shear parameter
+
+       Φ_y = 12 E I_z / (κ_y G A L²)   (shear along y, bending about z)
+       Φ_z = 12 E I_y / (κ_z G A L²)   (shear along z, bending about y)
+
+   M = ∫ ρA NᵀN + ρI_z N_ψzᵀN_ψz + ρI_y N_ψyᵀN_ψy dx (rotary inertia in the Timoshenko theory or
+   with ``rotary_inertia=True``: a Rayleigh beam), axial and torsion linear (ρA, ρI_p,
+   I_p = I_y + I_z the polar second moment of the mass), K the closed-form Timoshenko stiffness,
+   torsion GJ/L, axial EA/L.  The gyroscopic matrix of the spinning shaft's polar inertia is
+
+       G = ρ I_p ∫ (N_ψyᵀ N_ψz − N_ψzᵀ N_ψy) dx,
+
+   from the moment −ρI_pΩ ȧ per unit length on a section whose axis a tilts by ψ (the same law
+   as the rigid ``rotor`` element: T = −J_pΩ ȧ).  K_g = ∫ N′ᵀN′ dx in both planes is the
+   consistent geometric stiffness per unit axial force.
+
+2. The nonlinear element for mbseig (:class:`Beam3DElement`): co-rotational, on nodes that are
+   *frames* [r; u; v; w] exactly like spatial rigid bodies (:mod:`mbseig.model.spatial_body`): a
+   basic point and three unit vectors equal to the global x, y, z axes at the reference, with
+   the six quadratic conditions of :func:`mbseig.model.spatial_joints.triad_constraint` per free
+   node.  The section axes of node i, a_i (beam axis), b_i (section y), c_i (section z), are
+   fixed combinations of u, v, w (the reference section frame R₀ = [x₀ y₀ z₀]), so they are
+   linear in q.  With d = r₂ − r₁, l = |d|, e = d/l the element's deformations are
+
+       u  = l − l₀                                  elongation
+       θ  = ½ (c₁·b₂ − b₁·c₂)                       twist (sin of the relative rotation about x)
+       φz_i = −e·b_i,  φy_i = e·c_i                 end rotations about z and y relative to the chord
+
+   all invariant under rigid motions and zero at the reference (dot products of co-rotated
+   vectors), smooth, with gradients and Hessians in closed form.  The strain energy is the
+   planar beams' in each bending plane plus torsion:
+
+       ε̄ = u/l₀ + ½ φzᵀ G_z φz + ½ φyᵀ G_y φy,     N = EA ε̄
+       U = ½ EA l₀ ε̄² + ½ φzᵀ Kb_z φz + ½ φyᵀ Kb_y φy + ½ (GJ/l₀) θ²
+       Kb = EI/(l₀(1 + Φ)) [[4 + Φ, 2 − Φ], [2 − Φ, 4 + Φ]],   G = (1/l₀) ∫ N_φ′ N_φ′ᵀ dx
+
+   g = −Bᵀ U_p, K = −∂g/∂q = Bᵀ U_pp B + Σ_k U_p,k ∇²p_k (exact).  At the straight reference the
+   tangent on the rigid-motion-free directions is the standard K, and under an axial force N it
+   adds N K_g exactly (the chord term N/l (I − eeᵀ) plus N l₀ G), so columns buckle at the Euler
+   load of the mesh.
+
+   Mass and spin act on the nodal velocities in the current element frame R_e (e, and the mean
+   section y axis of the two nodes made normal to e):  ḋ = T(q) q̇ with translations R_eᵀ ṙ_i and
+   rotation rates R_eᵀ ω_i, ω_i = ½ (a_i × ȧ_i + b_i × ḃ_i + c_i × ċ_i); M(q) = Tᵀ M_loc T (as
+   the planar co-rotational beams: configuration-dependent, evaluated at q₀ by the
+   linearization) and the gyroscopic force g = −Ω Tᵀ G T q̇, so C = −∂g/∂q̇ = Ω Tᵀ G T.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import EquilibriumError
+from .affine import Affine
+from .base import ConfigurationMass, Force
+from .beam_sections import (
+    SHAPES,
+    cowper_shear_coefficient,
+    rectangle_torsion_constant,
+    section_frame,
+    section_properties,
+)
+from .beam_whirl import SpinningShaft  # noqa: F401
+from .beams import timoshenko_shape_functions
+
+__all__ = [
+    "SHAPES",
+    "THEORIES",
+    "Beam3DElement",
+    "BeamProperties3D",
+    "ElementMatrices",
+    "SpinningShaft",
+    "cowper_shear_coefficient",
+    "element_matrices",
+    "frames_to_local",
+    "rectangle_torsion_constant",
+    "section_frame",
+    "section_properties",
+]
+
+THEORIES = ("euler-bernoulli", "timoshenko")
+
+_GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(5)  # exact to degree 9 on [−1, 1]
+_GAUSS_X = 0.5 * (_GAUSS_X + 1.0)
+_GAUSS_W = 0.5 * _GAUSS_W
+_FLIP = np.diag([1.0, -1.0, 1.0, -1.0])  # xz-plane: the planar rotation ψ is −θy
+_XY = [1, 5, 7, 11]  # (v₁, θz₁, v₂, θz₂)
+_XZ = [2, 4, 8, 10]  # (w₁, θy₁, w₂, θy₂)
+
+
+@dataclass(frozen=True)
+class BeamProperties3D:
+    """Material and section of a spatial beam: E, G [Pa], ρ [kg/m³], A [m²], Iy, Iz [m⁴] (about
+    the section's y and z axes), J [m⁴] (torsion constant), κ_y, κ_z (shear coefficients for
+    shear along y and z), theory; ``rotary_inertia`` None follows the theory (Timoshenko: yes)."""
+
+    E: float
+    G: float
+    rho: float
+    A: float
+    Iy: float
+    Iz: float
+    J: float
+    kappa_y: float = 5.0 / 6.0
+    kappa_z: float = 5.0 / 6.0
+    theory: str = "timoshenko"
+    rotary_inertia: bool | None = None
+
+    def __post_init__(self):
+        if self.theory not in THEORIES:
+            raise ValueError(f"theory must be one of {', '.join(THEORIES)}, got {self.theory!r}")
+
+    @property
+    def polar(self) -> float:
+        """I_p = I_y + I_z, the polar second moment that carries the mass's torsional inertia."""
+        return self.Iy + self.Iz
+
+    @property
+    def has_rotary_inertia(self) -> bool:
+        if self.rotary_inertia is None:
+            return self.theory == "timoshenko"
+        return bool(self.rotary_inertia)
+
+    def shear_parameters(self, L: float) -> tuple[float, float]:
+        """(Φ_y, Φ_z) = (12 E I_z/(κ_y G A L²), 12 E I_y/(κ_z G A L²)); zeros for Euler–Bernoulli."""
+        if self.theory == "euler-bernoulli":
+            return 0.0, 0.0
+        c = 12.0 * self.E / (self.G * self.A * L * L)
+        return c * self.Iz / self.kappa_y, c * self.Iy / self.kappa_z
+
+
+# ---------------------------------------------------------------------------------------------
+# the linear local element
+@dataclass(frozen=True)
+class ElementMatrices:
+    """Local 12×12 matrices of one element: M d̈ + Ω G ḋ + (K + N K_g) d = f (module docstring),
+    d = [u, v, w, θx, θy, θz] at node 1 then node 2, x along the beam."""
+
+    M: np.ndarray
+    K: np.ndarray
+    G: np.ndarray
+    Kg: np.ndarray
+    L: float
+    Phi_y: float
+    Phi_z: float
+
+
+def _bending_stiffness(EI, L, Phi):
+    """Closed-form Timoshenko bending stiffness on planar (w, ψ) (Przemieniecki; Friswell eq. 5.x)."""
+    return EI / (L**3 * (1 + Phi)) * np.array([
+        [12.0, 6 * L, -12, 6 * L],
+        [6 * L, (4 + Phi) * L**2, -6 * L, (2 - Phi) * L**2],
+        [-12, -6 * L, 12, -6 * L],
+        [6 * L, (2 - Phi) * L**2, -6 * L, (4 + Phi) * L**2]])
+
+
+def _plane_fields(L, Phi, dofs, flip):
+    """(N, N′, N_ψ) of one bending plane as (ng, 12) arrays on d (rotation field as ψ of that
+    plane: θz in xy, −θy in xz is returned as the rotation about y, i.e. sign restored)."""
+    N, dN, Npsi = timoshenko_shape_functions(_GAUSS_X, L, Phi)
+    S = _FLIP if flip else np.eye(4)
+    out = []
+    for F in (N, dN, Npsi):
+        full = np.zeros((_GAUSS_X.size, 12))
+        full[:, dofs] = F @ S
+        out.append(full)
+    if flip:  # the planar ψ is −θy: the rotation about y is −ψ
+        out[2] = -out[2]
+    return out
+
+
+def element_matrices(props: BeamProperties3D, L: float) -> ElementMatrices:
+    """The standard local matrices of one uniform element of length L (module docstring)."""
+    p = props
+    Phi_y, Phi_z = p.shear_parameters(L)
+    M, K, Kg, G = (np.zeros((12, 12)) for _ in range(4))
+    lin = np.array([[2.0, 1.0], [1.0, 2.0]]) / 6.0
+    spring = np.array([[1.0, -1.0], [-1.0, 1.0]])
+    for dofs, k, m in (([0, 6], p.E * p.A / L, p.rho * p.A * L),
+                       ([3, 9], p.G * p.J / L, p.rho * p.polar * L)):
+        K[np.ix_(dofs, dofs)] += k * spring
+        M[np.ix_(dofs, dofs)] += m * lin
+    wq = _GAUSS_W * L
+    psi = {}
+    for dofs, flip, I_bend, Phi in ((_XY, False, p.Iz, Phi_y), (_XZ, True, p.Iy, Phi_z)):
+        S = _FLIP if flip else np.eye(4)
+        K[np.ix_(dofs, dofs)] += S @ _bending_stiffness(p.E * I_bend, L, Phi) @ S
+        N, dN, Npsi = _plane_fields(L, Phi, dofs, flip)
+        M += p.rho * p.A * (N.T * wq) @ N
+        if p.has_rotary_inertia:
+            M += p.rho * I_bend * (Npsi.T * wq) @ Npsi
+        Kg += (dN.T * wq) @ dN
+        psi["z" if not flip else "y"] = Npsi
+    Ny, Nz = psi["y"], psi["z"]
+    G = p.rho * p.polar * ((Ny.T * wq) @ Nz - (Nz.T * wq) @ Ny)
+    return ElementMatrices(M=M, K=K, G=G, Kg=Kg, L=L, Phi_y=Phi_y, Phi_z=Phi_z)
+
+
+# ---------------------------------------------------------------------------------------------
+# the co-rotational element on frame nodes
+def frames_to_local(R0: np.ndarray) -> np.ndarray:
+    """S (24×24): [r; a; b; c] per node (section axes) = S [r; u; v; w] per node (frame)."""
+    node = np.zeros((12, 12))
+    node[:3, :3] = np.eye(3)
+    node[3:, 3:] = np.kron(np.asarray(R0, float).T, np.eye(3))
+    return np.kron(np.eye(2), node)
+
+
+def _skew(a):
+    return np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]], dtype=a.dtype)
+
+
+_D = np.zeros((3, 24))
+_D[:, 12:15] = np.eye(3)
+_D[:, 0:3] = -np.eye(3)
+
+
+def _sel(k):
+    """3×24 selector of block k of z = [r₁, a₁, b₁, c₁, r₂, a₂, b₂, c₂]."""
+    S = np.zeros((3, 24))
+    S[:, 3 * k:3 * k + 3] = np.eye(3)
+    return S
+
+
+_B1, _C1, _B2, _C2 = _sel(2), _sel(3), _sel(6), _sel(7)
+# twist θ = ½ (c₁·b₂ − b₁·c₂): constant Hessian
+_H_TWIST = 0.5 * (_C1.T @ _B2 + _B2.T @ _C1 - _B1.T @ _C2 - _C2.T @ _B1)
+# rows of p = [u, θ, φz₁, φz₂, φy₁, φy₂]: (sign, selector) of the dot measures
+_DOTS = ((-1.0, _B1), (-1.0, _B2), (1.0, _C1), (1.0, _C2))
+
+
+@dataclass(frozen=True, eq=False)
+class Beam3DElement(Force, ConfigurationMass):
+    """One co-rotational spatial beam element between two frame nodes (module docstring).
+
+    ``frames`` maps q to the two node frames [r₁; u₁; v₁; w₁; r₂; u₂; v₂; w₂] (24 rows; triads
+    equal to the global axes at the reference); ``R0`` the reference section frame; ``spin`` Ω
+    about the element axis (rad/s).
+    """
+
+    name: str
+    frames: Affine
+    props: BeamProperties3D
+    l0: float
+    R0: np.ndarray
+    spin: float = 0.0
+    affine_field = "frames"
+
+    def __post_init__(self):
+        p, l0 = self.props, self.l0
+        em = element_matrices(p, l0)
+        S = frames_to_local(self.R0)
+        nodes = Affine(self.frames.idx, S @ self.frames.C, S @ self.frames.d)
+        planes = []
+        for Phi, I_bend in ((em.Phi_y, p.Iz), (em.Phi_z, p.Iy)):
+            _, dN, _ = timoshenko_shape_functions(_GAUSS_X, l0, Phi)
+            dphi = dN[:, [1, 3]]
+            Gm = (dphi.T * (_GAUSS_W * l0)) @ dphi / l0
+            Kb = p.E * I_bend / (l0 * (1 + Phi)) * np.array([[4 + Phi, 2 - Phi],
+                                                              [2 - Phi, 4 + Phi]])
+            planes.append((Gm, Kb))
+        object.__setattr__(self, "_nodes", nodes)
+        object.__setattr__(self, "_em", em)
+        object.__setattr__(self, "_planes", tuple(planes))
+
+    @property
+    def matrices(self) -> ElementMatrices:
+        return self._em
+
+    # -- deformations ------------------------------------------------------------------------
+    def _measures(self, z):
+        """p (6,), B = ∂p/∂z (6, 24) and the Hessians ∇²p_k (6, 24, 24) on the section axes z."""
+        d = _D @ z
+        l = np.sqrt(d @ d)
+        if l.real == 0.0:
+            raise EquilibriumError("beam element collapsed to zero length", element=self.name)
+        e = d / l
+        P = np.eye(3) - np.outer(e, e)
+        dt = z.dtype
+        p = np.zeros(6, dtype=dt)
+        B = np.zeros((6, 24), dtype=dt)
+        H = np.zeros((6, 24, 24), dtype=dt)
+        p[0] = l - self.l0
+        B[0] = e @ _D
+        H[0] = _D.T @ (P / l) @ _D
+        p[1] = 0.5 * ((_C1 @ z) @ (_B2 @ z) - (_B1 @ z) @ (_C2 @ z))
+        B[1] = _H_TWIST @ z
+        H[1] = _H_TWIST
+        for k, (sgn, X) in enumerate(_DOTS, start=2):
+            x = X @ z
+            ex = e @ x
+            p[k] = sgn * ex
+            B[k] = sgn * ((x - ex * e) / l @ _D + e @ X)
+            Hdd = -(np.outer(x, e) + np.outer(e, x) + ex * (np.eye(3) - 3 * np.outer(e, e))) / (l * l)
+            Hdx = _D.T @ (P / l) @ X
+            H[k] = sgn * (_D.T @ Hdd @ _D + Hdx + Hdx.T)
+        return p, B, H
+
+    def local_deformation(self, q):
+        """(u, θ, φz₁, φz₂, φy₁, φy₂): elongation, twist, end rotations about z and y (module
+        docstring)."""
+        return self._measures(self._nodes(q))[0]
+
+    def _energy_derivatives(self, p):
+        EA, l0 = self.props.E * self.props.A, self.l0
+        (Gz, Kbz), (Gy, Kby) = self._planes
+        phz, phy = p[2:4], p[4:6]
+        az, ay = Gz @ phz, Gy @ phy
+        eps = p[0] / l0 + 0.5 * phz @ az + 0.5 * phy @ ay
+        N = EA * eps
+        GJ = self.props.G * self.props.J / l0
+        Up = np.concatenate([[N, GJ * p[1]], N * l0 * az + Kbz @ phz, N * l0 * ay + Kby @ phy])
+        c = np.concatenate([[1.0 / l0, 0.0], az, ay])
+        Upp = EA * l0 * np.outer(c, c)
+        Upp[1, 1] += GJ
+        Upp[2:4, 2:4] += N * l0 * Gz + Kbz
+        Upp[4:6, 4:6] += N * l0 * Gy + Kby
+        U = 0.5 * EA * l0 * eps**2 + 0.5 * phz @ Kbz @ phz + 0.5 * phy @ Kby @ phy \
+            + 0.5 * GJ * p[1] ** 2
+        return U, Up, Upp, N
+
+    def strain_energy(self, q):
+        return self._energy_derivatives(self.local_deformation(q))[0]
+
+    def axial_force(self, q) -> float:
+        """N = EA ε̄ (tension positive)."""
+        return float(np.real(self._energy_derivatives(self.local_deformation(q))[3]))
+
+    # -- velocity map ------------------------------------------------------------------------
+    def velocity_map(self, q) -> np.ndarray:
+        """T (12 × |idx|): local nodal velocities ḋ = T q̇[idx] in the current element frame."""
+        z = self._nodes(q)
+        d = _D @ z
+        e1 = d / np.linalg.norm(d)
+        ybar = z[6:9] + z[18:21]
+        e3 = np.cross(e1, ybar)
+        e3 /= np.linalg.norm(e3)
+        Re = np.column_stack([e1, np.cross(e3, e1), e3])
+        T = np.zeros((12, 24))
+        for n in range(2):
+            o = 12 * n
+            T[6 * n:6 * n + 3, o:o + 3] = Re.T
+            for k in range(3):
+                vec = z[o + 3 + 3 * k:o + 6 + 3 * k]
+                T[6 * n + 3:6 * n + 6, o + 3 + 3 * k:o + 6 + 3 * k] = 0.5 * Re.T @ _skew(vec)
+        return T @ self._nodes.C
+
+    # -- force element interface ------------------------------------------------------------
+    def force(self, q, qd):
+        z = self._nodes(q)
+        p, B, _ = self._measures(z)
+        Up = self._energy_derivatives(p)[1]
+        g = -(self._nodes.C.T @ (B.T @ Up))
+        if self.spin:
+            T = self.velocity_map(q)
+            g = g - self.spin * (T.T @ (self._em.G @ (T @ qd[self.idx])))
+        return g
+
+    def jacobians(self, q, qd):
+        """(K, C): K exact for the elastic part; the gyroscopic force's ∂/∂q (∝ Ω q̇) is left
+        out, so K is exact at rest (q̇ = 0, where the linearization evaluates it)."""
+        z = self._nodes(q)
+        p, B, H = self._measures(z)
+        _, Up, Upp, _ = self._energy_derivatives(p)
+        Kz = B.T @ Upp @ B + np.tensordot(Up, H, axes=1)
+        Cn = self._nodes.C
+        K = Cn.T @ Kz @ Cn
+        if self.spin:
+            T = self.velocity_map(q)
+            C = self.spin * (T.T @ self._em.G @ T)
+        else:
+            C = np.zeros_like(K)
+        return K, C
+
+    # -- inertia -----------------------------------------------------------------------------
+    def mass(self, q):
+        """Consistent mass on idx in the current element frame: Tᵀ M_loc T."""
+        T = self.velocity_map(q)
+        return T.T @ self._em.M @ T
