@@ -3,9 +3,11 @@
 
     python scripts/check_report_html.py reports/hand_device/report.html [--screenshot out.png]
 
-Checks (exit 1 on failure): every <img> is an embedded PNG data URI that decodes (no browser
+Checks (exit 1 on failure): every <img> is an embedded PNG data URI that decodes, or an
+embedded GIF (a mode animation) that decodes to at least two frames and loops (no browser
 needed), and in Chromium every image has naturalWidth > 0 after load (the DOM is dumped after a
-small inline script writes the count of broken images into the page title).
+small inline script writes the counts of images, broken images and animations into the page
+title).
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ import tempfile
 from pathlib import Path
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+GIF_PREFIX = "data:image/gif;base64,"
 FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
          "--disable-component-update", "--no-first-run", "--hide-scrollbars"]
 
@@ -42,7 +45,9 @@ def find_chromium():
 
 
 def check_embedded(html: str) -> list[str]:
-    """Problems with the <img> tags: not a PNG data URI, or not decodable."""
+    """(problems, number of still figures): problems with the <img> tags (not an embedded PNG
+    or GIF, or not decodable); the count is of the PNG figures (the animations are counted by
+    :func:`check_animations`)."""
     import io
 
     import matplotlib.image as mpimg
@@ -51,10 +56,15 @@ def check_embedded(html: str) -> list[str]:
     srcs = re.findall(r'<img[^>]*\bsrc="([^"]*)"', html)
     if not srcs:
         problems.append("no <img> in the page")
+    n = 0
     for k, src in enumerate(srcs):
-        if not src.startswith("data:image/png;base64,"):
-            problems.append(f"image {k}: not an embedded PNG ({src[:40]!r})")
+        if src.startswith(GIF_PREFIX):
+            problems += [f"image {k}: {p}" for p in _gif_problems(src)]
             continue
+        if not src.startswith("data:image/png;base64,"):
+            problems.append(f"image {k}: not an embedded PNG or GIF ({src[:40]!r})")
+            continue
+        n += 1
         data = base64.b64decode(src.split(",", 1)[1], validate=True)
         if not data.startswith(PNG_SIGNATURE):
             problems.append(f"image {k}: bad PNG signature")
@@ -62,14 +72,55 @@ def check_embedded(html: str) -> list[str]:
         img = mpimg.imread(io.BytesIO(data), format="png")
         if img.shape[0] < 10 or img.shape[1] < 10:
             problems.append(f"image {k}: decoded to {img.shape}")
-    return problems, len(srcs)
+    return problems, n
 
 
-def check_in_browser(page: Path, screenshot: Path, chromium: str, width=1200, height=3000):
-    """(number of images, number broken) as seen by Chromium; writes the screenshot."""
+def _gif_problems(src):
+    """What is wrong with an embedded GIF animation (decoded by Pillow, which matplotlib
+    depends on): not a GIF, fewer than two frames, not looping, tiny."""
+    import io
+
+    from PIL import Image
+
+    data = base64.b64decode(src[len(GIF_PREFIX):], validate=True)
+    if not data.startswith((b"GIF87a", b"GIF89a")):
+        return ["bad GIF signature"]
+    with Image.open(io.BytesIO(data)) as im:
+        out = []
+        if getattr(im, "n_frames", 1) < 2:
+            out.append("a GIF of one frame (not an animation)")
+        if im.info.get("loop") != 0:
+            out.append("a GIF that does not loop")
+        if im.size[0] < 10 or im.size[1] < 10:
+            out.append(f"GIF of size {im.size}")
+        return out
+
+
+def check_animations(html: str):
+    """(problems, number of embedded GIF animations, frames of each)."""
+    import io
+
+    from PIL import Image
+
+    srcs = [s for s in re.findall(r'<img[^>]*\bsrc="([^"]*)"', html) if s.startswith(GIF_PREFIX)]
+    problems, frames = [], []
+    for k, src in enumerate(srcs):
+        problems += [f"animation {k}: {p}" for p in _gif_problems(src)]
+        with Image.open(io.BytesIO(base64.b64decode(src[len(GIF_PREFIX):]))) as im:
+            frames.append(getattr(im, "n_frames", 1))
+    return problems, len(srcs), frames
+
+
+def check_in_browser(page: Path, screenshot: Path, chromium: str, width=1200, height=3000, *,
+                     animations=False):
+    """(number of images, number broken) as seen by Chromium, and with ``animations`` the
+    number of loaded GIF animations as a third value; writes the screenshot."""
     html = page.read_text()
     probe = ("<script>window.addEventListener('load',()=>{const im=[...document.images];"
-             "document.title='IMAGES '+im.length+' BROKEN '+im.filter(i=>!(i.complete&&i.naturalWidth>0)).length;});</script>")
+             "const ok=i=>i.complete&&i.naturalWidth>0;"
+             "document.title='IMAGES '+im.length+' BROKEN '+im.filter(i=>!ok(i)).length"
+             "+' GIFS '+im.filter(i=>i.src.startsWith('data:image/gif')&&ok(i)).length;});"
+             "</script>")
     with tempfile.TemporaryDirectory() as tmp:
         probed = Path(tmp) / "probe.html"
         probed.write_text(html.replace("</body>", probe + "</body>"))
@@ -77,13 +128,14 @@ def check_in_browser(page: Path, screenshot: Path, chromium: str, width=1200, he
         dom = subprocess.run([chromium, *FLAGS, f"--user-data-dir={profile}",
                               "--virtual-time-budget=5000", "--dump-dom", probed.as_uri()],
                              capture_output=True, text=True, timeout=120)
-        m = re.search(r"<title>IMAGES (\d+) BROKEN (\d+)</title>", dom.stdout)
+        m = re.search(r"<title>IMAGES (\d+) BROKEN (\d+) GIFS (\d+)</title>", dom.stdout)
         subprocess.run([chromium, *FLAGS, f"--user-data-dir={profile}2",
                         f"--screenshot={screenshot}", f"--window-size={width},{height}",
                         page.resolve().as_uri()], capture_output=True, timeout=120)
     if not m:
         raise RuntimeError("chromium did not run the probe script:\n" + dom.stderr[-2000:])
-    return int(m.group(1)), int(m.group(2))
+    counts = int(m.group(1)), int(m.group(2))
+    return (*counts, int(m.group(3))) if animations else counts
 
 
 def print_to_pdf(page: Path, pdf: Path, chromium: str):
@@ -102,7 +154,9 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     html = args.html.read_text()
     problems, n = check_embedded(html)
-    print(f"{n} embedded images; {len(problems)} problems")
+    _, n_anim, frames = check_animations(html)
+    print(f"{n} embedded figures and {n_anim} animations ({sum(frames)} frames); "
+          f"{len(problems)} problems")
     for p in problems:
         print("  " + p)
     chromium = find_chromium()
@@ -110,9 +164,9 @@ def main(argv=None) -> int:
         print("chromium not found: browser check skipped")
         return 1 if problems else 0
     shot = args.screenshot or args.html.with_name("screenshot.png")
-    total, broken = check_in_browser(args.html, shot, chromium)
-    print(f"chromium: {total} images, {broken} broken; screenshot {shot}")
-    return 1 if problems or broken or total != n else 0
+    total, broken, gifs = check_in_browser(args.html, shot, chromium, animations=True)
+    print(f"chromium: {total} images ({gifs} animations), {broken} broken; screenshot {shot}")
+    return 1 if problems or broken or total != n + n_anim or gifs != n_anim else 0
 
 
 if __name__ == "__main__":

@@ -28,12 +28,12 @@ def test_report_sections_and_time_domain_check(tmp_path):
         assert heading in text
     assert "| MCP | 45 |" in text  # posture: the commanded angle (inverse statics)
     assert "all passed" in text  # every C1 mode confirmed by the nonlinear simulation
-    # the summary names the parameters that move the least-damped mode most, each with its
-    # unit: in C1 hand_length (m) moves it most (+1 % moves Re s by +0.61 1/s, the next 0.10)
-    assert "C1: the parameters that move the least-damped mode (mode 1" in text
-    assert "hand_length (= 0.19 m; ∂Re s/∂hand_length =" in text and "1/s per m" in text
+    # the summary's sensitivity table ranks the parameters that move the least-damped mode,
+    # each with its unit: in C1 hand_length (m) moves it most (+1 % moves Re s by +0.61 1/s,
+    # the next 0.10)
+    assert "| C1 | 1 | hand_length | 0.19 m | " in text and "1/s per m" in text
     problems, n = check_report_html.check_embedded(page.read_text())
-    assert problems == [] and n == 2  # mode shapes and pole map
+    assert problems == [] and n == 4  # summary poles, tornado chart, mode shapes, pole map
 
 
 def test_report_summary_names_units_provenance(tmp_path, monkeypatch):

@@ -1,4 +1,5 @@
-"""Figures: sweeps, pole maps, mechanism mode shapes, time-domain checks (the drawing layer).
+"""Figures: sweeps, pole maps, mechanism mode shapes, time-domain checks, the report's summary
+figures, and animated mode shapes (:mod:`mbseig.plots.animation`, GIF) (the drawing layer).
 
 Every function returns a :class:`matplotlib.figure.Figure` built without pyplot, so no global
 state changes: the backend a notebook or application chose stays as it is, and no figure is kept
@@ -10,6 +11,7 @@ for.  The functions take result objects by their attributes (duck typing) and im
 from .common import decade_scale, save
 from .mechanism import mechanism_layout, mechanism_modes, project_constraints
 from .poles import plot_check, pole_map, speed_accuracy
+from .summary import summary_poles, tornado
 from .sweeps import (
            bifurcation_diagram,
            modes_vs_parameter,
@@ -20,4 +22,4 @@ from .sweeps import (
 
 __all__ = ["root_locus", "modes_vs_parameter", "stability_map", "bifurcation_diagram",
            "stability_chart", "pole_map", "mechanism_modes", "plot_check", "speed_accuracy", "save",
-           "decade_scale", "mechanism_layout", "project_constraints"]
+           "decade_scale", "mechanism_layout", "project_constraints", "summary_poles", "tornado"]

@@ -31,6 +31,12 @@ def project_constraints(model, q, *, tol=1e-12, max_iter=30):
     return q, res
 
 
+def plane_point(p):
+    """A point of a 1-D or 2-D model as (x, y) (a chain along x has y = 0)."""
+    p = np.asarray(p, float).ravel()
+    return np.pad(p, (0, 2 - p.size)) if p.size < 2 else p[:2]
+
+
 def _point_pair(model, element):
     """Names (a, b) of the points ``element`` acts between (r_b − r_a), as the reader recorded
     them (:mod:`mbseig.model.assembly`), or None."""
@@ -120,8 +126,12 @@ def _zigzag(p, q, n=8, width=0.06):
 
 def _draw_mechanism(ax, model, layout, q, *, colour, lw, alpha=1.0, labels=False, ms=3):
     def pt(n):  # a named point in mm
-        return np.asarray(model.points[n](q), float) * 1e3
+        return plane_point(model.points[n](q)) * 1e3
 
+    free = [n for n, a in model.points.items() if a.idx.size and "." not in n]
+    if free:  # every moving point (a point mass, a body end, a slider) as a dot
+        r = np.array([pt(n) for n in free])
+        ax.plot(r[:, 0], r[:, 1], "o", color=colour, ms=ms, alpha=alpha, zorder=3)
     for b in layout["bodies"]:
         if len(b["points"]) != 2:
             continue
@@ -224,7 +234,7 @@ def mechanism_modes(model, q0, shapes, labels, *, amplitude=0.12, title="", eige
     L = float(model.length_scale)
     q0 = np.asarray(q0, float)
     layout = mechanism_layout(model, q0)
-    pts0 = np.array([model.points[nm](q0) for nm in model.points]) * 1e3
+    pts0 = np.array([plane_point(model.points[nm](q0)) for nm in model.points]) * 1e3
     span = np.ptp(pts0, axis=0) + 0.5 * float(np.max(np.ptp(pts0, axis=0)))
     ratio = float(span[0] / max(span[1], 1e-300))  # panel width / height of the drawing
     panel_h = 3.9

@@ -1,4 +1,5 @@
-"""Figures of spatial models: mode shapes in three orthographic views and Campbell diagrams.
+"""Figures of spatial models: mode shapes in a true-aspect 3-D view beside three orthographic
+views, and Campbell diagrams.
 
 Like :mod:`mbseig.plots`, every function returns a :class:`matplotlib.figure.Figure` built
 without pyplot (no backend switch, no global state) and drawn in a local rc context;
@@ -6,16 +7,27 @@ without pyplot (no backend switch, no global state) and drawn in a local rc cont
 read by their attributes (duck typing):
 
 - ``model.points``: name → affine map (callable on q, ``.idx`` empty for a fixed point);
-- ``model.bodies``: name → record whose ``markers`` are names in ``model.points`` (for a
-  spatial body: its centre of mass and every point where a joint, spring or bushing acts), or
-  whose ``points`` are two such names (planar bodies);
+- ``model.bodies``: name → record with ``carried`` (the user's basic points the body carries),
+  ``markers`` (names in ``model.points``: its centre of mass first, then every point where a
+  joint, spring or bushing acts on it, in the order the reader recorded them), ``mass`` and
+  ``frame`` (the affine map of [r₀; u; v; w]); planar bodies have ``points`` instead;
+- rotor elements (``body``, ``frame`` the carrier's frame map, ``axis`` in the carrier's
+  axes, ``polar_inertia``, ``stations``: the (label, map) of the carrier's centre (or station)
+  and of the body's other markers in the same order);
 - a Campbell result: ``values``, ``parameter``, ``speeds``, ``harmonic``, ``frequency``,
-  ``log_decrement``, ``whirl`` (per point, per track) and ``critical_speeds``.
+  ``log_decrement``, ``whirl`` (per point, per track), ``critical_speeds`` and, when it has
+  them, ``tolerance`` (per point, per track: each eigenvalue's stability tolerance) and
+  ``units``.
 
 A body is drawn rigid: the displaced configuration q₀ ± a·L·Re(e^{−iφ} x) is projected back
-onto the constraints Φ(q) = 0 (:func:`mbseig.plots.project_constraints`), and its markers are
-affine maps of the body's frame, so they move together; each body is drawn as the segments
-from its centre of mass to its other markers.
+onto the constraints Φ(q) = 0 (:func:`mbseig.plots.project_constraints`), and its points are
+affine maps of the body's frame, so they move together.  Each body is drawn as the segments
+from its centre of mass to every point it carries and every joint or spring station on it (a
+pendulum link is the line through its pivots); a body carrying a rotor element is drawn with
+its disc (the circle of the uniform disc of the body's mass and the rotor's polar inertia,
+radius √(2 J_p/m), normal to the spin axis); joints are open circles, fixed points black
+squares, rotor stations (bearings) triangles; in the 3-D view each body's frame axes u (solid)
+and v (dotted) show its rotation about its own line.
 """
 
 from __future__ import annotations
@@ -30,7 +42,8 @@ from .mechanism import project_constraints
 #: the three-view and Campbell figures are set one point smaller than the planar ones
 SPATIAL_STYLE = {**STYLE, "font.size": 8}
 
-__all__ = ["VIEWS", "WHIRL_COLOURS", "campbell_diagram", "save", "spatial_modes"]
+__all__ = ["VIEWS", "WHIRL_COLOURS", "campbell_diagram", "save", "spatial_modes",
+           "spatial_layout", "draw_spatial", "view_limits", "speed_unit"]
 
 #: (horizontal axis, vertical axis, title) of the three orthographic views
 VIEWS = ((0, 1, "top (x, y)"), (0, 2, "front (x, z)"), (1, 2, "side (y, z)"))
@@ -38,17 +51,153 @@ WHIRL_COLOURS = {"forward": "tab:blue", "backward": "tab:red", "mixed": "tab:gra
                  "none": "tab:green", None: "k"}
 
 
+def _vec3(p):
+    p = np.asarray(p, float).ravel()
+    return np.pad(p, (0, 3 - p.size)) if p.size < 3 else p[:3]
 
-def _body_polylines(model, q):
-    """Per body: an array (k, 3) of its markers, the first one the centre of mass."""
-    out = []
-    for b in model.bodies.values():
-        names = b.get("markers") or list(b.get("points", ()))
-        pts = [np.asarray(model.points[nm](q), float) for nm in names]
-        pts = [np.pad(p, (0, 3 - p.size)) for p in pts]
-        if pts:
-            out.append(np.array(pts))
-    return out
+
+def spatial_layout(model):
+    """What a spatial drawing shows, from the records the reader left on the model: per body
+    its point names (centre of mass first), the rotor discs, the joints (points carried by two
+    bodies or by a body and the ground, and the bodies' joint stations), the fixed points and
+    the rotor stations (bearings), each with its name."""
+    bodies, discs, stations = [], [], []
+    carried_by = {}
+    for name, b in model.bodies.items():
+        markers = list(b.get("markers") or ())
+        carried = [p for p in b.get("carried", ()) if p in model.points]
+        if not markers and not carried:
+            markers = list(b.get("points", ()))
+        names = list(dict.fromkeys(markers[:1] + carried + markers[1:]))
+        bodies.append({"name": name, "points": names})
+        for p in carried:
+            carried_by.setdefault(p, []).append(name)
+    fixed = [n for n, a in model.points.items() if a.idx.size == 0 and "." not in n]
+    joints = [p for p, bs in carried_by.items() if len(bs) > 1 or p in fixed]
+    for name, b in model.bodies.items():
+        joints += list(b.get("markers") or ())[1:]
+    for e in getattr(model, "forces", ()):
+        if not all(hasattr(e, a) for a in ("body", "axis", "polar_inertia", "stations", "frame")):
+            continue
+        if not e.stations:
+            continue
+        b = model.bodies.get(e.body) or {}
+        mass = float(b.get("mass", 0.0) or 0.0)
+        jp = float(e.polar_inertia)
+        # the uniform disc of the carrier's mass; a carrier without a mass of its own (a beam
+        # station) has no disc radius to show, and its station is drawn as a joint instead
+        radius = math.sqrt(2 * jp / mass) if mass > 0 and jp > 0 else None
+        discs.append({"body": e.body, "axis": np.asarray(e.axis, float), "radius": radius,
+                      "frame": e.frame, "centre": e.stations[0][1]})
+        markers = list(b.get("markers") or ())
+        for k, (label, _) in enumerate(e.stations):
+            if 0 < k < len(markers):
+                stations.append({"name": label, "point": markers[k]})
+    station_points = {s["point"] for s in stations}
+    joints = [j for j in dict.fromkeys(joints) if j not in station_points]
+    return {"bodies": bodies, "discs": discs, "joints": joints, "fixed": fixed,
+            "stations": stations}
+
+
+def _disc_circle(model, q, disc, n=48):
+    """Points (n, 3) of a rotor's disc circle at configuration q: centred on the rotor's first
+    station, normal to its spin axis (given in the carrier's axes u, v, w)."""
+    f = np.asarray(disc["frame"](q), float)
+    u, v, w = f[3:6], f[6:9], f[9:12]
+    a = disc["axis"]
+    axis = a[0] * u + a[1] * v + a[2] * w
+    axis = axis / max(np.linalg.norm(axis), 1e-300)
+    ref = np.eye(3)[int(np.argmin(np.abs(axis)))]
+    e1 = np.cross(axis, ref)
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(axis, e1)
+    c = _vec3(disc["centre"](q))
+    t = np.linspace(0, 2 * math.pi, n)
+    return c + disc["radius"] * (np.outer(np.cos(t), e1) + np.outer(np.sin(t), e2))
+
+
+def draw_spatial(ax, model, layout, q, project, *, colour, lw, alpha=1.0, symbols=False,
+                 triads=None):
+    """Draw the layout at configuration q on ``ax``; ``project`` maps an (n, 3) array to the
+    tuple of coordinate arrays the axes plot (two for a projection, three for a 3-D axes).
+    With ``triads`` (a length), each body's frame axes u (solid) and v (dotted) are drawn that
+    long from its centre of mass, so a spin about a body's own line shows."""
+    def xyz(names):
+        return np.array([_vec3(model.points[n](q)) for n in names])
+
+    if triads:
+        for b in layout["bodies"]:
+            rec = model.bodies.get(b["name"], {})
+            if "frame" not in rec or not b["points"]:
+                continue
+            f = np.asarray(rec["frame"](q), float)
+            c = _vec3(model.points[b["points"][0]](q))
+            for axis, style in ((f[3:6], "-"), (f[6:9], ":")):
+                ax.plot(*project(np.array([c, c + triads * axis])), style, color=colour,
+                        lw=max(lw * 0.5, 0.6), alpha=alpha)
+
+    for b in layout["bodies"]:
+        P = xyz(b["points"])
+        if len(P) == 1:
+            ax.plot(*project(P), "o", color=colour, ms=3, alpha=alpha)
+            continue
+        for k in range(1, len(P)):
+            ax.plot(*project(P[[0, k]]), "-", color=colour, lw=lw, alpha=alpha,
+                    solid_capstyle="round")
+        ax.plot(*project(P[:1]), "o", color=colour, ms=2.5, alpha=alpha)
+    for d in layout["discs"]:
+        if d["radius"]:
+            ax.plot(*project(_disc_circle(model, q, d)), "-", color=colour, lw=lw * 0.7,
+                    alpha=alpha)
+    if not symbols:
+        return
+    if layout["joints"]:
+        ax.plot(*project(xyz(layout["joints"])), "o", ms=6, mfc="none", mec=colour, mew=0.9,
+                alpha=alpha)
+    if layout["stations"]:
+        ax.plot(*project(xyz([s["point"] for s in layout["stations"]])), "^", ms=6, mfc="none",
+                mec="tab:green", mew=0.9)
+    if layout["fixed"]:
+        ax.plot(*project(xyz(layout["fixed"])), "ks", ms=4)
+
+
+def _all_points(model, layout, qs):
+    pts = []
+    for q in qs:
+        for b in layout["bodies"]:
+            pts += [_vec3(model.points[n](q)) for n in b["points"]]
+        for d in layout["discs"]:
+            if d["radius"]:
+                pts += list(_disc_circle(model, q, d, n=12))
+        pts += [_vec3(model.points[n](q)) for n in layout["fixed"]]
+    return np.array(pts)
+
+
+def view_limits(points, min_span):
+    """(centre, half-width) per axis: one half-width for all three (a true-aspect box), at
+    least ``min_span``/2, so a view along a body's line is not blown up to rounding residues."""
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    centre = 0.5 * (lo + hi)
+    half = max(0.5 * float(np.max(hi - lo)) * 1.12, 0.5 * min_span)
+    return centre, half
+
+
+def _set_view(ax, centre, half, h, v):
+    ax.set_xlim(centre[h] - half, centre[h] + half)
+    ax.set_ylim(centre[v] - half, centre[v] + half)
+    ax.set_aspect("equal", adjustable="box")  # square limits: nothing for matplotlib to override
+
+
+def _set_view3d(ax, centre, half):
+    ax.set_xlim(centre[0] - half, centre[0] + half)
+    ax.set_ylim(centre[1] - half, centre[1] + half)
+    ax.set_zlim(centre[2] - half, centre[2] + half)
+    ax.set_box_aspect((1, 1, 1))  # equal limits in a cube: true aspect
+    ax.set_xlabel("x [m]", labelpad=-6)
+    ax.set_ylabel("y [m]", labelpad=-6)
+    ax.set_zlabel("z [m]", labelpad=-6)
+    ax.tick_params(labelsize=6, pad=0)
+    ax.view_init(elev=22, azim=-58)
 
 
 def _real_shape(v):
@@ -58,63 +207,106 @@ def _real_shape(v):
     return vr / max(np.max(np.abs(vr)), 1e-300)
 
 
-def _draw(ax, model, q, h, v, **kw):
-    for P in _body_polylines(model, q):
-        for k in range(1, len(P)):
-            ax.plot(P[[0, k], h], P[[0, k], v], "-", **kw)
-        ax.plot(P[:1, h], P[:1, v], "o", ms=3, **kw)
-
-
 def spatial_modes(model, q0, shapes, labels, *, amplitude=0.15, title=""):
-    """One row a mode, three orthographic views a row: the model at equilibrium (black) and
-    displaced by ± the mode shape (red/blue), bodies drawn rigid (module docstring)."""
+    """One row a mode: a true-aspect 3-D view and the three orthographic views of the model at
+    equilibrium (black) and displaced by ± the mode shape (red/blue), bodies drawn rigid
+    (module docstring)."""
     import matplotlib
+    from matplotlib.lines import Line2D
 
     with matplotlib.rc_context(SPATIAL_STYLE):
         n = max(len(labels), 1)
-        fig = figure(figsize=(10.5, 3.2 * n))
-        axes = fig.subplots(n, 3, squeeze=False)
+        fig = figure(figsize=(12.4, 3.1 * n + 0.5))
+        gs = fig.add_gridspec(n, 4, width_ratios=[1.5, 1, 1, 1])
         L = float(getattr(model, "length_scale", 1.0))
-        fixed = [np.pad(np.asarray(a(q0), float), (0, 3 - a.dim)) for nm, a in model.points.items()
-                 if a.idx.size == 0]
+        q0 = np.asarray(q0, float)
+        layout = spatial_layout(model)
         for k in range(len(labels)):
             d = amplitude * L * _real_shape(shapes[:, k])
             # moved along the mode and projected back onto Φ(q) = 0: unit vectors stay unit
             # and rigid bodies rigid (a linear displacement stretches them by O(a²))
             q_plus = project_constraints(model, q0 + d)[0]
             q_minus = project_constraints(model, q0 - d)[0]
+            centre, half = view_limits(_all_points(model, layout, (q0, q_plus, q_minus)),
+                                       0.2 * L)
+            ax3 = fig.add_subplot(gs[k, 0], projection="3d")
+            for q, col, lw, sym in ((q0, "k", 2.0, True), (q_plus, "tab:red", 1.0, False),
+                                    (q_minus, "tab:blue", 1.0, False)):
+                draw_spatial(ax3, model, layout, q, lambda P: (P[:, 0], P[:, 1], P[:, 2]),
+                             colour=col, lw=lw, alpha=1.0 if sym else 0.8, symbols=sym,
+                             triads=0.08 * L)
+            _set_view3d(ax3, centre, half)
+            ax3.set_title(f"{labels[k]} — 3-D", fontsize=8)
             for c, (h, v, name) in enumerate(VIEWS):
-                ax = axes[k][c]
-                _draw(ax, model, q0, h, v, color="k", lw=2)
-                _draw(ax, model, q_plus, h, v, color="tab:red", lw=1, alpha=0.8)
-                _draw(ax, model, q_minus, h, v, color="tab:blue", lw=1, alpha=0.8)
-                for p in fixed:
-                    ax.plot(p[h], p[v], "ks", ms=4)
-                _min_span(ax, 0.2 * L)
-                ax.set_aspect("equal", adjustable="datalim")
+                ax = fig.add_subplot(gs[k, c + 1])
+
+                def proj(P, h=h, v=v):
+                    return P[:, h], P[:, v]
+                for q, col, lw, sym in ((q0, "k", 2.0, True), (q_plus, "tab:red", 1.0, False),
+                                        (q_minus, "tab:blue", 1.0, False)):
+                    draw_spatial(ax, model, layout, q, proj, colour=col, lw=lw,
+                                 alpha=1.0 if sym else 0.8, symbols=sym)
+                _set_view(ax, centre, half, h, v)
                 ax.set_xlabel("xyz"[h] + " [m]")
                 ax.set_ylabel("xyz"[v] + " [m]")
-                ax.set_title(f"{labels[k]} — {name}" if c == 0 else name, fontsize=8)
+                ax.set_title(name, fontsize=8)
                 ax.grid(True, lw=0.3)
+        handles = [Line2D([], [], color="k", lw=2, label="equilibrium"),
+                   Line2D([], [], color="tab:red", lw=1, label="+ mode"),
+                   Line2D([], [], color="tab:blue", lw=1, label="− mode (half a period later)"),
+                   Line2D([], [], ls="none", marker="o", mfc="none", mec="k", ms=6,
+                          label="joint"),
+                   Line2D([], [], ls="none", marker="s", color="k", ms=4, label="fixed point")]
+        if layout["stations"]:
+            handles.append(Line2D([], [], ls="none", marker="^", mfc="none", mec="tab:green",
+                                  ms=6, label="bearing / spring station"))
+        if layout["discs"]:
+            handles.append(Line2D([], [], color="0.3", lw=0.8, label="rotor disc"))
+        fig.legend(handles=handles, loc="lower center", ncol=len(handles), fontsize=7,
+                   frameon=False)
         if title:
             fig.suptitle(title)
-        fig.tight_layout(rect=(0, 0, 1, 0.985 if title else 1))
+        fig.subplots_adjust(left=0.03, right=0.99, bottom=0.35 / (3.1 * n + 0.5) + 0.06,
+                            top=1 - (0.75 if title else 0.35) / (3.1 * n + 0.5), wspace=0.3,
+                            hspace=0.45)
         return fig
 
 
-def _min_span(ax, span):
-    """Axis limits at least ``span`` wide (a view along a body's line is not blown up to
-    show rounding residues)."""
-    for get, set_ in ((ax.get_xlim, ax.set_xlim), (ax.get_ylim, ax.set_ylim)):
-        lo, hi = get()
-        if hi - lo < span:
-            mid = 0.5 * (lo + hi)
-            set_(mid - span / 2, mid + span / 2)
+def speed_unit(res):
+    """The unit of a Campbell diagram's parameter: its unit from the case (``res.units``) when
+    known; else rad/s when the parameter is the rotor speed Ω itself, rpm when it is Ω·60/2π
+    (both to 1e-9), else None."""
+    unit = (getattr(res, "units", None) or {}).get(res.parameter)
+    if unit:
+        return unit
+    x, w = np.asarray(res.values, float), np.asarray(res.speeds, float)
+    scale = max(float(np.max(np.abs(w), initial=0.0)), 1e-300)
+    if np.allclose(x, w, rtol=0, atol=1e-9 * scale):
+        return "rad/s"
+    if np.allclose(x * 2 * math.pi / 60, w, rtol=0, atol=1e-9 * scale):
+        return "rpm"
+    return None
 
 
-def campbell_diagram(res):
+def _log_dec_band(res, rtol):
+    """Per point and track, the log decrement's error band 2π tol/ω: ``res.tolerance`` when
+    the result carries the eigenvalues' stability tolerances, else rtol |s| (the floor of
+    mbseig.modal's tolerance rule)."""
+    s = np.asarray(res.tracks)
+    tol = getattr(res, "tolerance", None)
+    tol = np.asarray(tol, float) if tol is not None else rtol * np.abs(s)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(np.abs(s.imag) > 0, 2 * math.pi * tol / np.abs(s.imag), np.nan)
+
+
+def campbell_diagram(res, *, rtol=1e-12, min_log_dec_span=0.05):
     """Frequency against the swept parameter, coloured by whirl, with the excitation line
-    h·|Ω| (dashed) and the critical speeds (circles); below, the logarithmic decrement."""
+    h·|Ω| (dashed) and the critical speeds (circles); below, the logarithmic decrement.
+
+    A log decrement within its error band (2π tol/ω, the eigenvalue's stability tolerance;
+    ``rtol``·|s| when the result does not carry it) is drawn as 0, on the grey band, so the
+    panel shows the physics and not the rounding; its axis spans at least ±
+    ``min_log_dec_span``."""
     import matplotlib
     from matplotlib.lines import Line2D
 
@@ -124,11 +316,13 @@ def campbell_diagram(res):
         x = np.asarray(res.values, float)
         F = np.asarray(res.frequency) / (2 * math.pi)
         LD = np.asarray(res.log_decrement)
+        band = _log_dec_band(res, rtol)
+        LDp = np.where(np.abs(LD) <= band, 0.0, LD)
         for j in range(F.shape[1]):
             for k in range(len(x) - 1):
                 colour = WHIRL_COLOURS.get(res.whirl[k][j], "k")
                 a1.plot(x[k:k + 2], F[k:k + 2, j], "-", color=colour, lw=1.5)
-                a2.plot(x[k:k + 2], LD[k:k + 2, j], "-", color=colour, lw=1.2)
+                a2.plot(x[k:k + 2], LDp[k:k + 2, j], "-", color=colour, lw=1.2)
         a1.plot(x, res.harmonic * np.abs(res.speeds) / (2 * math.pi), "k--", lw=1)
         for c in res.critical_speeds:
             a1.plot(c["value"], c["frequency"] / (2 * math.pi), "o", mfc="none",
@@ -138,10 +332,21 @@ def campbell_diagram(res):
         handles.append(Line2D([], [], color="k", ls="--", label=f"{res.harmonic:g}x excitation"))
         a1.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0),
                   borderaxespad=0.0)  # outside the axes, never over the curves
-        a1.set_ylabel("frequency [Hz]")
+        a1.set_ylabel("frequency ω_d/2π [Hz]")
         a1.set_title(f"Campbell diagram of {res.case}: circles = critical speeds")
-        a2.set_ylabel("log decrement")
-        a2.set_xlabel(res.parameter)
+        finite = np.abs(LDp[np.isfinite(LDp)])
+        top = max(float(finite.max()) * 1.15 if finite.size else 0.0, min_log_dec_span)
+        lo = min(float(np.nanmin(LDp)) * 1.15 if finite.size else 0.0, -min_log_dec_span)
+        a2.set_ylim(lo, top)
+        bmax = float(np.nanmax(band)) if np.isfinite(band).any() else 0.0
+        a2.axhspan(-bmax, bmax, color="0.8", lw=0, zorder=0)
+        a2.axhline(0.0, color="0.5", lw=0.6, zorder=0)
+        a2.set_ylabel("log decrement Λ = 2πδ/ω_d [–]")
+        a2.legend(handles=[Line2D([], [], color="0.6", lw=4,
+                                  label=f"|Λ| ≤ 2π tol/ω_d (≤ {bmax:.1g}): drawn as 0")],
+                  fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
+        unit = speed_unit(res)
+        a2.set_xlabel(res.parameter + (f" [{unit}]" if unit else ""))
         a1.grid(True, lw=0.3)
         a2.grid(True, lw=0.3)
         fig.tight_layout()

@@ -21,15 +21,39 @@ from .common import (
 
 
 def _tracks(res):
-    """(line style, track, mode number, colour) of every listed track of every line: one colour
-    a mode numbered as the mode tables at the first point, one line style a line."""
+    """(line style, track, mode number, colour, tolerance) of every listed track of every line:
+    one colour a mode numbered as the mode tables at the first point, one line style a line;
+    the tolerance is each point's stability tolerance of that eigenvalue (None when the result
+    carries none)."""
     cmap = colormap("tab10")
+    tols = getattr(res, "tolerances_track", None)
     for l, S in enumerate(res.tracks):
         numbers = mode_numbers(res, l)
         ls = LINESTYLES[l % len(LINESTYLES)]
+        T = None if tols is None or l >= len(tols) else np.asarray(tols[l], float)
         for j in res.listed_tracks(S):
             m = numbers.get(j, j + 1)
-            yield ls, S[:, j], m, cmap((m - 1) % 10)
+            yield ls, S[:, j], m, cmap((m - 1) % 10), None if T is None else T[:, j]
+
+
+def banded_real(col, tol):
+    """Re s with every value inside its error band (|Re s| ≤ tol, the eigenvalue's stability
+    tolerance, as the tables call such a mode "critical") drawn as 0: a figure shows the
+    physics, not the rounding residue."""
+    re = np.asarray(col).real.copy()
+    if tol is not None:
+        inside = np.abs(re) <= np.nan_to_num(np.asarray(tol, float), nan=0.0)
+        re[inside] = 0.0
+    return re
+
+
+def physical_limits(lo, hi, scale, *, fraction=0.05):
+    """Axis limits [lo, hi] padded, at least ±``fraction``·``scale`` around 0, so values within
+    their error band (drawn as 0) are not blown up to fill the axis."""
+    w = fraction * scale if scale > 0 else 1.0
+    lo, hi = min(lo, -w), max(hi, w)
+    pad = 0.06 * (hi - lo)
+    return lo - pad, hi + pad
 
 
 def _mode_legend(ax, res, modes_seen, extra):
@@ -57,28 +81,43 @@ def root_locus(res):
     fig = figure(figsize=(8.5, 5))
     ax = fig.subplots()
     modes_seen = {}
-    for ls, col, m, c in _tracks(res):
+    re_all, s_max, band = [], 0.0, 0.0
+    for ls, col, m, c, tol in _tracks(res):
         ok = ~np.isnan(col)
         if not ok.any():
             continue
         modes_seen.setdefault(m, c)
+        re = banded_real(col, tol)
+        re_all.append(re[ok])
+        s_max = max(s_max, float(np.max(np.abs(col[ok]))))
+        if tol is not None:
+            band = max(band, float(np.nanmax(np.asarray(tol, float)[ok])))
         for sign in ((1, -1) if np.any(col.imag[ok] != 0) else (1,)):
-            ax.plot(col.real[ok], sign * col.imag[ok], linestyle=ls, color=c, lw=1.1, alpha=0.85)
+            ax.plot(re[ok], sign * col.imag[ok], linestyle=ls, color=c, lw=1.1, alpha=0.85)
         first = np.flatnonzero(ok)[0]
-        ax.plot(col.real[first], col.imag[first], "o", color=c, ms=3.5)
+        ax.plot(re[first], col.imag[first], "o", color=c, ms=3.5)
     for b in res.boundaries:
         ax.plot(b["eigenvalue"][0], b["eigenvalue"][1], "kx", ms=8, mew=1.5)
         ax.plot(b["eigenvalue"][0], -b["eigenvalue"][1], "kx", ms=8, mew=1.5)
+        re_all.append(np.array([b["eigenvalue"][0]]))
+    if re_all:
+        re_all = np.concatenate(re_all)
+        ax.set_xlim(*physical_limits(float(re_all.min()), float(re_all.max()), s_max))
+    if band > 0:
+        ax.axvspan(-band, band, color="0.75", lw=0, zorder=0)
     ax.axvline(0.0, color="k", lw=0.8)
     ax.set_xlabel("Re s = −δ [1/s]")
     ax.set_ylabel("Im s = ±ω_d [rad/s]")
     title = f"root locus of {Path(res.case).stem}" + (f" ({res.config})" if res.config else "")
-    ax.set_title(f"{title}: {res.axis} from {res.values[0]:g} to {res.values[-1]:g}")
+    unit = (getattr(res, "units", None) or {}).get(res.axis)
+    unit = f" {unit}" if unit and unit != "1" else ""
+    ax.set_title(f"{title}: {res.axis} from {res.values[0]:g} to {res.values[-1]:g}{unit}")
     ax.grid(True, lw=0.3)
     _mode_legend(ax, res, modes_seen, [
         Line2D([], [], ls="none", marker="o", color="0.3", ms=3.5,
                label=f"{res.axis} = {res.values[0]:g}"),
-        Line2D([], [], ls="none", marker="x", color="k", ms=7, label="stability boundary")])
+        Line2D([], [], ls="none", marker="x", color="k", ms=7, label="stability boundary"),
+        Line2D([], [], color="0.75", lw=4, label=f"|Re s| ≤ tol (≤ {band:.1g} 1/s): drawn as 0")])
     fig.tight_layout()
     return fig
 
@@ -94,15 +133,15 @@ def modes_vs_parameter(res):
     a1, a2 = fig.subplots(2, 1, sharex=True)
     x = np.asarray(res.values, float)
     modes_seen = {}
-    for ls, col, m, c in _tracks(res):
+    for ls, col, m, c, tol in _tracks(res):
         modes_seen.setdefault(m, c)
         a1.plot(x, np.abs(col.imag) / (2 * math.pi), linestyle=ls, color=c, lw=1.1)
-        a2.plot(x, -col.real, linestyle=ls, color=c, lw=1.1)
+        a2.plot(x, -banded_real(col, tol), linestyle=ls, color=c, lw=1.1)
     for b in res.boundaries:
         a2.axvline(b["value"], color="r", lw=0.8, ls="--")
     a2.axhline(0.0, color="k", lw=0.8)
     a1.set_ylabel("damped frequency ω_d/2π [Hz]")
-    a2.set_ylabel("damping δ = −Re s [1/s]")
+    a2.set_ylabel("damping δ = −Re s [1/s] (0 within its error band)")
     a2.set_xlabel(axis_label(res, res.axis))
     a2.set_yscale("symlog", linthresh=1.0)
     decade_scale(a2, "x", x)

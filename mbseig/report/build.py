@@ -1,9 +1,10 @@
 """Stability reports: ``report.md`` and a self-contained ``report.html`` per case.
 
-For each configuration (all of the case's ``[configurations]`` with ``all_configs``): the model
-summary, the equilibrium (posture, range-of-motion flags, pin reactions, constraint forces,
-actuator effort), the mode table with verdict and margins, the mechanism at equilibrium with
-each mode shape superposed, the pole map and the time-domain check of every mode
+First the summary (:mod:`mbseig.report.summary`).  For each configuration (all of the case's
+``[configurations]`` with ``all_configs``): the model summary, the equilibrium (posture,
+range-of-motion flags, pin reactions, constraint forces, actuator effort), the mode table with
+verdict and margins, the mechanism at equilibrium with each mode shape superposed, one looping
+GIF a mode (embedded in the HTML), the pole map and the time-domain check of every mode
 (:mod:`mbseig.check`).  Then the studies declared in ``[[report.studies]]``:
 
 - ``sweep``: a parameter swept over ``range`` with ``count`` points on ``config`` (optionally
@@ -13,9 +14,10 @@ each mode shape superposed, the pole map and the time-domain check of every mode
 - ``compare = "constraint_stiffness"``: the eigenvalues of ``config`` with and without the
   constraint-force stiffness Σ λ ∇²Φ.
 
-Output is deterministic: no dates or timings; figures are PNGs without metadata; numbers are
-formatted at fixed precision.  The HTML embeds every figure as a base64 data URI; the PNGs are
-also written next to report.md, which links them.
+Output is deterministic: no dates or timings; figures are PNGs without metadata, animations
+GIFs of the same frames; numbers are formatted at fixed precision.  The HTML embeds every
+figure and animation as a base64 data URI; the files are also written next to report.md, which
+links them.
 """
 
 from __future__ import annotations
@@ -65,7 +67,7 @@ def provenance(case) -> dict:
 
 
 def build_report(case, *, configs=None, out_dir, run_check=True, jobs=None, studies=True,
-                 sensitivities=True):
+                 sensitivities=True, animations=True):
     """Blocks of the report of ``case`` (a path or a parsed :class:`~mbseig.casefile.CaseSpec`,
     read once) for ``configs`` (list of names; [None] for the base): title, provenance, table
     of contents, summary, comparison, one section a configuration, the studies."""
@@ -88,7 +90,7 @@ def build_report(case, *, configs=None, out_dir, run_check=True, jobs=None, stud
     for c in configs:
         s = study_configuration(case, c, run_check=run_check)
         cfg_blocks += configuration_blocks(case, s, out_dir, run_check=run_check, stem=stem,
-                                           units=units)
+                                           units=units, animations=animations)
         summaries.append(s)
     study_blocks, study_sums = [], []
     if studies:
@@ -98,7 +100,8 @@ def build_report(case, *, configs=None, out_dir, run_check=True, jobs=None, stud
             b, s = study_section(case, st, out_dir, stem, jobs, units)
             study_blocks += b
             study_sums.append(s)
-    body = summary_blocks(case, summaries, study_sums, units, sensitivities)
+    body = summary_blocks(case, summaries, study_sums, units, sensitivities, out_dir=out_dir,
+                          stem=stem)
     if len(configs) > 1:
         body += comparison_blocks(summaries, study_sums, units)
     body += cfg_blocks + study_blocks
@@ -107,8 +110,9 @@ def build_report(case, *, configs=None, out_dir, run_check=True, jobs=None, stud
 
 
 def write_report(case, *, out_dir=None, configs=None, all_configs=False, run_check=True,
-                 jobs=None, studies=True, sensitivities=True):
+                 jobs=None, studies=True, sensitivities=True, animations=True):
     """Write report.md and report.html (default directory reports/<case>); returns their paths.
+    ``animations=False`` leaves out the animated mode shapes (one GIF a mode).
 
     ``case`` is a path or a parsed :class:`~mbseig.casefile.CaseSpec`; it is read once."""
     case = as_spec(case)
@@ -116,7 +120,7 @@ def write_report(case, *, out_dir=None, configs=None, all_configs=False, run_che
         configs = [None] + sorted(case.configurations)
     out = Path(out_dir) if out_dir else Path("reports") / case.name
     blocks = build_report(case, configs=configs, out_dir=out, run_check=run_check, jobs=jobs,
-                          studies=studies, sensitivities=sensitivities)
+                          studies=studies, sensitivities=sensitivities, animations=animations)
     md = out / "report.md"
     md.write_text(render_markdown(blocks, out))
     page = out / "report.html"

@@ -1,6 +1,6 @@
 """Rendering of report blocks: Markdown (figures linked) and self-contained HTML (figures as
 PNG data URIs).  Blocks: ("h1"|"h2"|"h3"|"p"|"pre", text) | ("table", header, rows) |
-("img", path, caption) | ("toc", [(level, heading text), ...]) (a table of contents linking
+("img", path, caption) | ("gallery", [(path, caption), ...]) | ("toc", [(level, heading text), ...]) (a table of contents linking
 the headings; both renderers give every h2/h3 the same GitHub-style anchor).  The HTML has
 print styles (@media print): full width, no page break inside a figure or a table, each
 configuration on a new page, link targets spelled out in the contents."""
@@ -69,6 +69,9 @@ def render_markdown(blocks, out_dir) -> str:
         elif kind == "img":
             rel = Path(b[1]).relative_to(out_dir).as_posix()
             lines += [f"![{b[2]}]({rel})", ""]
+        elif kind == "gallery":
+            lines += [" ".join(f"![{cap}]({Path(p).relative_to(out_dir).as_posix()})"
+                               for p, cap in b[1]), ""]
     return "\n".join(lines).rstrip() + "\n"
 
 
@@ -79,6 +82,7 @@ th{background:#eee}img{max-width:100%;height:auto;border:1px solid #ddd}figure{m
 figcaption{font-size:0.85em;color:#555}code{background:#f4f4f4}
 nav.toc{background:#f7f7f7;border:1px solid #ddd;padding:0.4em 1em;display:inline-block}
 nav.toc ul{margin:0.2em 0;padding-left:1.2em}.provenance{font-size:0.85em;color:#555}
+.gallery{display:flex;flex-wrap:wrap;gap:0.6em}.gallery figure{margin:0.3em 0;max-width:48%}
 @media print{
 body{max-width:none;margin:0;padding:0;font-size:10pt;color:#000}
 h2{page-break-before:always;break-before:page}h2#contents,h2#summary{page-break-before:avoid;break-before:auto}
@@ -101,6 +105,15 @@ def _inline(text):
     (``hs**3`` stays as written)."""
     parts = html.escape(text).split("`")
     return "".join(f"<code>{p}</code>" if i % 2 else _bold(p) for i, p in enumerate(parts))
+
+
+def _figure(path, caption):
+    """A figure with its image embedded as a data URI (PNG, or GIF for an animation)."""
+    path = Path(path)
+    mime = "image/gif" if path.suffix.lower() == ".gif" else "image/png"
+    data = base64.b64encode(path.read_bytes()).decode("ascii")
+    return (f'<figure><img src="data:{mime};base64,{data}" alt="{html.escape(caption)}">'
+            f"<figcaption>{_inline(caption)}</figcaption></figure>")
 
 
 def render_html(blocks, title) -> str:
@@ -128,8 +141,9 @@ def render_html(blocks, title) -> str:
                 out.append("<tr>" + "".join(f"<td>{_inline(str(x))}</td>" for x in r) + "</tr>")
             out.append("</table>")
         elif kind == "img":
-            data = base64.b64encode(Path(b[1]).read_bytes()).decode("ascii")
-            out.append(f'<figure><img src="data:image/png;base64,{data}" alt="{html.escape(b[2])}">'
-                       f"<figcaption>{_inline(b[2])}</figcaption></figure>")
+            out.append(_figure(b[1], b[2]))
+        elif kind == "gallery":
+            out.append('<div class="gallery">' + "".join(_figure(p, c) for p, c in b[1])
+                       + "</div>")
     out.append("</body></html>")
     return "\n".join(out) + "\n"

@@ -14,10 +14,11 @@ from ..modal import tolerance_rule
 from .text import fmt
 from .units import with_unit
 
-__all__ = ["configuration_blocks", "check_blocks", "mode_label", "statics_text", "describe"]
+__all__ = ["configuration_blocks", "check_blocks", "mode_label", "statics_text", "describe",
+           "animation_blocks"]
 
 
-def configuration_blocks(case, study, out_dir, *, run_check, stem, units):
+def configuration_blocks(case, study, out_dir, *, run_check, stem, units, animations=True):
     """Blocks of one configuration (:class:`~mbseig.studies.report_studies.ConfigurationStudy`)."""
     config = None if study.config == "base" else study.config
     a = study.analysis
@@ -78,19 +79,27 @@ def configuration_blocks(case, study, out_dir, *, run_check, stem, units):
         blocks.append(("table", ["actuator element", "kind", "length [mm]", "tension [N]"],
                        [[r["element"], r["kind"], fmt(r["length"] * 1e3, 6), fmt(r["tension"], 6)]
                         for r in rep["actuator"]]))
+    zero = float(getattr(study, "reaction_zero", 0.0) or 0.0)
+
+    def rfmt(x, digits):  # a reaction below its error bound is rounding residue: 0
+        return "0" if x is not None and abs(float(x)) <= zero else fmt(x, digits)
     if rep["pins"]:
         blocks.append(("table", ["pin (force on the outboard bodies)", "point", "Fx [N]", "Fy [N]", "|F| [N]"],
-                       [[p["name"], p["point"], fmt(p["force"][0], 5), fmt(p["force"][1], 5),
-                         fmt(p["magnitude"], 5)] for p in rep["pins"]]))
+                       [[p["name"], p["point"], rfmt(p["force"][0], 5), rfmt(p["force"][1], 5),
+                         rfmt(p["magnitude"], 5)] for p in rep["pins"]]))
     rows = []
     for c in rep["constraints"]:
         r = c["reaction"]
         value = r["value"] if isinstance(r["value"], list) else [r["value"]]
-        carried = f"{r['label']} {', '.join(fmt(x, 5) for x in value)} {r['unit']}".rstrip()
+        carried = f"{r['label']} {', '.join(rfmt(x, 5) for x in value)} {r['unit']}".rstrip()
         rows.append([c["element"], ", ".join(fmt(x, 6) for x in c["multipliers"]), carried])
     if rows:
         blocks.append(("table", ["constraint", "multiplier λ (in the constraint's own scaling)",
                                  "reaction"], rows))
+    if (rows or rep["pins"]) and zero > 0:
+        blocks.append(("p", f"Reactions below their error bound ({zero:.2g}: the equilibrium's "
+                            f"tolerance times the largest reaction) are rounding residue and "
+                            f"printed as 0."))
 
     blocks.append(("h3", f"Modes — verdict: {md.verdict}"))
     rows = []
@@ -126,12 +135,33 @@ def configuration_blocks(case, study, out_dir, *, run_check, stem, units):
                                    f"and each mode shape superposed: displaced along the mode and "
                                    f"projected back onto the constraints Φ(q) = 0, so bodies stay "
                                    f"rigid; a real (overdamped) mode is drawn as its decay"))
+        if animations:
+            blocks += animation_blocks(eq.model if eq.model is not None else model, eq.q, md,
+                                       out_dir, f"{stem}_{tag}")
     img = plots.save(plots.pole_map(md.eigenvalues, title=f"{tag}: pole map",
                                     stability=md.stability), out_dir / f"{stem}_{tag}_poles.png")
     blocks.append(("img", img, f"{tag}: pole map over lines of constant ζ and circles of constant "
                                f"ω_n; numbers are the modes of the table"))
     blocks += check_blocks(study.check, run_check)
     return blocks
+
+
+def animation_blocks(model, q0, md, out_dir, prefix, *, frames=12, fps=10):
+    """One looping GIF a listed mode (:func:`mbseig.plots.animation.write_mode_gif`), shown
+    side by side."""
+    from ..plots.animation import oscillates, write_mode_gif
+
+    items = []
+    for k in range(len(md)):
+        path = write_mode_gif(model, q0, md.shapes[:, k], out_dir / f"{prefix}_mode{k + 1}.gif",
+                              label=mode_label(k, md),
+                              oscillatory=oscillates(md.kind[k], md.eigenvalues[k]),
+                              frames=frames, fps=fps)
+        items.append((path, f"mode {k + 1}, animated: one period"))
+    if not items:
+        return []
+    return [("p", "Animated mode shapes (one period each, looping; bodies kept rigid, the "
+                  "equilibrium in grey):"), ("gallery", items)]
 
 
 def mode_label(k, md):

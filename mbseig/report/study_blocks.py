@@ -41,7 +41,10 @@ def study_section(case, study, out_dir, stem, jobs, units):
                      "inside over the range" if rom is None else
                      with_unit(f"{rom['value']:.8g}", unit) + f" ({rom['joint']})",
                      str(c["failed"])])
-    crit = [{k: v for k, v in c.items() if k != "first"} for c in sw.critical]
+    # the crossing eigenvalue at each boundary, for the summary figure
+    crit = [{**{k: v for k, v in c.items() if k != "first"},
+             "eigenvalue": None if c["first"] is None else list(c["first"]["eigenvalue"])}
+            for c in sw.critical]
     n_fold = sum(1 for f in res.folds if f["type"] == "fold")
     blocks.append(("p", f"{name} from {values[0]:g} to {with_unit(f'{values[-1]:g}', unit)} "
                         f"({len(values)} points per line) on "

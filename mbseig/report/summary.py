@@ -1,30 +1,44 @@
-"""The report's first page: the summary per configuration (verdict, least-damped mode, range of
-motion, margins to every boundary the studies found, the parameters that move the least-damped
-mode most) and the comparison of the configurations with what the studies found."""
+"""The report's first page: the figure of every configuration's least-damped pole with the
+boundaries found, the summary per configuration (verdict, least-damped mode, range of motion,
+margins to every boundary the studies found: on which side the present value lies and how far),
+the table and tornado chart of the parameters that move the least-damped mode most, and the
+comparison of the configurations with what the studies found."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
+from .. import plots
 from ..studies.report_studies import least_mode_sensitivities
 from .text import fmt
 from .units import with_unit
 
-__all__ = ["summary_blocks", "comparison_blocks", "margin_text", "findings"]
+__all__ = ["summary_blocks", "comparison_blocks", "margin_text", "findings",
+           "sensitivity_blocks"]
 
 
-def margin_text(name, current, crit, unit, kind):
-    """``f: 0.786 N to flutter (f* = 1.786 N, +79 %)``."""
+def margin_text(name, current, crit, unit, kind, *, verdict="stable"):
+    """Where the present value lies and how far the boundary is: ``f = 1 N (stable): flutter
+    if f rises by 0.7864 N (+79 % of its present value) to f* = 1.78639 N``.  The boundary is
+    the first loss of stability the study found; the present configuration's verdict says on
+    which side of it the present value lies."""
     d = crit - current
-    rel = f", {100 * d / abs(current):+.0f} % of the present value" if current else ""
-    return (f"{name} = {with_unit(fmt(current, 5), unit)} → {name}* = "
-            f"{with_unit(fmt(crit, 6), unit)} ({kind}): margin {with_unit(f'{d:+.4g}', unit)}{rel}")
+    way = "rises" if d > 0 else "falls"
+    rel = f", {100 * abs(d) / abs(current):.0f} % of its present value" if current else ""
+    side = "stable side" if verdict == "stable" else f"{verdict} at present"
+    return (f"{name} = {with_unit(fmt(current, 5), unit)} ({side}): {kind} if {name} {way} by "
+            f"{with_unit(f'{abs(d):.4g}', unit)}{rel}, to {name}* = "
+            f"{with_unit(fmt(crit, 6), unit)}")
 
 
-def summary_blocks(case, summaries, study_sums, units, sensitivities=True):
-    """The summary first: per configuration the verdict, the least-damped mode, the margins to
-    every boundary the studies found (with units) and, when :mod:`mbseig.studies.design` is
-    there, the parameter that moves the least stable mode most."""
+def summary_blocks(case, summaries, study_sums, units, sensitivities=True, *, out_dir=None,
+                   stem="case"):
+    """The summary first: the figure of every configuration's least-damped pole with the
+    boundaries found (when ``out_dir`` is given), then per configuration the verdict, the
+    least-damped mode, the margins to every boundary the studies found (with units) and, when
+    :mod:`mbseig.studies.design` is there, the table and tornado chart of the parameters that
+    move the least-damped mode."""
     rows = []
-    notes = []
     for s in summaries:
         lm = s["least_mode"]
         if lm is None:
@@ -42,17 +56,15 @@ def summary_blocks(case, summaries, study_sums, units, sensitivities=True):
             name = st["parameter"]
             unit = units.get(name)
             current = s["parameters"].get(name)
-            own = [c for c in st["critical"]
-                   if all(s["parameters"].get(k) is not None and
-                          abs(float(s["parameters"][k]) - float(v)) <= 1e-12 * (1 + abs(float(v)))
-                          for k, v in c["line"].items())] or st["critical"]
+            own = _own_lines(s, st)
             for c in own:
                 where = ", ".join(f"{k} = " + with_unit(f"{v:g}", units.get(k))
                                   for k, v in c["line"].items())
                 if c["critical"] is None:
                     margins.append(f"{name}: no boundary in the swept range" + (f" ({where})" if where else ""))
                 elif current is not None and isinstance(current, (int, float)):
-                    margins.append(margin_text(name, float(current), c["critical"], unit, c["kind"])
+                    margins.append(margin_text(name, float(current), c["critical"], unit, c["kind"],
+                                               verdict=s["verdict"])
                                    + (f" at {where}" if where and len(own) > 1 else ""))
                 else:
                     margins.append(f"{name}* = {with_unit(fmt(c['critical'], 6), unit)} ({c['kind']})")
@@ -62,39 +74,94 @@ def summary_blocks(case, summaries, study_sums, units, sensitivities=True):
         rom = ("inside" if not s["out_of_range"] else "OUTSIDE for " + ", ".join(s["out_of_range"]))
         rows.append([s["config"], f"**{s['verdict']}**" if s["verdict"] != "stable" else s["verdict"],
                      least, rom, "; ".join(margins) or "no boundary study"])
-        sens = sensitivity_sentence(case, s, units) if sensitivities else None
-        if sens:
-            notes.append(sens)
-    blocks = [("h2", "Summary"),
-              ("table", ["configuration", "verdict", "least-damped mode", "range of motion",
-                         "margins to the boundaries found (present value → critical value)"], rows)]
-    if notes:
-        blocks += [("p", n) for n in notes]
-    elif not sensitivities:
+    blocks = [("h2", "Summary")]
+    if out_dir is not None:
+        blocks += _summary_figure(summaries, study_sums, units, out_dir, stem)
+    blocks.append(("table", ["configuration", "verdict", "least-damped mode", "range of motion",
+                             "margins to the boundaries found (where the present value lies, how "
+                             "far the boundary is)"], rows))
+    if sensitivities:
+        blocks += sensitivity_blocks(case, summaries, units, out_dir=out_dir, stem=stem)
+    else:
         blocks.append(("p", "Eigenvalue sensitivities not computed (--no-sensitivities)."))
     return blocks
 
 
-def sensitivity_sentence(case, s, units):
-    """The parameters that move the least-damped mode most per relative change, with units
-    (:func:`mbseig.studies.report_studies.least_mode_sensitivities`)."""
-    ranked = least_mode_sensitivities(case, s)
-    if isinstance(ranked, str):
-        return f"{s['config']}: sensitivities not computed ({ranked})."
-    if not ranked:
-        return None
-    k = s["least"]
-    parts = []
-    for p, d, value, per_pct in ranked:
-        unit = units.get(p)
-        per = f"1/s per {unit}" if unit and unit != "1" else "1/s"
-        effect = "destabilizes" if d.real > 0 else "stabilizes"
-        step = f"+1 % moves Re s by {per_pct:+.3g} 1/s"
-        parts.append(f"{p} (= {with_unit(fmt(value, 5), unit)}; ∂Re s/∂{p} = {d.real:.4g} {per}; "
-                     f"{step}; increasing it {effect} the mode)")
-    return (f"{s['config']}: the parameters that move the least-damped mode (mode {k + 1}, "
-            f"Re s = {-s['least_mode']['delta']:.4g} 1/s) most, per relative change: "
-            + "; ".join(parts) + " (parameters at 0 left out).")
+def _own_lines(s, st):
+    """The study's lines at this configuration's own values of the other axes (all lines when
+    none matches)."""
+    return [c for c in st["critical"]
+            if all(s["parameters"].get(k) is not None and
+                   abs(float(s["parameters"][k]) - float(v)) <= 1e-12 * (1 + abs(float(v)))
+                   for k, v in c["line"].items())] or st["critical"]
+
+
+def _summary_figure(summaries, study_sums, units, out_dir, stem):
+    """The least-damped pole of every configuration and the crossing eigenvalue of every
+    boundary found at the configuration's own line, on one ζ/ω_n grid."""
+    poles = [{"label": f"{s['config']}: mode {s['least_mode']['mode']} ({s['verdict']})",
+              "s": complex(*s["least_mode"]["eigenvalue"]), "stable": s["verdict"] == "stable"}
+             for s in summaries if s["least_mode"] is not None and "eigenvalue" in s["least_mode"]]
+    if not poles:
+        return []
+    bounds = []
+    for s in summaries:
+        for st in study_sums:
+            if st.get("config") != s["config"] or "critical" not in st:
+                continue
+            for c in _own_lines(s, st):
+                if c["critical"] is None or c.get("eigenvalue") is None:
+                    continue
+                name = st["parameter"]
+                bounds.append({"s": complex(*c["eigenvalue"]),
+                               "label": f"{s['config']}: {name}* = "
+                                        + with_unit(fmt(c["critical"], 4), units.get(name))})
+    fig = plots.summary_poles(poles, bounds, title="least-damped mode of every configuration, "
+                                                   "and the boundaries found")
+    img = plots.save(fig, Path(out_dir) / f"{stem}_summary_poles.png")
+    return [("img", img, "the least-damped pole of every configuration (circles, with its "
+                         "conjugate) over lines of constant ζ and circles of constant ω_n; "
+                         "crosses: the crossing eigenvalue at each stability boundary the studies "
+                         "found, labelled with the critical value")]
+
+
+def sensitivity_blocks(case, summaries, units, *, out_dir=None, stem="case", top=6):
+    """The table of the parameters that move the least-damped mode most per relative change
+    (:func:`mbseig.studies.report_studies.least_mode_sensitivities`), with units, and their
+    tornado chart (when ``out_dir`` is given)."""
+    rows, panels, notes = [], [], []
+    for s in summaries:
+        ranked = least_mode_sensitivities(case, s, top=top)
+        if isinstance(ranked, str):
+            notes.append(f"{s['config']}: sensitivities not computed ({ranked}).")
+            continue
+        if not ranked:
+            continue
+        k = s["least"]
+        for p, d, value, per_pct in ranked:
+            unit = units.get(p)
+            per = f"1/s per {unit}" if unit and unit != "1" else "1/s"
+            rows.append([s["config"], f"{k + 1}", p, with_unit(fmt(value, 5), unit),
+                         f"{d.real:.4g} {per}", f"{-per_pct:+.3g}",
+                         "takes damping away" if d.real > 0 else "adds damping"])
+        delta = s["least_mode"]["delta"]
+        panels.append({"title": f"{s['config']}: mode {k + 1}, δ = {delta:.4g} 1/s",
+                       "rows": [(p, -per_pct) for p, _, _, per_pct in ranked]})
+    blocks = []
+    if rows:
+        blocks.append(("p", "The parameters that move the least-damped mode most, per relative "
+                            "change (first-order eigenvalue sensitivities; parameters at 0 left "
+                            "out), largest first:"))
+        blocks.append(("table", ["configuration", "mode", "parameter", "present value",
+                                 "∂Re s/∂p", "change of δ for +1 % [1/s]", "increasing it"], rows))
+        if out_dir is not None:
+            img = plots.save(plots.tornado(panels),
+                             Path(out_dir) / f"{stem}_sensitivity_tornado.png")
+            blocks.append(("img", img, "tornado chart: first-order change of the least-damped "
+                                       "mode's damping δ for ±10 % of each parameter (blue adds "
+                                       "damping, red takes it away), largest first"))
+    blocks += [("p", n) for n in notes]
+    return blocks
 
 
 def comparison_blocks(summaries, study_sums, units):

@@ -1,7 +1,8 @@
 """Text of the report: numbers at fixed precision, user names in every block.
 
 A block is ("h1"|"h2"|"h3"|"p"|"pre", text) | ("table", header, rows) | ("img", path, caption)
-| ("toc", entries)."""
+| ("gallery", [(path, caption), ...]) (images side by side: the mode animations) |
+("toc", entries)."""
 
 from __future__ import annotations
 
@@ -37,6 +38,8 @@ def clean(blocks):
                         [[user_names(str(x)) for x in r] for r in b[2]]))
         elif b[0] == "img":
             out.append(("img", b[1], user_names(b[2])))
+        elif b[0] == "gallery":
+            out.append(("gallery", [(path, user_names(cap)) for path, cap in b[1]]))
         elif b[0] == "toc":
             out.append(b)
         else:

@@ -8,6 +8,13 @@
 - :func:`compare_study` → :class:`CompareStudy`: the eigenvalues with and without the
   constraint-force stiffness Σ λ ∇²Φ, paired;
 - :func:`least_mode_sensitivities`: the parameters that move the least-damped mode most.
+
+``reaction_zero`` of a :class:`ConfigurationStudy` is the error bound of its reactions:
+tol · max |value| over the pin forces and the constraint reactions, with tol the equilibrium's
+convergence tolerance (``eq.tolerances["tol"]``, every constraint and force balanced to that
+fraction of its scale), so a value below it is rounding residue (printed as 0).  The
+least-damped mode's ``eigenvalue`` is kept as [Re s, Im s] (upper half-plane) for the summary
+figure.
 """
 
 from __future__ import annotations
@@ -56,6 +63,7 @@ class ConfigurationStudy(Record):
     reactions: dict = internal()
     check: object = internal()
     linear_case: bool = False
+    reaction_zero: float = 0.0
 
 
 def study_configuration(case, config, *, run_check=True) -> ConfigurationStudy:
@@ -69,7 +77,8 @@ def study_configuration(case, config, *, run_check=True) -> ConfigurationStudy:
         "mode": least + 1, "delta": float(md.delta[least]), "zeta": float(md.zeta[least]),
         "kind": md.kind[least], "fn": float(md.omega_n[least] / (2 * math.pi)),
         "fd": float(abs(md.eigenvalues[least].imag) / (2 * math.pi)),
-        "margin": float(md.delta[least] - md.tolerance[least])}
+        "margin": float(md.delta[least] - md.tolerance[least]),
+        "eigenvalue": [float(md.eigenvalues[least].real), abs(float(md.eigenvalues[least].imag))]}
     return ConfigurationStudy(
         config=config or "base", dof=lin.dof, verdict=md.verdict, least=least,
         least_mode=least_mode, parameters=dict(model.parameters),
@@ -80,7 +89,18 @@ def study_configuration(case, config, *, run_check=True) -> ConfigurationStudy:
         out_of_range=rep["out_of_range"], actuator=[r["tension"] for r in rep["actuator"]],
         analysis=a, reactions=rep,
         check=check_modes(a.model, a.eq, a.linear, a.modes) if run_check else None,
-        linear_case=linear_case)
+        linear_case=linear_case, reaction_zero=_reaction_zero(eq, rep))
+
+
+def _reaction_zero(eq, rep) -> float:
+    """The reactions' error bound (module docstring)."""
+    values = [abs(float(x)) for p in rep["pins"] for x in p["force"]]
+    for c in rep["constraints"]:
+        v = c["reaction"]["value"]
+        values += [abs(float(x)) for x in (v if isinstance(v, list) else [v])]
+    tol = float((getattr(eq, "tolerances", None) or {}).get("tol", 1e-12))
+    finite = [v for v in values if math.isfinite(v)]
+    return tol * max(finite, default=0.0)
 
 
 @dataclass(frozen=True, eq=False)
@@ -210,10 +230,10 @@ def _mpq(lin):
     return lin.M, lin.P, lin.Q
 
 
-def least_mode_sensitivities(case, summary: ConfigurationStudy):
+def least_mode_sensitivities(case, summary: ConfigurationStudy, *, top=3):
     """∂s/∂p of the least-damped mode for every parameter (:mod:`mbseig.studies.design`),
     ranked by the change of Re s per 1 % change of p: a list of (p, ∂s/∂p, value, change per
-    %), the top three; None when there is no mode or no parameter moves it; a string (what
+    %), the first ``top`` (all with None); None when there is no mode or no parameter moves it; a string (what
     failed) when the sensitivities could not be computed."""
     from .design import eigen_sensitivities
 
@@ -239,4 +259,4 @@ def least_mode_sensitivities(case, summary: ConfigurationStudy):
     if not ranked:
         return None
     ranked.sort(key=lambda r: -r[0])
-    return [(p, d, value, per_pct) for _, p, d, value, per_pct in ranked[:3]]
+    return [(p, d, value, per_pct) for _, p, d, value, per_pct in ranked[:top]]
