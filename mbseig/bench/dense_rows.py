@@ -144,6 +144,32 @@ def bench_structured(sizes, repeats, general_max, log):
     return rows
 
 
+def bench_pipeline(sizes, repeats, log, case="chain_damped"):
+    """The whole pipeline (build, equilibrium with its static-stability check, linearization,
+    modes) on the bundled damped chain of n masses against its eigen floor, ``eigh(K, M)`` on
+    the same matrices, interleaved in one process (the median of ``repeats`` of each)."""
+    from ..casefile import read_case
+    from ..studies.pipeline import analyze
+    from .cases import case_path
+
+    spec = read_case(case_path(case))
+    rows = []
+    for n in sizes:
+        a = analyze(spec, params={"n": n})
+        M, K = (A.toarray() if hasattr(A, "toarray") else np.asarray(A)
+                for A in (a.linear.M, a.linear.Q))
+        t, _ = median_times({"floor": lambda: sla.eigh(K, M, check_finite=False),
+                             "pipeline": lambda: analyze(spec, params={"n": n})},
+                            max(repeats, 5))
+        ratio = t["pipeline"] / t["floor"]
+        rows.append({"section": "structured", "method": "mbseig whole pipeline", "n": n,
+                     "time": t["pipeline"], "floor_time": t["floor"], "pipeline_ratio": ratio,
+                     "solver": a.modes.solver,
+                     "eta": float(np.max(a.modes.backward_error, initial=0.0))})
+        log(f"pipeline  n={n:5d} {t['pipeline']:.4f} s  floor {t['floor']:.4f} s  ({ratio:.2f}x)")
+    return rows
+
+
 def json_default(x):
     if isinstance(x, (np.floating, np.integer)):
         return x.item()

@@ -45,6 +45,12 @@ def _targets(res):
                         f"{r['floor_ratio']:.2f} ({r['time']:.3f} s / {r['floor_time']:.3f} s)", "≤ 1.15",
                         r["floor_ratio"] <= 1.15))
     for r in _rows(res, "structured"):
+        if r["n"] == 600 and "pipeline_ratio" in r:
+            out.append(("whole pipeline on the damped chain n = 600 (build, equilibrium and its "
+                        "static stability, linearization, modes) / eigh(K, M) on its matrices",
+                        f"{r['pipeline_ratio']:.2f} ({r['time']:.3f} s / {r['floor_time']:.3f} s)",
+                        "≤ 1.25", r["pipeline_ratio"] <= 1.25))
+    for r in _rows(res, "structured"):
         if r["n"] == 3000 and "speedup" in r:
             out.append((f"{r['method']} n = 3000 vs dense general path", f"{r['speedup']:.0f}× "
                         f"({r['time']:.2f} s vs {r['general_time']:.1f} s)", "≥ 20×", r["speedup"] >= 20))
@@ -173,9 +179,10 @@ def write_report(res, out_dir):
                "Floor: `scipy.linalg.eigh(Q, M)` with vectors on the same matrices, interleaved.",
                "| path | n | time | eigh(Q, M) floor | / floor | general path | speed-up | error | η |",
                st, lambda r: f"| {r['method']} | {r['n']} | {_f(r['time'])} s | "
-               f"{_f(r.get('floor_time'))} s | {_f(r.get('floor_ratio'), '.2f')} | "
+               f"{_f(r.get('floor_time'))} s | "
+               f"{_f(r.get('floor_ratio', r.get('pipeline_ratio')), '.2f')} | "
                f"{_f(r.get('general_time'))} s | {_f(r.get('speedup'), '.0f')}× | "
-               f"{_f(r['error'], '.0e')} | {_f(r['eta'], '.0e')} |")
+               f"{_f(r.get('error'), '.0e')} | {_f(r.get('eta'), '.0e')} |")
     part = _rows(res, "partial")
     if part:
         _table(L, "Partial spectrum of large sparse models (lowest 20 modes, whole pipeline)",

@@ -50,6 +50,7 @@ import numpy as np
 from .dense_rows import (
     bench_dense,
     bench_left_vectors,
+    bench_pipeline,
     bench_structured,
     capped_threads,
     json_default,
@@ -85,6 +86,7 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
         "qz_max": 100 if quick else 300, "naive_max": 100 if quick else 1000,
         "general_max": 100 if quick else 3000,
         "structured_sizes": [100] if quick else [300, 1000, 3000],
+        "pipeline_sizes": [100] if quick else [100, 300, 600, 1000],
         "partial_sizes": [1000, 3000] if quick else [10_000, 100_000, 1_000_000],
         "partial_general_max": 3000 if quick else 100_000,
         "jacobian_sizes": [10] if quick else [10, 100],
@@ -104,6 +106,7 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
             res["left_vectors"] = bench_left_vectors(cfg["left_n"], repeats, log)
         if "structured" in sections:
             res["rows"] += bench_structured(cfg["structured_sizes"], repeats, cfg["general_max"], log)
+            res["rows"] += bench_pipeline(cfg["pipeline_sizes"], repeats, log)
         if "peer" in sections:
             rows, note = bench_peer(cfg["peer_sizes"], repeats, log)
             res["rows"] += rows

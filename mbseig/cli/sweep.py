@@ -26,6 +26,10 @@ def register(sub):
                    help="local worker processes (default: CPU count; 1 runs in-process)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="run the points on a Dask distributed scheduler (pip install 'mbseig[dask]')")
+    p.add_argument("--resume", default=None, metavar="DIR",
+                   help="keep every completed line, point and boundary in DIR as it completes; "
+                        "rerun with the same DIR to compute only the missing ones (the outputs "
+                        "equal those of an uninterrupted sweep)")
     p.add_argument("--xtol-rel", type=float, default=1e-10, metavar="X",
                    help="boundary tolerance relative to the first axis' span (default 1e-10)")
     p.add_argument("--no-continuation", dest="continuation", action="store_false",
@@ -59,7 +63,7 @@ def run(args) -> int:
     res = run_sweep(args.case, ranges, config=args.config, fixed=fixed, jobs=args.jobs,
                     scheduler=args.scheduler, progress=progress_bar() if show else None,
                     xtol_rel=args.xtol_rel, continuation=args.continuation, curves=args.curves,
-                    diagram=args.diagram)
+                    diagram=args.diagram, resume=args.resume)
     stem = Path(args.case).stem + (f"-{args.config}" if args.config else "")
     out_dir = args.out or f"sweep-{stem}"
     paths = write_outputs(res, out_dir, units=_units(args.case))

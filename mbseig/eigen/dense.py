@@ -102,6 +102,12 @@ def mass_condition(M, memo=None):
     condition estimate (``pocon``).  ``memo`` keeps the Cholesky factor ("L") for the caller.
     """
     memo = {} if memo is None else memo
+    if "mass_condition" not in memo:  # the path's choice and its check ask for the same M
+        memo["mass_condition"] = _mass_condition(M, memo)
+    return memo["mass_condition"]
+
+
+def _mass_condition(M, memo):
     if np.iscomplexobj(M):
         return False, np.inf
     diag = diagonal_positive(M)

@@ -101,7 +101,15 @@ def colnorm(X):
 
 
 def unit_columns(X):
-    """X with unit columns (zero columns left as they are)."""
+    """X with unit columns (zero columns left as they are).  Columns beyond 1e±150 are first
+    scaled by a power of 2 (exact): a complex division by a subnormal norm would overflow."""
+    X = np.asarray(X)
+    if X.ndim == 2 and X.size:
+        m = np.max(np.abs(X), axis=0)
+        odd = ((m > BIG) | (m < SMALL)) & (m > 0)
+        if np.any(odd):
+            X = X.copy()
+            X[:, odd] = pow2_scale(X[:, odd], -np.frexp(m[odd])[1][None, :])
     nrm = colnorm(X)
     nrm[nrm == 0] = 1.0
     return X / nrm

@@ -70,6 +70,8 @@ def nullity(sol, mean, spread, scale, max_order=2000):
 def components(n, pairs):
     """Connected components (labels) of the graph on n nodes with the given edges."""
     parent = np.arange(n)
+    if not pairs:  # every node its own component (the common case: well separated eigenvalues)
+        return parent
 
     def find(i):
         while parent[i] != i:
@@ -173,10 +175,15 @@ def error_bounds(sol, *, safety=10.0, stability_rtol=1e-12, stability_atol=0.0, 
             radius[finite] = np.where(counts > 1, np.minimum(err[finite], holder_k), err[finite])
         pairs = set()
         reach = np.minimum(2 * safety * radius / unit, 4.0)  # beyond 4 max|s|: everything
-        for i in range(k):  # radius 0 still finds exact duplicates
-            for j in tree.query_ball_point(points[i], reach[i]):
-                if j != i and abs(s[i] - s[j]) <= safety * (radius[i] + radius[j]):
-                    pairs.add((min(i, j), max(i, j)))
+        # one query for all points (radius 0 still finds exact duplicates); the candidates are
+        # tested in one vectorized comparison
+        hits = tree.query_ball_point(points, reach)
+        counts = np.fromiter((len(h) for h in hits), int, k)
+        if counts.sum() > k:
+            ii = np.repeat(np.arange(k), counts)
+            jj = np.fromiter((j for h in hits for j in h), int, int(counts.sum()))
+            ok = (jj != ii) & (np.abs(s[ii] - s[jj]) <= safety * (radius[ii] + radius[jj]))
+            pairs = set(zip(np.minimum(ii, jj)[ok].tolist(), np.maximum(ii, jj)[ok].tolist()))
         cluster = components(k, pairs)
     err = err.copy()
     labels, inverse, counts = np.unique(cluster, return_inverse=True, return_counts=True)
@@ -187,9 +194,9 @@ def error_bounds(sol, *, safety=10.0, stability_rtol=1e-12, stability_atol=0.0, 
         members = np.flatnonzero(cluster == c)
         mean0 = np.mean(s[members])
         spread0 = float(np.max(np.abs(s[members] - mean0)))
-        g = max(numerical_rank(sol.vectors[:, members], rank_tol),
-                nullity(sol, mean0, spread0, max(abs(mean0), scale)))
-        g = min(g, members.size)
+        g = numerical_rank(sol.vectors[:, members], rank_tol)
+        if g < members.size:  # the vectors alone do not show a full set: T's singular values
+            g = min(max(g, nullity(sol, mean0, spread0, max(abs(mean0), scale))), members.size)
         geometric[members] = g
         b = max(1, math.ceil(members.size / max(g, 1)))
         mean = np.mean(s[members])

@@ -205,21 +205,47 @@ def coverage_text(sol, n_listed):
     return text + "; modes outside were not computed"
 
 
+def _identity(N):
+    """Whether the dense basis N is exactly the identity (a model without constraints)."""
+    return (isinstance(N, np.ndarray) and N.ndim == 2 and N.shape[0] == N.shape[1]
+            and np.count_nonzero(N) == N.shape[0] and bool(np.all(N.diagonal() == 1.0)))
+
+
 def mode_shapes(X, N, coordinate_names, n_dominant):
-    full = X if N is None else N @ X
-    n_full = full.shape[0]
+    """Shapes in full coordinates (largest component 1) and the dominant coordinates of each
+    mode, over all modes at once (the per-mode arithmetic of one column at a time)."""
+    full = X if N is None or _identity(N) else N @ X
+    n_full, k = full.shape
     names = list(coordinate_names) if coordinate_names is not None else [f"q{k + 1}" for k in range(n_full)]
-    shapes = np.zeros_like(full)
-    dominant = []
-    for k in range(full.shape[1]):
-        v = full[:, k]
-        j = int(np.argmax(np.abs(v)))
-        shapes[:, k] = v / v[j] if v[j] != 0 else v
-        mag = np.abs(shapes[:, k])
-        if mag.size > 4 * n_dominant:  # large models: the top entries without a full sort
-            cand = np.argpartition(-mag, n_dominant)[:n_dominant]
-            top = cand[np.lexsort((cand, -mag[cand]))]
-        else:
-            top = np.argsort(-mag, kind="stable")[:n_dominant]
-        dominant.append([(names[i], float(mag[i])) for i in top if mag[i] >= 0.05])
+    if k == 0 or n_full == 0:
+        return np.zeros_like(full), [[] for _ in range(k)]
+    cols = np.arange(k)
+    j = np.argmax(np.abs(full), axis=0)
+    piv = full[j, cols]
+    nz = piv != 0
+    if np.all(nz):
+        shapes = full / piv
+    else:  # a zero column stays as it is
+        shapes = full.copy()
+        shapes[:, nz] = full[:, nz] / piv[nz]
+    mag = np.abs(shapes)
+    # the n_dominant largest |entries| of each mode in the order of a stable sort by −|x|
+    # (equal ones by index): one argmax per rank over all modes, the found entry then masked
+    rows = np.array(mag.T, order="C")
+    picks = min(n_dominant, n_full)
+    top = np.empty((picks, k), dtype=np.intp)
+    for t in range(picks):
+        top[t] = np.argmax(rows, axis=1)
+        rows[cols, top[t]] = -np.inf
+    if n_full > 4 * n_dominant and picks:
+        # an entry equal to the last one picked but left out (a tie at the cut): the selection
+        # of the listing's large-model rule decides which of them is named, as it always did
+        last = mag[top[-1], cols]
+        for c in np.flatnonzero(np.max(rows, axis=1) == last):
+            m = mag[:, c]
+            cand = np.argpartition(-m, n_dominant)[:n_dominant]
+            top[:, c] = cand[np.lexsort((cand, -m[cand]))]
+    topmag = np.take_along_axis(mag, top, 0).T.tolist()
+    dominant = [[(names[i], m) for i, m in zip(t, tm) if m >= 0.05]
+                for t, tm in zip(top.T.tolist(), topmag)]
     return shapes, dominant

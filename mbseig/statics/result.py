@@ -57,7 +57,9 @@ class StaticStability(Record):
     stiffness K_r = Nᵀ(K + H(λ))N, its size ``dof``, whether it is symmetric (``asymmetry``
     relative to ‖K_r‖ against ``symmetry_tol``), the number of negative (``index``) and zero
     (``zero``) eigenvalues beyond ``stiffness_tol``·‖K_r‖, the smallest eigenvalue and its
-    direction in full coordinates; ``gyroscopic``: an unstable equilibrium whose velocity
+    direction in full coordinates (both None when one Cholesky factorization showed K_r
+    positive definite beyond the tolerance: no eigenvalue is computed then, and ``asymmetry``
+    is the upper bound that decided); ``gyroscopic``: an unstable equilibrium whose velocity
     Jacobian has a skew part (gyroscopic forces may stabilize it); ``self_stress_tol`` and
     ``reason`` (why it was not examined) as recorded."""
 

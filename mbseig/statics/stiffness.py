@@ -10,7 +10,10 @@ Static stability.  The equilibrium is statically unstable (a divergence) when K_
 not a minimum: unstable with any dissipation), or when K_r is not symmetric and det K_r < 0 (an
 odd number of negative real eigenvalues: a real positive root s of det(M s² + P s + K_r) for any
 M > 0, P).  ``index`` counts the negative eigenvalues.  A non-symmetric K_r with det K_r > 0 is
-left to the modes ("undetermined" here).
+left to the modes ("undetermined" here).  The common case, a symmetric K_r positive definite
+beyond the tolerance, is decided by norm bounds and one Cholesky factorization of the shifted
+K_r (Sylvester's law of inertia: :func:`_positive_definite`); only the others compute
+eigenvalues, with the exact 2-norms.
 
 Self-stress.  Redundant constraints leave Φ_qᵀ μ = 0 for μ ≠ 0 (the left null space of Φ_q):
 every λ₀ + t μ balances the loads, statics cannot choose t, and the stiffness changes with it by
@@ -25,6 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.linalg as sla
+import scipy.sparse as sp
 
 from ..numerics import dense
 from .result import StaticStability
@@ -48,11 +52,13 @@ def _basis(model, q, rank_tol):
 
 def reduced_stiffness(model, q, lam, rank_tol=1e-10):
     """(K_r, N) at q with multipliers λ."""
-    N, _, _, _ = _basis(model, q, rank_tol)
+    N, _, Phi_q, _ = _basis(model, q, rank_tol)
     K, _ = model.force_jacobians(q, dense=True)
     Kt = dense(K)
     if model.n_constraints:
         Kt = Kt + dense(model.constraint_hessian(q, lam, dense=True))
+    if Phi_q.shape[0] == 0:  # N = I: Nᵀ K N is K itself (no two products of order n³)
+        return np.array(Kt, dtype=float), N
     return N.T @ Kt @ N, N
 
 
@@ -63,11 +69,24 @@ def static_stability(model, q, lam, *, rank_tol=1e-10, stiffness_tol=STIFFNESS_T
 
 
 def _stability(model, q, lam, rank_tol, stiffness_tol, symmetry_tol) -> dict:
+    if model.n_constraints == 0 and model.n > SPARSE_CHECK_MIN:  # K_r = K, kept sparse
+        K, _ = model.force_jacobians(q)
+        if sp.issparse(K):
+            fast = _positive_definite_sparse(K, stiffness_tol, symmetry_tol)
+            if fast is not None:
+                return {"dof": int(model.n), "stiffness_tol": stiffness_tol,
+                        "symmetry_tol": symmetry_tol, **fast}
     Kr, N = reduced_stiffness(model, q, lam, rank_tol)
     rec = {"dof": int(Kr.shape[0]), "stiffness_tol": stiffness_tol, "symmetry_tol": symmetry_tol}
     if Kr.shape[0] == 0:
         return {**rec, "verdict": "stable", "index": 0, "symmetric": True, "min_eigenvalue": None,
                 "direction": None}
+    # decided by bounds and one Cholesky factorization above a few dozen unknowns (below, the
+    # eigenvalues cost less than the bounds' Python and give the smallest one and its direction)
+    fast = (_positive_definite(Kr, stiffness_tol, symmetry_tol)
+            if Kr.shape[0] > SPARSE_CHECK_MIN else None)
+    if fast is not None:
+        return {**rec, **fast}
     norm = float(np.linalg.norm(Kr, 2)) or 1.0
     asym = float(np.linalg.norm(Kr - Kr.T, 2)) / norm
     symmetric = asym <= symmetry_tol
@@ -92,6 +111,116 @@ def _stability(model, q, lam, rank_tol, stiffness_tol, symmetry_tol) -> dict:
     if rec["verdict"] == "stable?":  # no negative real eigenvalue: statics sees no divergence
         rec["verdict"] = "stable" if np.all(mu.real > stiffness_tol * norm) else "undetermined"
     return rec
+
+
+def _norm_bounds(A):
+    """(lower, upper) bounds of ‖A‖₂ that cost O(n²): ‖A‖_F/√r ≤ ‖A‖₂ ≤ min(‖A‖_F, √(‖A‖₁‖A‖_∞))."""
+    fro = float(np.sqrt(np.einsum("ij,ij->", A, A)))
+    a = np.abs(A)
+    one, inf = float(a.sum(axis=0).max()), float(a.sum(axis=1).max())
+    return fro / np.sqrt(min(A.shape)), min(fro, np.sqrt(one * inf))
+
+
+def _positive_definite(Kr, stiffness_tol, symmetry_tol):
+    """The record of a K_r shown symmetric and positive definite beyond its tolerance without
+    an eigendecomposition, else None (the caller then decides from the eigenvalues).
+
+    Symmetric: ‖K_r − K_rᵀ‖₂/‖K_r‖₂ ≤ ‖K_r − K_rᵀ‖_F/(‖K_r‖_F/√r) ≤ ``symmetry_tol`` (bounds;
+    zero when K_r is exactly symmetric).  Positive beyond the tolerance: a Cholesky
+    factorization of K_s − c·I, K_s = ½(K_r + K_rᵀ), c = ``stiffness_tol``·(an upper bound of
+    ‖K_r‖₂), succeeds; by Sylvester's law of inertia every eigenvalue of K_s is then above
+    c ≥ ``stiffness_tol``·‖K_r‖₂, so the index and the zero count are 0 exactly as the
+    eigenvalues would give them.  Where the factorization fails (an eigenvalue at or below
+    c: unstable, neutral or close to either) the eigenvalues decide, with the exact norms."""
+    S = Kr - Kr.T
+    lo, hi = _norm_bounds(Kr)
+    if not (np.isfinite(hi) and hi > 0):
+        return None
+    if np.any(S):
+        asym = float(np.sqrt(np.einsum("ij,ij->", S, S))) / lo
+        if not asym <= symmetry_tol:
+            return None
+        Ks = 0.5 * (Kr + Kr.T)
+    else:
+        asym, Ks = 0.0, Kr
+    if not _cholesky_succeeds(Ks, stiffness_tol * hi):
+        return None
+    return {"symmetric": True, "asymmetry": asym, "min_eigenvalue": None, "index": 0, "zero": 0,
+            "direction": None, "verdict": "stable"}
+
+
+SPARSE_CHECK_MIN = 64  # order of K_r above which the factorization decides (a model without
+# constraints: on its sparse K)
+
+
+def _positive_definite_sparse(K, stiffness_tol, symmetry_tol):
+    """:func:`_positive_definite` on a sparse K (a model without constraints: K_r = K), with
+    the same bounds from its stored entries and a banded factorization where K is banded;
+    None where it does not decide (the caller then forms the dense K_r)."""
+    K = sp.csr_matrix(K, dtype=float, copy=True)
+    K.sum_duplicates()
+    n = K.shape[0]
+    a = abs(K)
+    fro = float(np.sqrt(np.dot(K.data, K.data)))
+    one, inf = float(a.sum(axis=0).max()), float(a.sum(axis=1).max())
+    lo, hi = fro / np.sqrt(n), min(fro, np.sqrt(one * inf))
+    if not (np.isfinite(hi) and hi > 0):
+        return None
+    S = (K - K.T).tocsr()
+    if S.nnz and np.any(S.data):
+        asym = float(np.sqrt(np.dot(S.data, S.data))) / lo
+        if not asym <= symmetry_tol:
+            return None
+        K = (0.5 * (K + K.T)).tocsr()
+    else:
+        asym = 0.0
+    C = K.tocoo()
+    low = C.row >= C.col
+    r, c, v = C.row[low], C.col[low], C.data[low]
+    band = int(np.max(r - c, initial=0))
+    if band > n * BANDED_MAX:
+        return None
+    ab = np.zeros((band + 1, n))
+    np.add.at(ab, (r - c, c), v)
+    ab[0] -= stiffness_tol * hi
+    try:
+        sla.cholesky_banded(ab, lower=True, overwrite_ab=True, check_finite=False)
+    except np.linalg.LinAlgError:
+        return None
+    return {"symmetric": True, "asymmetry": asym, "min_eigenvalue": None, "index": 0, "zero": 0,
+            "direction": None, "verdict": "stable"}
+
+
+BANDED_MAX = 1 / 16  # half-bandwidth, relative to the order, up to which the banded factorization runs
+
+
+def _cholesky_succeeds(A, shift) -> bool:
+    """Whether A − shift·I (A symmetric) has a Cholesky factorization: dense LAPACK ``potrf``,
+    or its banded form ``pbtrf`` when A is banded (a chain's tridiagonal stiffness: O(n b²)
+    instead of O(n³))."""
+    n = A.shape[0]
+    band = None
+    if n > 64:  # the half-bandwidth: diagonals counted outwards until they hold every nonzero
+        left, k = int(np.count_nonzero(A)), 0
+        while k <= n * BANDED_MAX:
+            left -= np.count_nonzero(np.diagonal(A, k)) + (np.count_nonzero(np.diagonal(A, -k))
+                                                          if k else 0)
+            if left == 0:
+                band = k
+                break
+            k += 1
+    try:
+        if band is None:
+            sla.cholesky(A - shift * np.eye(n), lower=True, check_finite=False, overwrite_a=True)
+        else:  # lower banded storage: ab[k, j] = A[j + k, j]
+            ab = np.zeros((band + 1, n))
+            for k in range(band + 1):
+                ab[k, :n - k] = np.diagonal(A, -k)
+            ab[0] -= shift
+            sla.cholesky_banded(ab, lower=True, overwrite_ab=True, check_finite=False)
+    except np.linalg.LinAlgError:
+        return False
+    return True
 
 
 def self_stress_states(model, q, *, rank_tol=1e-10, tol=SELF_STRESS_TOL, states=None) -> list:

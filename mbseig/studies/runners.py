@@ -47,8 +47,11 @@ class Runner:
     """Runs a pure function over argument tuples: in-process, local processes or Dask."""
 
     def __init__(self, *, jobs=None, scheduler=None, progress=None, blas_threads=1,
-                 connect_timeout=CONNECT_TIMEOUT):
+                 connect_timeout=CONNECT_TIMEOUT, checkpoint=None):
         self.blas = blas_threads
+        # checkpoint: a mbseig.studies.resume.Checkpoint; every task's result is written to it
+        # as it completes and a task it already holds is not run again
+        self.checkpoint = checkpoint
         self.jobs = jobs if jobs is not None else (os.cpu_count() or 1)
         self.scheduler = scheduler
         self.connect_timeout = connect_timeout
@@ -83,38 +86,52 @@ class Runner:
             self._client.close()
 
     def map(self, fn, calls, label):
-        """[fn(*args, **kwargs) for args, kwargs in calls], in order."""
-        total, done = len(calls), 0
+        """[fn(*args, **kwargs) for args, kwargs in calls], in order.  With a checkpoint, the
+        tasks it holds are read instead of run, and each result is written to it as soon as
+        it arrives (so an interruption loses only the tasks still running)."""
+        total = len(calls)
         results = [None] * total
+        todo = []
+        for i in range(total):
+            held, value = (self.checkpoint.get(label, i) if self.checkpoint is not None
+                           else (False, None))
+            if held:
+                results[i] = value
+            else:
+                todo.append(i)
+        done = total - len(todo)
         if self.progress:
-            self.progress(label, 0, total)
+            self.progress(label, done, total)
+
+        def arrived(i, value):
+            nonlocal done
+            results[i] = value
+            if self.checkpoint is not None:
+                self.checkpoint.put(label, i, value)
+            done += 1
+            if self.progress:
+                self.progress(label, done, total)
+
         if self.kind == "serial":
-            for i, (a, kw) in enumerate(calls):
-                results[i] = _capped(fn, self.blas, a, kw)
-                done += 1
-                if self.progress:
-                    self.progress(label, done, total)
+            for i in todo:
+                a, kw = calls[i]
+                arrived(i, _capped(fn, self.blas, a, kw))
             return results
         if self.kind == "processes":
             from concurrent.futures import as_completed
 
-            futs = {self._pool.submit(_capped, fn, self.blas, a, kw): i
-                    for i, (a, kw) in enumerate(calls)}
+            futs = {self._pool.submit(_capped, fn, self.blas, *calls[i]): i for i in todo}
             for fut in as_completed(futs):
-                results[futs[fut]] = fut.result()
-                done += 1
-                if self.progress:
-                    self.progress(label, done, total)
+                arrived(futs[fut], fut.result())
             return results
         from distributed import as_completed as das_completed
 
-        futs = [self._client.submit(_capped, fn, self.blas, a, kw, pure=False) for a, kw in calls]
-        index = {f.key: i for i, f in enumerate(futs)}
+        # a worker lost while it runs a task: the scheduler runs the task again on another
+        # worker, and its future completes once (tests/test_resume.py kills one)
+        futs = [self._client.submit(_capped, fn, self.blas, *calls[i], pure=False) for i in todo]
+        index = {f.key: i for f, i in zip(futs, todo)}
         for fut in das_completed(futs):
-            results[index[fut.key]] = fut.result()
-            done += 1
-            if self.progress:
-                self.progress(label, done, total)
+            arrived(index[fut.key], fut.result())
         return results
 
 

@@ -87,7 +87,7 @@ def _lines(axes, fixed):
 
 def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None, progress=None,
               xtol_rel=1e-10, safety=10.0, stability_rtol=1e-12, continuation=True,
-              curves=True, curve_values=None, diagram=None) -> SweepResult:
+              curves=True, curve_values=None, diagram=None, resume=None) -> SweepResult:
     """Sweep ``case`` over ``axes`` = [(name, values), ...] (see the module docstring).
 
     case : a path (read and parsed once, here) or a :class:`~mbseig.casefile.CaseSpec`; the
@@ -98,6 +98,9 @@ def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None,
     continuation : follow the branch along each line (default); False solves each point alone.
     curves : with two axes, follow each first-line boundary across the second axis (at
         ``curve_values`` of it, default its grid values; more are inserted where it bends).
+    resume : a directory (:mod:`mbseig.studies.resume`): every line, point, boundary search
+        and curve is written there as it completes, and the ones it already holds are read
+        instead of computed; the result equals that of an uninterrupted sweep bit for bit.
     diagram : the coordinate or named angle of the bifurcation diagram (default: the named angle,
         else the coordinate, that varies most along the branch).
     """
@@ -113,7 +116,16 @@ def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None,
     span = abs(float(values0[-1] - values0[0]))
     xtol = xtol_rel * span
     n0 = len(values0)
-    with Runner(jobs=jobs, scheduler=scheduler, progress=progress) as runner:
+    checkpoint = None
+    if resume is not None:
+        from .resume import Checkpoint, study_identity
+
+        checkpoint = Checkpoint(resume, study_identity(
+            spec, config=config, axes=[(n, np.asarray(v, dtype=float)) for n, v in axes],
+            fixed=fixed, xtol_rel=xtol_rel, safety=safety, stability_rtol=stability_rtol,
+            continuation=bool(continuation), curves=bool(curves), curve_values=curve_values))
+    with Runner(jobs=jobs, scheduler=scheduler, progress=progress,
+                checkpoint=checkpoint) as runner:
         if continuation:
             points, branches, events, records = _followed_lines(runner, case, config, fixed,
                                                                 lines, axis0, values0, opts)
