@@ -68,8 +68,11 @@ def run(args) -> int:
     out_dir = args.out or f"sweep-{stem}"
     paths = write_outputs(res, out_dir, units=_units(args.case))
     camp = _campbell(args, ranges, fixed, out_dir, paths)
+    lift = _lift_offs(spec, ranges, fixed, args.config)
     if args.json:
-        print_json({**res.to_json(), **camp})
+        out = {**res.to_json(), **camp}
+        out["boundaries"] = out["boundaries"] + [dict(b) for b in lift]
+        print_json(out)
         return 0
     n_pts = sum(len(line) for line in res.points)
     failed = sum(1 for line in res.points for pt in line if pt.get("error"))
@@ -88,6 +91,9 @@ def run(args) -> int:
         print(f"  {b['parameter']} = {b['value']:.10g}{' at ' + where if where else ''}: "
               f"{b['kind']} ({b['stability']} of stability){event}, s = {b['eigenvalue'][0]:.4g} "
               f"{b['eigenvalue'][1]:+.6g}i{band_txt}")
+    for b in lift:
+        print(f"  {b['parameter']} = {b['value']:.10g}: lift-off of contact {b['contact']} "
+              f"({'it stops pushing' if b['stability'] == 'loss' else 'it pushes again'})")
     for f in res.folds:
         if f["type"] == "fold" and not f.get("dof"):
             print(f"  {f['parameter']} = {f['value']:.10g}: fold without degrees of freedom "
@@ -101,6 +107,19 @@ def run(args) -> int:
               f"{c['mode']}, {c['whirl']} whirl")
     print("wrote " + ", ".join(str(p) for p in paths))
     return 0
+
+
+def _lift_offs(spec, ranges, fixed, config) -> tuple:
+    """Where a single-sided contact of a static case stops (or starts) pushing along the swept
+    parameter (DESIGN §8: a boundary of kind ``lift-off``), for a sweep of one parameter."""
+    joints = spec.data.get("joints", [])
+    if len(ranges) != 1 or not any(isinstance(j, dict) and j.get("type") in ("contact", "rolling")
+                                   for j in (joints if isinstance(joints, list) else [])):
+        return ()
+    from ..studies.steady_sweep import contact_boundaries
+
+    name, values = ranges[0]
+    return contact_boundaries(spec, name, values, config=config, fixed=fixed)
 
 
 def _units(case) -> dict:
