@@ -247,8 +247,50 @@ def dissipative_integrator(steps_per_period=10, periods=20):
         data={"growth": float(growth), "naive_delta": float(naive_delta), "measured_delta": float(measured)})
 
 
+def driven_pendulum_frozen_time():
+    """The pendulum on a vertically driven pivot (cases/pendulum_shaken_pivot.toml and
+    inverted_pendulum_shaken_pivot.toml): eigenvalues of the linearization frozen at 64
+    instants against the Floquet multipliers.  Reference: Mathieu's equation, a = ±4g/(lω²),
+    q = 2A/l, characteristic values from scipy.special.mathieu_a / mathieu_b."""
+    from scipy.special import mathieu_a, mathieu_b
+
+    from ..casefile import read_case
+    from ..studies.periodic import frozen_summary, periodic_analysis
+
+    out = {}
+    for key, name in (("hanging", "pendulum_shaken_pivot"),
+                      ("inverted", "inverted_pendulum_shaken_pivot")):
+        a = periodic_analysis(read_case(case_path(name)))
+        out[key] = (a, frozen_summary(a))
+    (ah, fh), (ai, fi) = out["hanging"], out["inverted"]
+    p = ah.parameters
+    q = 2 * p["A"] / p["l"]
+    a_h = 4 * p["g"] / (p["l"] * p["w"] ** 2)
+    in_tongue = mathieu_b(1, q) < a_h < mathieu_a(1, q)
+    w_star = np.sqrt(-4 * ai.parameters["g"] / (ai.parameters["l"] * mathieu_a(0, q)))
+    held = ai.parameters["w"] > w_star
+    rh, ri = ah.floquet, ai.floquet
+    return FailCase(
+        "driven pendulum: frozen-time eigenvalues", "eigenvalues frozen at 64 instants",
+        f"hanging at ω = {p['w']:g}: max Re s = {fh['max_real_part']:.3g} ({fh['verdict']}); "
+        f"inverted at ω = {ai.parameters['w']:g}: max Re s = {fi['max_real_part']:.3g} "
+        f"({fi['verdict']})",
+        f"Floquet: hanging |μ| = {rh.spectral_radius:.6g} ± {rh.error_bound:.1e} ({rh.verdict}); "
+        f"inverted |μ| = {ri.spectral_radius:.10g} ± {ri.error_bound:.1e} ({ri.verdict})",
+        f"Mathieu (scipy mathieu_a/b): hanging a = {a_h:.4g} inside the principal tongue "
+        f"({mathieu_b(1, q):.4g}, {mathieu_a(1, q):.4g}): unstable; inverted held above "
+        f"ω* = {w_star:.8g} rad/s",
+        naive_wrong=fh["verdict"] != "unstable" and fi["verdict"] == "unstable",
+        mbseig_right=(in_tongue and rh.verdict == "unstable" and held
+                      and ri.verdict != "unstable"),
+        data={"frozen_hanging": fh["max_real_part"], "frozen_inverted": fi["max_real_part"],
+              "mu_hanging": rh.spectral_radius, "mu_inverted": ri.spectral_radius,
+              "bound_hanging": rh.error_bound, "bound_inverted": ri.error_bound})
+
+
 ALL = [pendulum_constraint_stiffness, four_bar_constraint_stiffness, ziegler_follower,
-       badly_scaled, large_undamped, repeated_and_defective, dissipative_integrator]
+       badly_scaled, large_undamped, repeated_and_defective, dissipative_integrator,
+       driven_pendulum_frozen_time]
 
 
 def run_all():

@@ -18,6 +18,7 @@ from ..model.assembly import Assembly
 from ..model.driver import check_command
 from ..model.elements import (
     DistanceConstraint,
+    LinearConstraint,
     body_direction,
     body_mass_matrix,
     body_point,
@@ -26,7 +27,7 @@ from ..model.system import Model
 from ..numerics import scatter
 from .batch import Batcher, LazyPoints
 from .element_readers import ElementReaders
-from .fields import Fields, expand, template
+from .fields import Fields, expand, template, uses_time
 from .report_table import parse_report
 
 
@@ -66,6 +67,9 @@ class Builder(ElementReaders):
         self.mass_parts: list = []  # (name, idx, block) of every body and mass (modal energy)
         self._affine: dict[str, Affine] = {}  # point maps, made once a build (affine_of)
         self._dirs: dict[tuple, Affine] = {}  # body directions, made once a build (body_dir)
+        motion = data.get("motion")
+        self.periodic = isinstance(motion, dict) and "period" in motion
+        self.driven_points: list = []  # (label, coordinate indices, position) of moving pivots
 
     @property
     def coord_names(self) -> list:
@@ -88,7 +92,13 @@ class Builder(ElementReaders):
             pos = f.vec("position", self.dim)
             fixed = f.flag("fixed", False)
             f.done()
-            if fixed:
+            if fixed and self.periodic and uses_time(item.get("position")):
+                # a pivot moved with time (DESIGN §8 "Periodic motions"): free coordinates
+                # held on its path by a rheonomic constraint, whose multiplier drives it
+                idx = self.assembly.coordinates([f"{pname}.{_AXES[a]}" for a in range(self.dim)],
+                                                pos, "length")
+                self.driven_points.append((label, idx, pos))
+            elif fixed:
                 idx = np.full(self.dim, -1, dtype=np.intp)
             else:
                 idx = self.assembly.coordinates([f"{pname}.{_AXES[a]}" for a in range(self.dim)],
@@ -112,6 +122,9 @@ class Builder(ElementReaders):
         mass_blocks, g_const = [], np.zeros(self.n)
         gravity = self.gravity()
         constraints, forces = [], []
+        for plabel, idx, pos in self.driven_points:
+            constraints.append(LinearConstraint(plabel, Affine.select(idx), np.eye(self.dim), pos,
+                                                self.length_scale))
         batch.bind(g_const, forces, gravity)
 
         for item, label, names in expand("masses", self.data.get("masses", []), self.params, batch):

@@ -22,15 +22,19 @@ the rule:
 
 from __future__ import annotations
 
+import ast
 import re
 
 import numpy as np
 
 from ..errors import CaseError, MbseigError
-from .expr import evaluate
+from .expr import evaluate, parse
 
 __all__ = ["Fields", "REQUIRED", "MAX_REPEAT", "MAX_INDEX", "MAX_MAGNITUDE", "MIN_MAGNITUDE",
-           "RANGE_RULE", "in_range", "check_range", "template", "expand", "enabled"]
+           "RANGE_RULE", "in_range", "check_range", "template", "expand", "enabled", "uses_time",
+           "TIME"]
+
+TIME = "t"  # the name of time in a periodic case (DESIGN §8, "Periodic motions")
 
 MAX_REPEAT = 2_000_000  # repeated elements in one case
 MAX_INDEX = 1e15  # |first|, |last| of a repeat range: exact integers, formatted exactly
@@ -149,6 +153,23 @@ class Fields:
         extra = sorted(set(self.t) - self.used)
         if extra:
             raise self.error(f"unknown field {extra[0]!r}")
+
+
+def uses_time(value) -> bool:
+    """Whether a field's value (a number, an expression, or a list or table of them) names the
+    time ``t``: only numeric fields of points, joints, drivers and forces of a periodic case
+    may (mbseig.studies.periodic checks the others)."""
+    if isinstance(value, str):
+        try:
+            tree = parse(value)
+        except MbseigError:
+            return False  # not an expression: its own field reports it
+        return any(isinstance(n, ast.Name) and n.id == TIME for n in ast.walk(tree))
+    if isinstance(value, list):
+        return any(uses_time(v) for v in value)
+    if isinstance(value, dict):
+        return any(uses_time(v) for v in value.values())
+    return False
 
 
 def _numbers(value):

@@ -1,0 +1,379 @@
+"""The model of a T-periodic case as a function of time (DESIGN §8, "Periodic motions").
+
+    M q̈ + Φ_qᵀ(q, t) λ = g(q, q̇, t),        Φ(q, t) = 0,        Φ(q, t + T) = Φ(q, t)
+
+A periodic case writes ``t`` in numeric fields of points, joints, drivers and forces.  The
+reader builds an ordinary :class:`~mbseig.model.system.Model` at any instant; a
+:class:`TimedModel` holds the model at t = 0 and, for every number of an element that changes
+with time (a driver's target angle, a moving pivot's position, a force's vector), its samples
+at N equally spaced instants of one period as a trigonometric interpolant
+
+    f(t) = s t / T + Σ_|k|<N/2 c_k exp(2πi k t / T)
+
+whose secular part s is zero except for a driver angle, where it is a whole number of turns
+(w·t over a period 2π/w).  The interpolant is exact for trigonometric polynomials of degree
+below N/2 (A cos ωt, w t); :func:`sample_time` doubles N until the interpolant reproduces the
+model at off-grid instants and records that error (``interpolation_error``).
+
+Time derivatives at fixed q (Φ_t, Φ_tt, Φ_qt) are five-point differences along the quadratic
+Taylor curve of an element's numbers in t (exact for constraints at most quadratic in them, as
+every natural-coordinate constraint is, rounding ≈ 1e-13 with the step 1e-2 T); the
+constraint velocity and acceleration terms of a rheonomic constraint follow from them:
+
+    Φ_q q̇ = −Φ_t,        Φ_q q̈ = γ(q, q̇) − 2 Φ_qt q̇ − Φ_tt.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import CaseError
+
+__all__ = ["TimedModel", "TrigSeries", "sample_time", "TIME_STEP"]
+
+TIME_STEP = 1e-2  # step along the Taylor curve of the numbers, as a fraction of the period
+_DRIFTING = {"angle_target"}  # element numbers that may advance by whole turns per period
+_MAX_SAMPLES = 512
+
+
+@dataclass(frozen=True)
+class TrigSeries:
+    """f(t) = s t / T + Σ_|k|<N/2 c_k exp(2πi k t / T) from N samples of one period (values of
+    any shape stacked on the first axis): exact for trigonometric polynomials of degree below
+    N/2, spectrally accurate for smooth periodic f; ``offset`` is the first sample's instant."""
+
+    coeffs: np.ndarray  # rfft / N, shape (N//2 + 1, *value shape)
+    samples: int
+    period: float
+    drift: np.ndarray | float = 0.0  # f(T) − f(0): whole turns of a driver angle, else 0
+
+    @classmethod
+    def fit(cls, values, period, *, offset=0.0, drift=0.0):
+        values = np.asarray(values, dtype=float)
+        N = values.shape[0]
+        times = offset + np.arange(N) * period / N
+        shape = (-1,) + (1,) * (values.ndim - 1)
+        periodic = values - np.asarray(drift) * (times / period).reshape(shape)
+        coeffs = np.fft.rfft(periodic, axis=0) / N
+        if offset:
+            k = np.arange(coeffs.shape[0])
+            coeffs = coeffs * np.exp(-2j * math.pi * k * offset / period).reshape(shape)
+        return cls(coeffs, N, float(period), drift)
+
+    def jet(self, t):
+        """(f, f', f'') at t."""
+        T = self.period
+        w = 2.0 * math.pi / T
+        k = np.arange(self.coeffs.shape[0])
+        weight = np.full(k.size, 2.0)
+        weight[0] = 1.0
+        base = weight * np.exp(1j * w * k * t)
+        shape = (-1,) + (1,) * (self.coeffs.ndim - 1)
+        out = []
+        for order in (0, 1, 2):
+            fac = (1j * w * k) ** order
+            if self.samples % 2 == 0:
+                base[-1] = np.exp(1j * w * k[-1] * t)  # the Nyquist cosine, weight 1
+                if order:
+                    fac[-1] = 0.0
+            value = np.real(np.sum((base * fac).reshape(shape) * self.coeffs, axis=0))
+            out.append(value + np.asarray(self.drift) * (t / T if order == 0 else
+                                                          (1.0 / T if order == 1 else 0.0)))
+        return out
+
+    def __call__(self, t, order=0):
+        """The value (order 0) or its first / second time derivative at t."""
+        T = self.period
+        w = 2.0 * math.pi / T
+        k = np.arange(self.coeffs.shape[0])
+        weight = np.full(k.size, 2.0)
+        weight[0] = 1.0
+        fac = (1j * w * k) ** order
+        if self.samples % 2 == 0:
+            weight[-1] = 1.0  # the Nyquist cosine; its derivative is left out (ambiguous)
+            if order:
+                fac[-1] = 0.0
+        terms = (weight * fac * np.exp(1j * w * k * t)).reshape(
+            (-1,) + (1,) * (self.coeffs.ndim - 1))
+        periodic = np.real(np.sum(terms * self.coeffs, axis=0))
+        secular = np.asarray(self.drift) * (t / T if order == 0 else (1.0 / T if order == 1 else 0.0))
+        return periodic + secular
+
+
+@dataclass(frozen=True)
+class _Leaf:
+    """One time-dependent number (or array) of an element: where it is, its interpolant."""
+
+    where: tuple  # ("constraints" | "forces", index, field[, subfield]) or ("g_const",)
+    element: str
+    series: TrigSeries
+
+    def value(self, t, T=None, order=0):
+        return self.series(t, order)
+
+
+def _leaves_of(obj, prefix):
+    """(path, value) of every float or float-array field of an element (one nested level)."""
+    out = []
+    for f in dataclasses.fields(obj):
+        v = getattr(obj, f.name)
+        if isinstance(v, float) and not isinstance(v, bool):
+            out.append(((*prefix, f.name), v))
+        elif isinstance(v, np.ndarray) and v.dtype.kind == "f":
+            out.append(((*prefix, f.name), v))
+        elif dataclasses.is_dataclass(v) and not isinstance(v, type):
+            out.extend(((*prefix, f.name, g.name), getattr(v, g.name))
+                       for g in dataclasses.fields(v)
+                       if isinstance(getattr(v, g.name), (float, np.ndarray)))
+    return out
+
+
+def _get(model, where):
+    if where == ("g_const",):
+        return model.g_const
+    obj = getattr(model, where[0])[where[1]]
+    for name in where[2:]:
+        obj = getattr(obj, name)
+    return obj
+
+
+def _replace(element, path, value):
+    if len(path) == 1:
+        return dataclasses.replace(element, **{path[0]: value})
+    inner = getattr(element, path[0])
+    return dataclasses.replace(element, **{path[0]: _replace(inner, path[1:], value)})
+
+
+def _differs(a, b):
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    return a.shape != b.shape or not np.array_equal(a, b)
+
+
+@dataclass(frozen=True, eq=False)
+class TimedModel:
+    """Model(t) of a T-periodic case (module docstring): ``at(t)`` gives the model at t, and
+    phi, phi_q, hessian, g, force Jacobians and the rheonomic terms are evaluated at (q, t)."""
+
+    base: object  # the Model at t = 0
+    period: float
+    leaves: tuple
+    interpolation_error: float
+    samples: int
+    _kept: dict = field(default_factory=dict, repr=False, compare=False)
+
+    @property
+    def n(self):
+        return self.base.n
+
+    @property
+    def time_dependent(self):
+        """Names of the elements that change with time."""
+        return tuple(dict.fromkeys(leaf.element for leaf in self.leaves))
+
+    def _element(self, kind, k, t):
+        """Element k of ``kind`` (constraints / forces) with its numbers at t."""
+        key = (kind, k, float(t))
+        kept = self._kept.setdefault("elements", {})
+        if key in kept:
+            return kept[key]
+        if len(kept) > 256:
+            kept.clear()
+        kept[key] = el = self._element_at(kind, k, t)
+        return el
+
+    def _element_at(self, kind, k, t):
+        el = getattr(self.base, kind)[k]
+        for leaf in self.leaves:
+            if leaf.where[:2] == (kind, k):
+                value = leaf.value(t)
+                if isinstance(_get(self.base, leaf.where), float):
+                    value = float(value)
+                el = _replace(el, leaf.where[2:], value)
+        return el
+
+    @property
+    def _timed_constraints(self):
+        return sorted({leaf.where[1] for leaf in self.leaves if leaf.where[0] == "constraints"})
+
+    def at(self, t):
+        """The Model at time t (elements with the interpolated numbers; the last few kept)."""
+        t = float(t)
+        models = self._kept.setdefault("models", {})
+        if t in models:
+            return models[t]
+        if not self.leaves:
+            return self.base
+        groups = {"constraints": list(self.base.constraints), "forces": list(self.base.forces)}
+        for kind, k in {leaf.where[:2] for leaf in self.leaves if leaf.where[0] != "g_const"}:
+            groups[kind][k] = self._element(kind, k, t)
+        g_const = self.base.g_const
+        for leaf in self.leaves:
+            if leaf.where == ("g_const",):
+                g_const = leaf.value(t)
+        model = dataclasses.replace(self.base, constraints=tuple(groups["constraints"]),
+                                    forces=tuple(groups["forces"]), g_const=g_const)
+        if len(models) > 16:
+            models.clear()
+        models[t] = model
+        return model
+
+    def phi_q(self, q, t):
+        """Φ_q(q, t), dense (assembled here: small models, many instants)."""
+        m = self.at(t)
+        J = np.zeros((m.n_constraints, self.n))
+        r = 0
+        for c in m.constraints:
+            J[r:r + c.n_eq, c.idx] += c.jac(q)
+            r += c.n_eq
+        return J
+
+    # ---- time derivatives at fixed q (only the elements that change with time) -------------
+    def _rows(self):
+        off = np.cumsum([0] + [c.n_eq for c in self.base.constraints])
+        return [(k, off[k], off[k + 1]) for k in self._timed_constraints]
+
+    def _taylor(self, k, t):
+        """The elements of constraint k on the quadratic Taylor curve of its numbers about t,
+        ℓ(ε) = ℓ + ε ℓ' + ε² ℓ''/2 at ε = −2h … 2h (h = TIME_STEP · T): the five-point
+        differences along it give Φ_t and Φ_tt exactly when Φ is at most quadratic in its
+        numbers (natural coordinates; a driver angle, a pivot's position enter linearly)."""
+        key = ("taylor", k, float(t))
+        kept = self._kept.setdefault("taylor", {})
+        if key in kept:
+            return kept[key]
+        if len(kept) > 64:
+            kept.clear()
+        h = TIME_STEP * self.period
+        jets = [(leaf, leaf.series.jet(t)) for leaf in self.leaves
+                if leaf.where[:2] == ("constraints", k)]
+        out = []
+        for j in (-2, -1, 0, 1, 2):
+            el, e = self.base.constraints[k], j * h
+            for leaf, (v, v1, v2) in jets:
+                value = v + e * v1 + 0.5 * e * e * v2
+                if isinstance(_get(self.base, leaf.where), float):
+                    value = float(value)
+                el = _replace(el, leaf.where[2:], value)
+            out.append(el)
+        kept[key] = (h, out)
+        return h, out
+
+    @staticmethod
+    def _differences(h, f):
+        d1 = (f[0] - 8 * f[1] + 8 * f[3] - f[4]) / (12 * h)
+        d2 = (-f[0] + 16 * f[1] - 30 * f[2] + 16 * f[3] - f[4]) / (12 * h * h)
+        return d1, d2
+
+    def phi_time(self, q, t):
+        """(Φ, Φ_t, Φ_tt) at (q, t)."""
+        phi = self.at(t).phi(q)
+        dt, dtt = np.zeros_like(phi), np.zeros_like(phi)
+        for k, a, b in self._rows():
+            h, els = self._taylor(k, t)
+            dt[a:b], dtt[a:b] = self._differences(h, [el.phi(q) for el in els])
+        return phi, dt, dtt
+
+    @property
+    def _jac_timed(self):
+        """The time-dependent constraints whose Φ_q changes with time too (a moving pivot or
+        a driver angle only shift Φ: their Φ_qt = 0), found once at a generic q."""
+        if "jac_timed" not in self._kept:
+            rng = np.random.default_rng(0)
+            q = self.base.q_init + 0.1 * self.base.length_scale * rng.standard_normal(self.n)
+            out = []
+            for k, _, _ in self._rows():
+                J0 = self._element_at("constraints", k, 0.0).jac(q)
+                J1 = self._element_at("constraints", k, 0.3 * self.period).jac(q)
+                if not np.array_equal(J0, J1):
+                    out.append(k)
+            self._kept["jac_timed"] = out
+        return self._kept["jac_timed"]
+
+    def phi_qt(self, q, t):
+        """∂Φ_q/∂t at (q, t) (dense)."""
+        out = np.zeros((self.base.n_constraints, self.n))
+        for k, a, b in self._rows():
+            if k not in self._jac_timed:
+                continue
+            c = self.base.constraints[k]
+            h, els = self._taylor(k, t)
+            out[a:b, c.idx] += self._differences(h, [el.jac(q) for el in els])[0]
+        return out
+
+
+def sample_time(build_at, period, *, samples=16, check=3):
+    """The :class:`TimedModel` of a periodic case: ``build_at(t)`` builds the Model at t.
+
+    Samples one period at N instants (N doubled from ``samples`` until the interpolant matches
+    ``check`` off-grid builds to 1e-12 relative, at most 512); a number that does not come back
+    after one period (a driver angle may come back a whole number of turns further) is refused
+    in one line naming the element: the motion does not repeat with the stated period."""
+    T = float(period)
+    base = build_at(0.0)
+    end = build_at(T)
+    leaves_at = {}
+    for kind in ("constraints", "forces"):
+        a, b = getattr(base, kind), getattr(end, kind)
+        if len(a) != len(b):
+            raise CaseError("the model's elements change with time", element="motion")
+        for k, (ea, eb) in enumerate(zip(a, b)):
+            if type(ea) is not type(eb):
+                raise CaseError("the model's elements change with time", element=ea.name)
+    if base.mass.shape != end.mass.shape or _differs(base.mass.toarray(), end.mass.toarray()):
+        raise CaseError("the mass matrix changes with time (t in a mass or a body)",
+                        element="motion")
+    probe = build_at(0.37 * T)  # which numbers move at all
+    candidates = [("g_const",)] if _differs(base.g_const, probe.g_const) else []
+    for kind in ("constraints", "forces"):
+        for k, el in enumerate(getattr(base, kind)):
+            if not dataclasses.is_dataclass(el):
+                continue
+            for path, v in _leaves_of(el, (kind, k)):
+                if _differs(v, _get(probe, path)):
+                    candidates.append(path)
+    for path in candidates:
+        v0, vT = np.asarray(_get(base, path), float), np.asarray(_get(end, path), float)
+        drift = vT - v0
+        name = "gravity and point forces" if path == ("g_const",) else _get(base, path[:2]).name
+        scale = max(1.0, float(np.max(np.abs(v0))) if v0.size else 1.0)
+        if path[-1] in _DRIFTING:
+            turns = np.round(drift / (2 * math.pi))
+            ok = np.all(np.abs(drift - 2 * math.pi * turns) <= 1e-9 * max(scale, abs(drift).max()))
+            drift = 2 * math.pi * turns
+        else:
+            ok = np.all(np.abs(drift) <= 1e-9 * scale)
+            drift = np.zeros_like(drift)
+        if not ok:
+            raise CaseError(f"the motion does not repeat with period T = {T:.6g}: {path[-1]} "
+                            f"changes from {_fmt(v0)} at t = 0 to {_fmt(vT)} at t = T",
+                            element=name)
+        leaves_at[path] = (name, drift)
+    if not leaves_at:
+        return TimedModel(base, T, (), 0.0, 0)
+    N = samples
+    while True:
+        times = np.arange(N) * T / N
+        models = [base] + [build_at(t) for t in times[1:]]
+        leaves = []
+        for path, (name, drift) in leaves_at.items():
+            vals = np.array([np.asarray(_get(m, path), float) for m in models])
+            leaves.append(_Leaf(path, name, TrigSeries.fit(vals, T, drift=drift)))
+        err = 0.0
+        for j in range(check):
+            t = T * (j + 0.5 + 0.123 * j) / (check + 1)
+            ref = build_at(t)
+            for leaf in leaves:
+                want = np.asarray(_get(ref, leaf.where), float)
+                got = leaf.value(t, T)
+                err = max(err, float(np.max(np.abs(got - want))) / max(1.0, float(np.max(np.abs(want)))))
+        if err <= 1e-12 or N >= _MAX_SAMPLES:
+            return TimedModel(base, T, tuple(leaves), err, N)
+        N *= 2
+
+
+def _fmt(v):
+    return f"{float(v):.6g}" if v.size == 1 else np.array2string(v, precision=6)

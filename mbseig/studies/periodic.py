@@ -1,0 +1,324 @@
+"""Floquet analysis of a periodic case (DESIGN §8, "Periodic motions").
+
+    case with [motion] period ─► TimedModel ─► reference motion ─► linearization along it
+        (t in points, joints,      (time-       (kinematics or      (M, C(t), K(t), Φ_q(t):
+         drivers, forces)           sampled)     shooting)           trigonometric series)
+    ─► monodromy of the projected variational equations ─► multipliers, bounds, verdict
+
+The linearization along the reference (C = −∂g/∂q̇, K = −∂g/∂q + Σ λ*_k ∇²Φ_k, Φ_q) is
+sampled at N instants of the period and held as a trigonometric series; Φ̇_q is the series'
+derivative.  The two monodromy estimates of :mod:`mbseig.studies.floquet` differ in both
+tolerance (1e-12, 1e-10) and samples (the second on the grid shifted by half a step), so their
+difference also measures the sampling; N is doubled until the two series agree to 1e-10.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg as la
+
+from ..casefile.expr import evaluate
+from ..casefile.fields import TIME, uses_time
+from ..errors import CaseError, MbseigError
+from ..model.timed import TrigSeries, sample_time
+from .floquet import FloquetError, FloquetResult, analyze, monodromy
+from .floquet_paths import constrained_system
+from .periodic_motion import reference_motion
+
+__all__ = ["PeriodicAnalysis", "periodic_analysis", "PeriodicLinearization",
+           "periodic_linearization", "period_of", "check_time_fields",
+           "frozen_time", "frozen_summary", "floquet_json", "TIMED_SECTIONS"]
+
+TIMED_SECTIONS = ("points", "joints", "forces")  # where a numeric field may use t
+_UNTIMED_KEYS = {"name", "type", "repeat", "enabled", "fixed", "points", "bodies", "point",
+                 "joint", "body", "sets", "sense", "follower"}
+RTOLS = (1e-10, 1e-12)
+SAMPLES = 16  # first sampling of the linearization; doubled until two samplings agree
+
+
+def check_time_fields(data):
+    """Refuse ``t`` where it cannot be: every section but points, joints, drivers and forces
+    (parameters, masses, bodies, gravity, beams, ...), ``repeat``/``enabled``/names anywhere,
+    and a point's ``position`` only (one line naming the element)."""
+    for key, value in data.items():
+        if key in TIMED_SECTIONS and isinstance(value, list):
+            for k, item in enumerate(value):
+                if not isinstance(item, dict):
+                    continue
+                for fname, fval in item.items():
+                    bad = fname in _UNTIMED_KEYS or (key == "points" and fname != "position")
+                    if bad and uses_time(fval):
+                        raise CaseError(f"{fname} uses t, but it cannot depend on time",
+                                        element=_label(key, k, item))
+        elif key not in ("motion", "expected", "source", "description", "title") and uses_time(value):
+            if isinstance(value, list):
+                for k, item in enumerate(value):
+                    if uses_time(item):
+                        raise CaseError("uses t, but a field here cannot depend on time (only "
+                                        "points, joints, drivers and forces may)",
+                                        element=_label(key, k, item))
+            if isinstance(value, dict):
+                for name, item in value.items():
+                    if uses_time(item):
+                        raise CaseError("uses t, but a field here cannot depend on time (only "
+                                        "points, joints, drivers and forces may)",
+                                        element=f"{key}.{name}")
+            raise CaseError("uses t, but it cannot depend on time", element=key)
+
+
+def _label(section, k, item):
+    label = f"{section}[{k}]"
+    if isinstance(item, dict) and isinstance(item.get("name"), str):
+        label += f" {item['name']!r}"
+    return label
+
+
+def period_of(data, parameters) -> float:
+    """T from ``[motion] period`` (an expression of the parameters), positive and finite."""
+    motion = data.get("motion", {})
+    raw = motion.get("period")
+    if uses_time(raw):
+        raise CaseError("the period uses t, but it cannot depend on time", element="motion.period")
+    extra = sorted(set(motion) - {"period"})
+    if extra:
+        raise CaseError(f"unknown field {extra[0]!r} with period (a periodic motion takes "
+                        "period only)", element="motion")
+    try:
+        T = evaluate(raw, parameters)
+    except MbseigError as exc:
+        raise exc.located(element="motion.period") from None
+    if not (math.isfinite(T) and T > 0):
+        raise CaseError(f"period must be positive, got {T:g}", element="motion.period")
+    return T
+
+
+def timed_model(spec, *, config=None, params=None, samples=16):
+    """The :class:`~mbseig.model.timed.TimedModel` of a periodic case at these parameters
+    (and the parameters' values); every problem names the case file and the element."""
+    try:
+        return _timed_model(spec, config, params, samples)
+    except MbseigError as exc:
+        raise exc.located(file=spec.source) from None
+
+
+def _timed_model(spec, config, params, samples):
+    data = spec.data
+    check_time_fields(data)
+    table = data.get("parameters", {})
+    if isinstance(table, dict) and TIME in table:
+        raise CaseError("t is the time of a periodic case and cannot be a parameter",
+                        element="parameters.t")
+    timed_data = {**data, "parameters": {TIME: 0.0, **(table if isinstance(table, dict) else {})}}
+    tspec = type(spec)(timed_data, spec.name, spec.source, spec.base_dir)
+    params = dict(params or {})
+    if TIME in params:
+        raise CaseError("t is the time of a periodic case, not a parameter", element="--param")
+    base = tspec.build(config, **params)
+    if base.mass_elements:
+        raise CaseError("periodic motions of co-rotational beams are not supported (their mass "
+                        "depends on the configuration)", element="motion")
+    parameters = {k: v for k, v in base.parameters.items() if k != TIME}
+    T = period_of(data, parameters)
+
+    def build_at(t):
+        return tspec.build(config, **params, **{TIME: repr(float(t))})
+
+    return sample_time(build_at, T, samples=samples), parameters
+
+
+@dataclass(frozen=True)
+class PeriodicAnalysis:
+    """A periodic case analysed: the timed model, the reference motion, the sampled
+    linearization (``samples`` instants) and the Floquet result; ``basis`` maps the Floquet
+    state (y, p) at t = 0 to (δq, δq̇) in full coordinates."""
+
+    name: str
+    parameters: dict
+    timed: object = field(repr=False)
+    reference: object = field(repr=False)
+    floquet: FloquetResult
+    samples: int
+    sampling_difference: float
+    dof: int
+    basis: np.ndarray = field(repr=False)
+    system: object = field(repr=False)
+
+
+def _sample_linearization(reference, N, offset):
+    T = reference.period
+    model = reference.partition.timed
+    Cs, Ks, Js = [], [], []
+    for j in range(N):
+        t = offset + j * T / N
+        q, qd, _, lam = reference.at(t)
+        m = model.at(t)
+        K, C = m.force_jacobians(q, qd, dense=True)
+        K = np.asarray(K) + (np.asarray(m.constraint_hessian(q, lam, dense=True))
+                             if m.n_constraints else 0.0)
+        Cs.append(np.asarray(C))
+        Ks.append(K)
+        Js.append(model.phi_q(q, t))
+    fit = [TrigSeries.fit(np.array(v), T, offset=offset) for v in (Cs, Ks, Js)]
+    return fit
+
+
+def _system(M, fit, T, *, start=None):
+    C, K, J = fit
+    return constrained_system(lambda t: M, C, K, J, lambda t: J(t, 1), T, start=start)
+
+
+@dataclass(frozen=True)
+class PeriodicLinearization:
+    """The linearization along the reference motion, sampled twice (on N instants and on
+    the grid shifted by half a step) as trigonometric series, and its projected systems."""
+
+    timed: object
+    parameters: dict
+    reference: object
+    samples: int
+    sampling_difference: float
+    system: object  # ConstrainedLinearization on the first sampling
+    check: object  # the same on the shifted sampling, from the same basis at t = 0
+
+
+_KEPT: dict = {}  # the last few results of one process (a report, a test runs a case twice)
+
+
+def _kept(kind, spec, config, params, extra, compute):
+    try:
+        key = (kind, spec.source, json.dumps(spec.data, sort_keys=True, default=repr), config,
+               tuple(sorted((params or {}).items())), extra)
+    except (TypeError, ValueError):
+        return compute()
+    if key not in _KEPT:
+        if len(_KEPT) >= 8:
+            _KEPT.pop(next(iter(_KEPT)))
+        _KEPT[key] = compute()
+    return _KEPT[key]
+
+
+def periodic_linearization(spec, *, config=None, params=None, samples=SAMPLES,
+                           max_samples=1024) -> PeriodicLinearization:
+    """Reference motion and sampled linearization of a periodic case (module docstring)."""
+    return _kept("linearization", spec, config, params, (samples, max_samples),
+                 lambda: _periodic_linearization(spec, config, params, samples, max_samples))
+
+
+def _periodic_linearization(spec, config, params, samples, max_samples):
+    timed, parameters = timed_model(spec, config=config, params=params)
+    try:
+        ref = reference_motion(timed)
+        T = timed.period
+        M = ref.partition.M
+        N = samples
+        while True:
+            fit = _sample_linearization(ref, N, 0.0)
+            fit2 = _sample_linearization(ref, N, 0.5 * T / N)
+            probe = np.linspace(0.0, T, 7)[1:-1] + 0.01 * T
+            diff = max(float(np.max(np.abs(a(t) - b(t)), initial=0.0))
+                       / max(1.0, float(np.max(np.abs(a(t)), initial=0.0)))
+                       for a, b in zip(fit, fit2) for t in probe)
+            if diff <= 1e-10 or 2 * N > max_samples:
+                break
+            N *= 2
+        sys1 = _system(M, fit, T)
+        sys2 = _system(M, fit2, T, start=sys1.path.bases[0])
+    except MbseigError as exc:
+        raise exc.located(file=spec.source) from None
+    except (np.linalg.LinAlgError, ArithmeticError) as exc:
+        raise FloquetError(f"the reference motion or its linearization failed: {exc}",
+                           element="motion", file=spec.source) from None
+    return PeriodicLinearization(timed, parameters, ref, N, diff, sys1, sys2)
+
+
+def periodic_analysis(spec, *, config=None, params=None, rtols=RTOLS, samples=SAMPLES,
+                      max_samples=1024) -> PeriodicAnalysis:
+    """Floquet multipliers of a periodic case's reference motion (module docstring)."""
+    return _kept("analysis", spec, config, params, (tuple(rtols), samples, max_samples),
+                 lambda: _periodic_analysis(spec, config, params, rtols, samples, max_samples))
+
+
+def _periodic_analysis(spec, config, params, rtols, samples, max_samples):
+    lin = periodic_linearization(spec, config=config, params=params, samples=samples,
+                                 max_samples=max_samples)
+    T, M = lin.timed.period, lin.reference.partition.M
+    sys1, sys2 = lin.system, lin.check
+    try:
+        lo, hi = sorted(rtols)
+        Phi = monodromy(sys1.system, rtol=lo)
+        Phi2 = monodromy(sys2.system, rtol=hi)
+        res = analyze(Phi, Phi2, T, sys1.system.trace_integral(),
+                      method=f"variational equations projected on the constraints (DOP853, "
+                             f"{lin.samples} samples of the linearization per period)",
+                      tolerances=(lo, hi))
+    except MbseigError as exc:
+        raise exc.located(file=spec.source) from None
+    except (np.linalg.LinAlgError, ArithmeticError) as exc:
+        raise FloquetError(f"the monodromy matrix failed: {exc}", element="monodromy",
+                           file=spec.source) from None
+    N0, Nd0 = sys1.path.derivative(0.0, 0)
+    r = N0.shape[1]
+    G = np.linalg.inv(N0.T @ M @ N0)
+    H = (M @ N0).T @ Nd0
+    basis = np.block([[N0, np.zeros((N0.shape[0], r))], [Nd0 - N0 @ G @ H, N0 @ G]])
+    return PeriodicAnalysis(spec.name, lin.parameters, lin.timed, lin.reference, res,
+                            lin.samples, lin.sampling_difference, r, basis, sys1)
+
+
+def frozen_time(analysis, *, instants=64):
+    """(times, eigenvalues) of the linearization frozen at instants of the period: what a
+    frozen-time analysis would report (M_r s² + C_r s + K_r on the null space at each instant,
+    without the motion's Ṅ terms).  Not a stability criterion of a periodic motion."""
+    T = analysis.floquet.period
+    C, K, J = _sample_linearization(analysis.reference, 8, 0.0)
+    M = analysis.reference.partition.M
+    times = np.arange(instants) * T / instants
+    out = []
+    for t in times:
+        Jt = J(t)
+        N = la.null_space(Jt) if Jt.shape[0] else np.eye(M.shape[0])
+        Mr, Cr, Kr = N.T @ M @ N, N.T @ C(t) @ N, N.T @ K(t) @ N
+        r = Mr.shape[0]
+        A = np.block([[np.zeros((r, r)), np.eye(r)],
+                      [-np.linalg.solve(Mr, Kr), -np.linalg.solve(Mr, Cr)]])
+        out.append(np.linalg.eigvals(A))
+    return times, np.array(out)
+
+
+def frozen_summary(a) -> dict:
+    """The frozen-time verdict: the largest real part of the eigenvalues of the linearization
+    frozen at 64 instants (not a stability criterion of a periodic motion)."""
+    _, lam = frozen_time(a)
+    worst = float(lam.real.max()) + 0.0 if lam.size else 0.0  # (no -0)
+    tol = 1e-9 * max(1.0, float(abs(lam).max()) if lam.size else 1.0)
+    verdict = "unstable" if worst > tol else "stable" if worst < -tol else "critical"
+    return {"instants": int(lam.shape[0]), "max_real_part": worst, "verdict": verdict,
+            "note": "eigenvalues at frozen instants: not a stability criterion of a periodic "
+                    "motion"}
+
+
+def floquet_json(analysis) -> dict:
+    """The §8 ``"floquet"`` object (and its extras: per-multiplier bounds, the deciding
+    multiplier and margin, Liouville's check, the method, tolerances and samples)."""
+    out = analysis.floquet.to_dict()
+    res = analysis.floquet
+    T = res.period
+    w = 2 * math.pi / T
+    exps = []
+    for e in res.exponents:  # imaginary parts reduced modulo 2π/T into (−π/T, π/T]
+        im = e.imag - w * math.floor((e.imag + math.pi / T) / w)
+        if im <= -math.pi / T:
+            im += w
+        exps.append([float(e.real), float(im)])
+    out["exponents"] = exps
+    out["samples"] = analysis.samples
+    out["sampling_difference"] = analysis.sampling_difference
+    ref = analysis.reference
+    out["reference"] = {"method": ref.method, "residual": ref.residual,
+                        "iterations": ref.iterations}
+    out["time_dependent"] = list(analysis.timed.time_dependent)
+    return out
