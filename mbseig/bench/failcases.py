@@ -288,9 +288,17 @@ def driven_pendulum_frozen_time():
               "bound_hanging": rh.error_bound, "bound_inverted": ri.error_bound})
 
 
+def rolling_disk_naive():
+    """The rolling disk at its critical speed linearized without the velocity constraints'
+    position derivative (:mod:`mbseig.bench.failcases_steady`)."""
+    from .failcases_steady import rolling_disk_naive as case
+
+    return case()
+
+
 ALL = [pendulum_constraint_stiffness, four_bar_constraint_stiffness, ziegler_follower,
        badly_scaled, large_undamped, repeated_and_defective, dissipative_integrator,
-       driven_pendulum_frozen_time]
+       driven_pendulum_frozen_time, rolling_disk_naive]
 
 
 def run_all():
