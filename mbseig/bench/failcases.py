@@ -15,7 +15,6 @@ Naive methods, as commonly written:
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg as sla
@@ -26,20 +25,9 @@ from ..linear import linearize
 from ..modal import modes
 from ..statics import equilibrium
 from .cases import case_path
+from .failrecord import FailCase
 
 __all__ = ["FailCase", "ALL", "naive_companion", "naive_verdict", "run_all"]
-
-
-@dataclass
-class FailCase:
-    name: str
-    naive_method: str
-    naive: str  # the naive method's answer
-    mbseig: str  # mbseig's answer
-    reference: str  # the truth and its source
-    naive_wrong: bool
-    mbseig_right: bool
-    data: dict = field(default_factory=dict)
 
 
 def naive_companion(M, P, Q):

@@ -19,7 +19,7 @@ import math
 import numpy as np
 
 from .cases import case_path
-from .failcases import FailCase
+from .failrecord import FailCase
 
 __all__ = ["ALL_STEADY", "rolling_disk_naive", "run_steady"]
 

@@ -229,8 +229,8 @@ def allocate(b, mesh=None):
             warnings.warn(f"{label}: {msg}", BeamTheoryWarning, stacklevel=4)
         b.beam_specs.append(spec)
     items = b.data.get("fe_bodies", [])
-    if items and b.dim != 2:
-        raise CaseError("fe_bodies need dimension = 2", element="fe_bodies")
+    if items and b.dim not in (2, 3):
+        raise CaseError("fe_bodies need dimension = 2 or 3", element="fe_bodies")
     for item, label, params in expand("fe_bodies", items, b.params):
         b.fe_specs.append(fe_spec(b, Fields(item, label, params), _new_coord))
 

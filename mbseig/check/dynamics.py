@@ -6,6 +6,20 @@
 about the equilibrium q₀ (state u = q − q₀, v = q̇), DOP853 by default (explicit: no numerical
 damping), q and v projected back onto Φ = 0, Φ_q q̇ = 0 at the end of every segment so that
 constraint drift cannot fake a decay (docs/design.md, "Time-domain check").
+
+Configuration-dependent mass (co-rotational beams, 2-D and 3-D: ``model.mass_elements``).  The
+equations are Lagrange's with M(q):
+
+    M(q) q̈ + h(q, q̇) + Φ_qᵀ λ = g(q, q̇),    h = Ṁ q̇ − ½ ∂(q̇ᵀ M q̇)/∂q,
+
+M(q) = ``model.mass_matrix(q)`` at every evaluation.  h is formed element by element from the
+element's own ``mass(q)`` (the :class:`~mbseig.model.base.ConfigurationMass` contract): Ṁ q̇ by a
+central difference along q̇ and each component of ½ ∂(q̇ᵀ M_e q̇)/∂q_j by a central difference
+along q_j (step ``MASS_STEP`` × max(|q_j|, length scale): truncation error ~1e-12 of h, which
+is itself of second order in the perturbation).  Such models carry axial modes orders of
+magnitude stiffer than the bending modes that are checked, so :func:`simulate` integrates them
+with Radau IIA (order 5, implicit) when DOP853 is asked: an explicit method would need steps
+below the axial period (``Simulation.method`` records the one used).
 """
 
 from __future__ import annotations
@@ -23,6 +37,14 @@ __all__ = ["ForwardDynamics", "Simulation", "simulate", "INTEGRATORS"]
 
 #: integrators offered through ``method=`` (scipy.integrate.solve_ivp names)
 INTEGRATORS = ("DOP853", "Radau", "BDF")
+#: relative central-difference step of the mass derivatives (module docstring)
+MASS_STEP = 1e-6
+#: central-difference step of the constant Newton matrix, relative to the perturbation
+JAC_STEP = 1e-2
+#: stiff models: absolute tolerances at least this many noise levels per sample interval,
+#: relative tolerance at least STIFF_RTOL (simulate)
+NOISE_FACTOR = 10.0
+STIFF_RTOL = 1e-8
 
 
 class ForwardDynamics:
@@ -46,20 +68,20 @@ class ForwardDynamics:
             self.m = 0
             self.constraints = ()
         else:
-            if getattr(model, "mass_elements", ()):
-                names = ", ".join(str(getattr(e, "name", "?")) for e, _ in model.mass_elements[:3])
-                raise SimulationError(
-                    f"configuration-dependent mass ({names}): the time-domain check integrates "
-                    f"constant-mass models only", element="time-domain check")
+            self.mass_elements = tuple(getattr(model, "mass_elements", ()) or ())
             self.M = model.mass.toarray()
             self.constraints = tuple(model.constraints)
             self.m = model.n_constraints
             off = np.cumsum([0] + [c.n_eq for c in self.constraints])
             self.rows = [np.arange(off[k], off[k + 1]) for k in range(len(self.constraints))]
             self.cscale = model.constraint_scales() if self.m else np.zeros(0)
+        if self.linear:
+            self.mass_elements = ()
+        self.stiff = bool(self.mass_elements)  # configuration-dependent mass: Radau (simulate)
+        self._step = MASS_STEP * (1.0 if self.linear else float(model.length_scale))
         self.redundant = bool(redundant)
         self._check_mass()
-        if self.m == 0:
+        if self.m == 0 and not self.stiff:
             self._lu = sla.lu_factor(self.M)
 
     # -- model pieces (dense, assembled here because the sparse assembly costs ~100 µs) ------
@@ -94,18 +116,60 @@ class ForwardDynamics:
                 f"of {', '.join(names)}): the forward dynamics are not an ODE; give these points "
                 f"mass or constrain them", element="time-domain check")
 
+    # -- configuration-dependent mass (module docstring) -------------------------------------
+    def mass(self, q):
+        """M(q), dense: the constant part plus every element's mass(q) − its reference."""
+        if not self.mass_elements:
+            return self.M
+        M = self.M.copy()
+        for el, M_ref in self.mass_elements:
+            M[np.ix_(el.idx, el.idx)] += el.mass(q) - M_ref
+        return M
+
+    def velocity_terms(self, q, qd):
+        """h(q, q̇) = Ṁ q̇ − ½ ∂(q̇ᵀ M q̇)/∂q (zeros for a constant mass)."""
+        h = np.zeros(self.n)
+        if not self.mass_elements or not np.any(qd):
+            return h
+        for el, _ in self.mass_elements:
+            idx = el.idx
+            v = qd[idx]
+            vmax = float(np.max(np.abs(v)))
+            if vmax == 0.0:
+                continue
+            e = self._step / vmax
+            dq = np.zeros_like(q)
+            dq[idx] = e * v
+            Mdot_v = ((el.mass(q + dq) - el.mass(q - dq)) @ v) / (2.0 * e)
+            grad = np.empty(idx.size)
+            for k, j in enumerate(idx):
+                hj = self._step * max(abs(q[j]), 1.0)
+                qp, qm = q.copy(), q.copy()
+                qp[j] += hj
+                qm[j] -= hj
+                grad[k] = v @ ((el.mass(qp) - el.mass(qm)) @ v) / (4.0 * hj)
+            h[idx] += Mdot_v - grad
+        return h
+
     # -- accelerations ----------------------------------------------------------------------
     def acceleration(self, q, qd):
         """(q̈, λ) from the augmented index-1 system."""
         self.nfev += 1
         g = self.force(q, qd)
+        if self.stiff:
+            g = g - self.velocity_terms(q, qd)
+            M = self.mass(q)
+        else:
+            M = self.M
         if self.m == 0:
+            if self.stiff:
+                return np.linalg.solve(M, g), np.zeros(0)
             return sla.lu_solve(self._lu, g), np.zeros(0)
         J = self.phi_q(q)
         gam = self.model.gamma(q, qd)
         n = self.n
         A = np.zeros((n + self.m, n + self.m))
-        A[:n, :n] = self.M
+        A[:n, :n] = M
         A[:n, n:] = J.T
         A[n:, :n] = J
         rhs = np.concatenate([g, gam])
@@ -120,6 +184,30 @@ class ForwardDynamics:
         u, v = y[:n], y[n:]
         qdd, _ = self.acceleration(self.q0 + u, v)
         return np.concatenate([v, qdd])
+
+    def acceleration_noise(self, y, scale_u: float) -> float:
+        """Rounding noise of q̈ near the state y: the largest second difference of q̈ over
+        eleven points 1e-8 of the perturbation apart (a smooth q̈ gives ~0 there)."""
+        n = self.n
+        rng = np.random.default_rng(0)
+        dy = np.concatenate([rng.standard_normal(n), np.zeros(n)]) * (1e-8 * scale_u)
+        acc = np.array([self.rhs(0.0, y + t * dy)[n:] for t in range(11)])
+        return float(np.max(np.abs(np.diff(acc, 2, axis=0)), initial=0.0)) / 4.0
+
+    def state_jacobian(self, scale_u: float, scale_v: float):
+        """∂(rhs)/∂y at the equilibrium by central differences (steps ``JAC_STEP`` times the
+        perturbation's scales: above the rounding noise of the stiff forces): the constant Newton matrix Radau uses for a configuration-dependent mass (the
+        motion stays within the perturbation of q₀, where it is exact to that order)."""
+        n = self.n
+        J = np.zeros((2 * n, 2 * n))
+        y0 = np.zeros(2 * n)
+        for j in range(2 * n):
+            hj = JAC_STEP * (scale_u if j < n else scale_v)
+            yp, ym = y0.copy(), y0.copy()
+            yp[j] += hj
+            ym[j] -= hj
+            J[:, j] = (self.rhs(0.0, yp) - self.rhs(0.0, ym)) / (2.0 * hj)
+        return J
 
     # -- projections ------------------------------------------------------------------------
     def constraint_violation(self, u, v):
@@ -174,7 +262,8 @@ def simulate(dynamics: ForwardDynamics, u0, v0, t_eval, *, segment_samples: int,
              method: str = "DOP853", rtol: float = 1e-10, atol_position: float,
              atol_velocity: float) -> Simulation:
     """Integrate from (u0, v0) through the sample times ``t_eval`` (t_eval[0] = 0), projecting
-    onto the constraints every ``segment_samples`` samples."""
+    onto the constraints every ``segment_samples`` samples.  A model with a configuration-
+    dependent mass runs Radau where DOP853 is asked (module docstring)."""
     from scipy.integrate import (
         solve_ivp,  # imported here: it costs ~0.2 s at import mbseig
     )
@@ -183,6 +272,22 @@ def simulate(dynamics: ForwardDynamics, u0, v0, t_eval, *, segment_samples: int,
         raise CaseError(f"unknown integrator {method!r} (one of {', '.join(INTEGRATORS)})",
                         element="method")
     n = dynamics.n
+    extra = {}
+    if getattr(dynamics, "stiff", False):
+        if method == "DOP853":
+            method = "Radau"  # stiff axial modes (module docstring)
+        su = max(float(np.max(np.abs(u0), initial=0.0)), atol_position / rtol)
+        sv = max(float(np.max(np.abs(v0), initial=0.0)), atol_velocity / rtol)
+        if method in ("Radau", "BDF"):
+            extra["jac"] = dynamics.state_jacobian(su, sv)
+        # the stiff forces are computed from absolute coordinates: their rounding noise σ (in q̈)
+        # bounds what any step can resolve; tolerances below it would shrink the steps to
+        # nothing, so the absolute tolerances are floored at NOISE_FACTOR σ per sample interval
+        dt = float(t_eval[1] - t_eval[0]) if len(t_eval) > 1 else 1.0
+        sigma = dynamics.acceleration_noise(np.concatenate([u0, v0]), su)
+        atol_velocity = max(atol_velocity, NOISE_FACTOR * sigma * dt)
+        atol_position = max(atol_position, atol_velocity * dt)
+        rtol = max(rtol, STIFF_RTOL)
     atol = np.concatenate([np.full(n, atol_position), np.full(n, atol_velocity)])
     u, v, _, _ = dynamics.project(np.asarray(u0, float), np.asarray(v0, float))
     U, V = [u], [v]
@@ -194,7 +299,7 @@ def simulate(dynamics: ForwardDynamics, u0, v0, t_eval, *, segment_samples: int,
         k1 = min(k + segment_samples, len(t_eval) - 1)
         ts = t_eval[k:k1 + 1]
         sol = solve_ivp(dynamics.rhs, (ts[0], ts[-1]), np.concatenate([u, v]), method=method,
-                        t_eval=ts[1:], rtol=rtol, atol=atol)
+                        t_eval=ts[1:], rtol=rtol, atol=atol, **extra)
         if sol.status != 0:
             t_fail = sol.t[-1] if sol.t.size else ts[0]
             raise SimulationError(f"integration failed at t = {t_fail:.6g}: {sol.message}",

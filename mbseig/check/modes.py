@@ -22,9 +22,9 @@ drift d means a length error of about d·L/2, to be compared with the perturbati
 drift can be seen not to fake a decay.  A point may be massless only where the constraints fix
 it: the reduced mass Nᵀ M N must be positive definite, otherwise
 :class:`~mbseig.errors.SimulationError` names the massless coordinates.  Models with a
-configuration-dependent mass (co-rotational beams) are refused with the same error: they would
-need the quadratic velocity terms of M(q) and, being stiff in their axial modes, an implicit
-integrator.
+configuration-dependent mass (co-rotational beams) are integrated with M(q) and its velocity
+terms, and, being stiff in their axial modes, by Radau where DOP853 is asked
+(:mod:`mbseig.check.dynamics`); the result records the integrator that ran.
 
 Integrator
 ----------
@@ -247,7 +247,8 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
                     "recheck_amplification": recheck_amplification,
                     "defective_amplification": defective_amplification,
                     "projection_tol": dyn.projection_tol, "length_scale": length},
-        integrator=method, elapsed=time.perf_counter() - t_start, reactions=reactions,
+        integrator="Radau" if dyn.stiff and method == "DOP853" else method,
+        elapsed=time.perf_counter() - t_start, reactions=reactions,
         constraint_stiffness=bool(getattr(lin, "constraint_stiffness", True)),
         actuators=tuple(dict(r) for r in getattr(model, "drivers", ()) or ()))
 

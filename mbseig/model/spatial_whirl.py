@@ -13,13 +13,27 @@ is ROSS's signed ratio of minor to major axis: κ > 0 turns with the spin, κ < 
 and every point where a joint, bushing or spring acts on that body (``Rotor.stations``), and
 every node of a spinning beam (``SpinningShaft.stations``, casefile.flexible3d).
 
-Whirl of the mode: ``none`` when no station moves laterally (lateral amplitude ≤ ``none_tol``
-times the body's largest motion: axial and torsional modes); otherwise the stations whose orbit
+Whirl of the mode: ``none`` when the mode hardly moves the rotor laterally: its lateral
+fraction (below) is at most ``NONE_FRACTION`` = 0.1 (axial and torsional modes); otherwise the stations whose orbit
 turns (|κ| > ``line_tol``) decide: ``forward`` when all turn with the spin, ``backward`` when
 all turn against it, ``mixed`` when they disagree (ROSS's convention) — and ``mixed`` too when
 every orbit is a straight line (a planar mode, the sum of equal forward and backward whirls,
 e.g. the cylindrical modes of a symmetric rotor on anisotropic bearings; ROSS names these by the
 sign of a rounding residue).
+
+Lateral fraction.  The motion of a rotor splits into lateral motion (station translations
+normal to a, and tilts: node rotations θ normal to a, times the model's length scale ℓ) and
+motion along and about the axis (axial translation a·X, twist ℓ a·θ); the node rotations come
+from the frame's unit vectors, θ = ½ Σᵢ eᵢ × δeᵢ.  The fraction is
+‖lateral‖ / ‖whole motion‖ (2-norms over every station and node of every rotor).  A bending
+mode has a fraction of order 1 (≥ 0.9999998 for every bending mode of the shared overhung rotor's
+12-element mesh, examples/overhung_rotor.toml); a torsional or axial mode of a straight shaft
+has none, except through the static sag under gravity, which couples it to lateral motion in
+proportion to the sag's slope (3.1e-4 for the torsion mode, 1.9e-3–7.6e-3 for the axial modes
+of that rotor).  An orbit of a tenth of the motion carries 1 % of the mode's kinetic energy in
+lateral motion: below that it is coupling, not whirl, and its 1x crossing is no critical
+speed.  The threshold 0.1 lies a decade below the bending modes and 13x above the largest
+coupling of that example.
 """
 
 from __future__ import annotations
@@ -29,9 +43,10 @@ import numpy as np
 from .spatial_forces import Rotor
 from .spatial_joints import normal_pair
 
-__all__ = ["WHIRLS", "rotors", "station_orbits", "whirl"]
+__all__ = ["NONE_FRACTION", "WHIRLS", "lateral_fraction", "rotors", "station_orbits", "whirl"]
 
 WHIRLS = ("forward", "backward", "mixed", "none")
+NONE_FRACTION = 0.1  # whirl "none" at or below this lateral fraction (module docstring)
 
 
 def rotors(model) -> list:
@@ -75,14 +90,45 @@ def station_orbits(model, q0, shape, s=1j) -> list[dict]:
     return out
 
 
-def whirl(model, q0, shape, s=1j, *, line_tol: float = 1e-6, none_tol: float = 1e-6):
+def lateral_fraction(model, q0, shape) -> float:
+    """‖lateral motion‖ / ‖whole motion‖ of the rotors in a mode (module docstring); 0 for a
+    mode that does not move them (and without rotor)."""
+    x = np.asarray(shape, complex)
+    ell = float(model.length_scale)
+    lat2 = tot2 = 0.0
+    for r in rotors(model):
+        a = r.axis_map()(q0)
+        a = a / np.linalg.norm(a)
+        smap = getattr(r, "station_map", None)
+        if smap is None:
+            X = np.array([aff.C @ x[aff.idx] for _, aff in r.stations]).reshape(-1, 3)
+        else:
+            X = (smap[1] @ x[smap[0]]).reshape(-1, 3)
+        ax = X @ a
+        lat2 += float(np.sum(np.abs(X - np.outer(ax, a)) ** 2))
+        tot2 += float(np.sum(np.abs(X) ** 2))
+        F0 = r.frame(q0)            # [r; u; v; w] then the triads [u; v; w] of further nodes
+        dF = r.frame.C @ x[r.frame.idx]
+        triads = [(F0[3:12], dF[3:12])] + [(F0[k:k + 9], dF[k:k + 9])
+                                           for k in range(12, len(F0), 9)]
+        for E, dE in triads:
+            E, dE = np.asarray(E).reshape(3, 3), np.asarray(dE).reshape(3, 3)
+            th = 0.5 * sum(np.cross(E[i], dE[i]) for i in range(3))
+            tw = th @ a
+            lat2 += ell ** 2 * float(np.sum(np.abs(th - tw * a) ** 2))
+            tot2 += ell ** 2 * float(np.sum(np.abs(th) ** 2))
+    return float(np.sqrt(lat2 / tot2)) if tot2 > 0 else 0.0
+
+
+def whirl(model, q0, shape, s=1j, *, line_tol: float = 1e-6, none_tol: float = 1e-6,
+          none_fraction: float = NONE_FRACTION):
     """forward / backward / mixed / none for one mode (module docstring); None without rotor."""
     orbits = station_orbits(model, q0, shape, s)
     if not orbits:
         return None
     lateral = max(o["lateral"] for o in orbits)
     ref = max(max(o["amplitude"] for o in orbits), max(o["body_motion"] for o in orbits))
-    if ref == 0 or lateral <= none_tol * ref:
+    if ref == 0 or lateral <= none_tol * ref or lateral_fraction(model, q0, shape) <= none_fraction:
         return "none"
     if abs(complex(s).imag) <= line_tol * abs(complex(s)):
         return "mixed"  # a real eigenvalue: the orbit does not turn
