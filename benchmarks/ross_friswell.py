@@ -3,7 +3,7 @@ ROSS 2.3.0, same mesh, side by side: eigenvalues, log decrements, time per speed
 
 The rotors are those ROSS's tests build (``ross/tests/test_examples.py``); their model data
 (every shaft element, disk and bearing) and ROSS's eigenvalues come from the stored ROSS runs
-(/work/research/ross/data/friswell_rotors.json and friswell_rotors_eig.npz, made by its
+(friswell_rotors.json and friswell_rotors_eig.npz in the folder MBSEIG_ROSS_DATA, made by its
 scripts/02_friswell_rotors.py), or from tests/data/ross/friswell_lateral.json (a subset).  Each
 rotor becomes a ``dimension = 3`` mbseig case: the shaft a Timoshenko ``[[beams]]`` along x
 with a station at every ROSS node (ROSS's axis z is mbseig's x; its (x, y) are mbseig's (y, z),
@@ -23,13 +23,16 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-RESEARCH = Path("/work/research/ross/data")
+# a folder written by a ROSS run (friswell_rotors.json, friswell_rotors_eig.npz: ROSS 2.3 on
+# Python 3.11 with plotly<6), given by MBSEIG_ROSS_DATA; without it the stored numbers are used
+RESEARCH = Path(os.environ["MBSEIG_ROSS_DATA"]) if os.environ.get("MBSEIG_ROSS_DATA") else None
 STORED = Path(__file__).resolve().parents[1] / "tests" / "data" / "ross" / "friswell_lateral.json"
 EXAMPLES = ("ex1_friswell_5_9_1_nel6", "ex3_friswell_5_9_2_nel6", "ex5_friswell_5_9_3_nel6",
             "ex4_friswell_5_9_5_damped_nel6", "ex2_friswell_5_9_9_overhung_nel6")
@@ -129,7 +132,7 @@ def main(argv=None):
     ap.add_argument("--extract", action="store_true", help="rewrite the tests' stored subset")
     ap.add_argument("--ross", action="store_true", help="also print ROSS's stored wall times")
     args = ap.parse_args(argv)
-    data = stored() if RESEARCH.exists() else json.loads(STORED.read_text())["examples"]
+    data = stored() if RESEARCH is not None and RESEARCH.exists() else json.loads(STORED.read_text())["examples"]
     if args.extract:
         keep = {ex: {**v, "speeds": {k: s for k, s in v["speeds"].items()
                                      if float(k) in (0.0, 418.879020478639)}}
@@ -148,7 +151,7 @@ def main(argv=None):
             ross = np.array([complex(a, b) for a, b in s])
             ours, _, sec = mbseig_eigenvalues(v["model"], float(sp))
             print(f"{ex:36s} {float(sp):9.3f} {compare(ross, ours):13.2e} {sec:9.3f}")
-    if args.ross and RESEARCH.exists():  # ROSS's own timing, stored by its research run
+    if args.ross and RESEARCH is not None and RESEARCH.exists():  # ROSS's own timing, stored by its research run
         models = json.loads((RESEARCH / "friswell_rotors.json").read_text())["models"]
         for ex in EXAMPLES:
             print(f"{ex:36s} ROSS wall time (model + 5 speeds, modal post-processing included): "

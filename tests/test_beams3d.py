@@ -23,7 +23,8 @@ from mbseig.studies import analyze
 from mbseig.studies.campbell import campbell
 
 SHAFT = CASES / "spinning_shaft_rayleigh.toml"
-EXAMPLE = Path("/work/shared/examples/overhung_rotor.toml")
+# the format examples of DESIGN §8 (../shared/examples beside the checkout)
+EXAMPLE = Path(__file__).resolve().parents[2] / "shared" / "examples" / "overhung_rotor.toml"
 ROSS = Path(__file__).resolve().parent / "data" / "ross"
 
 
@@ -126,6 +127,7 @@ def test_friswell_rotors_match_ross(example):
         assert mod.compare(ross, ours) <= 1e-6
 
 
+@pytest.mark.skipif(not Path(EXAMPLE).exists(), reason="the format examples are not beside this checkout")
 def test_overhung_example_runs_with_whirl():
     """The shared format example runs unchanged: exit 0, every mode with a whirl label."""
     out = subprocess.run([sys.executable, "-m", "mbseig", "modes", str(EXAMPLE), "--json"],
@@ -137,6 +139,7 @@ def test_overhung_example_runs_with_whirl():
     assert {"forward", "backward"} <= {m["whirl"] for m in res["modes"]}
 
 
+@pytest.mark.skipif(not Path(EXAMPLE).exists(), reason="the format examples are not beside this checkout")
 def test_bearing_table_interpolates_linearly():
     """Bearing 2 of the example at Omega = 250, halfway between the table's 0 and 500: the
     mean of the two entries (linear interpolation, exact)."""

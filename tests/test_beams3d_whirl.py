@@ -14,7 +14,8 @@ from mbseig.model.spatial_whirl import NONE_FRACTION, lateral_fraction, whirl
 from mbseig.statics import equilibrium, solved
 from mbseig.studies.campbell import campbell
 
-EXAMPLE = Path("/work/shared/examples/overhung_rotor.toml")
+# the format examples of DESIGN §8 (../shared/examples beside the checkout)
+EXAMPLE = Path(__file__).resolve().parents[2] / "shared" / "examples" / "overhung_rotor.toml"
 pytestmark = pytest.mark.skipif(not EXAMPLE.exists(), reason="shared example not present")
 
 

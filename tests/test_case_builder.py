@@ -23,7 +23,8 @@ from mbseig import CaseBuilder, to_toml
 from mbseig.casefile.writer import point_ref
 from mbseig.studies import analyze
 
-EXAMPLES = Path("/work/shared/examples")
+# the format examples of DESIGN §8 (../shared/examples beside the checkout)
+EXAMPLES = Path(__file__).resolve().parents[2] / "shared" / "examples"
 TOMLS = sorted(CASES.glob("*.toml")) + sorted(EXAMPLES.glob("*.toml"))
 
 

@@ -4,9 +4,9 @@ system, the naive linearization shown wrong, the Whipple bicycle from its four b
 Meijaard et al. 2007 Table 2, the steady turn, and the one-line errors of bad input.
 
 References (each test names its own): the closed form of the rolling disk's linearized equations
-(cases/rolling_disk.toml, source field; also /work/research/bicycle/rolling_disk.out);
+(cases/rolling_disk.toml, source field; also tests/data/steady/rolling_disk.out);
 Meijaard, Papadopoulos, Ruina, Schwab 2007, Proc. R. Soc. A 463:1955, Table 2 (transcribed in
-/work/research/bicycle/README.md); rigid-body kinematics of the material contact point; complex
+tests/data/steady/README.md); rigid-body kinematics of the material contact point; complex
 step differences (h = 1e-30: exact to rounding for these polynomial rows).
 """
 
@@ -190,7 +190,7 @@ def test_naive_disk_and_the_reduction(tmp_path):
 
 
 # ---- the Whipple bicycle from its bodies -------------------------------------------------------
-# Meijaard et al. 2007, Table 2 (transcribed in /work/research/bicycle/README.md)
+# Meijaard et al. 2007, Table 2 (transcribed in tests/data/steady/README.md)
 TABLE2 = {
     0: [5.53094371765393, 3.13164324790656, -3.13164324790656, -5.53094371765393],
     1: [3.52696170990070 + 0.80774027519930j, -3.13423125066578, -7.11008014637442],
@@ -290,7 +290,7 @@ def test_bad_motion(tmp_path, capsys):
 
 
 def test_hoop_example_runs_unchanged(capsys):
-    """/work/shared/examples/rolling_hoop.toml: exit 0, the §8 fields; its pair against the closed
+    """../shared/examples/rolling_hoop.toml: exit 0, the §8 fields; its pair against the closed
     form s² = 2(g r − 4v²)/(3r²) (1e-10); five rigid-body s = 0."""
     path = CASES.parent.parent / "shared" / "examples" / "rolling_hoop.toml"
     if not path.exists():
