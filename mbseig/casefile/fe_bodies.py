@@ -130,7 +130,7 @@ def assemble_fe(b, spec, constraints, forces, mass_blocks, lock, error_only):
 
 
 def _assemble3d(b, spec, forces, mass_blocks):
-    b._bind()  # the bodies' frames (idempotent; a weld reads them)
+    b.bind()  # the bodies' frames (idempotent; a weld reads them)
     terms = []
     for p, t in zip(spec["interface"], spec["theta_idx"]):
         terms.append((1.0, b.affine_of(p) - Affine.constant(b.point_pos[p])))

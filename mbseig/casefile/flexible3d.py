@@ -284,7 +284,7 @@ def _node_frame(b, spec, k):
 
 def assemble(b, forces, constraints, mass_elements, mass_blocks, g_const, gravity):
     """Add the elements of every 3-D beam; return ({name: record}, [SpinningShaft])."""
-    b._bind()
+    b.bind()
     q0 = np.array(b.q_init)
     record, shafts = {}, []
     for spec in b.beam_specs:

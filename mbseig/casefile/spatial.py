@@ -116,7 +116,7 @@ class SpatialBuilder(SpatialElementReaders, Builder):
         return self.assembly.coordinates([f"{bname}.{v}.{a}" for v in "uvw" for a in "xyz"],
                                          values, "direction")
 
-    def _bind(self):
+    def bind(self):
         """Frames of the bodies once the points exist, and the length scale of the model (its
         points, centres of mass and carried points)."""
         if self._bound:
@@ -139,7 +139,7 @@ class SpatialBuilder(SpatialElementReaders, Builder):
         self.length_scale = extent if extent > 0 else 1.0
 
     def _finish(self, model):
-        self._bind()
+        self.bind()
         constraints, blocks, g = list(model.constraints), [], model.g_const.copy()
         mass_parts = list(model.mass_parts)
         g_gravity = np.zeros(model.n) if model.gravity_force is None else model.gravity_force.copy()
@@ -212,7 +212,7 @@ class SpatialBuilder(SpatialElementReaders, Builder):
     # -- references --------------------------------------------------------------------------
     def frame(self, f, bname):
         """The frame map of a body, or of the ground."""
-        self._bind()
+        self.bind()
         if bname == "ground":
             return GROUND
         return self.frames[self.body(f, bname)]
@@ -237,7 +237,7 @@ class SpatialBuilder(SpatialElementReaders, Builder):
         return self._point_and_body(f, key)[0]
 
     def _point_and_body(self, f, key):
-        self._bind()
+        self.bind()
         ref = f.raw(key)
         if isinstance(ref, dict):
             sub = Fields(ref, f"{f.label}.{key}", f.names)

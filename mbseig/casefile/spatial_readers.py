@@ -50,17 +50,17 @@ class SpatialElementReaders:
         elif kind == "angle_driver":
             self._angle_driver3(f, constraints)
         elif kind in ("distance", "fixed", "slider", "point_on_line"):
-            self._bind()
+            self.bind()
             super()._joint(f, constraints)
         elif kind == "mimic":  # a coupled joint of a robot description (casefile.urdf)
             from .urdf import read_mimic
 
-            self._bind()
+            self.bind()
             read_mimic(self, f, constraints)
         elif kind in ("rolling", "contact"):  # DESIGN §8, steady motions and contact
             from .motion_readers import read_motion_joint
 
-            self._bind()
+            self.bind()
             read_motion_joint(self, f, kind, constraints)
         else:
             raise f.error(f"unknown joint type {kind!r} ({', '.join(JOINT_TYPES)})")
@@ -130,7 +130,7 @@ class SpatialElementReaders:
 
     # -- forces ------------------------------------------------------------------------------
     def _force(self, f, forces, g_const):
-        self._bind()
+        self.bind()
         kind = f.raw("type", None)
         if not isinstance(kind, str):
             raise f.error(f"type must be a string, got {kind!r}")

@@ -61,7 +61,7 @@ def _arrays(model, eq, lin):
     return arrays
 
 
-def _json_value(v):
+def json_value(v):
     """A dense array as nested lists; a sparse one as its CSR parts."""
     if sp.issparse(v):
         v = v.tocsr()
@@ -109,9 +109,9 @@ def run(args) -> int:
         "input_units": list(lin.input_units),
     }
     if args.out:
-        _write(Path(args.out), arrays, meta)
+        write_arrays(Path(args.out), arrays, meta)
     if args.json:
-        print_json({**meta, **{k: _json_value(v) for k, v in arrays.items()}})
+        print_json({**meta, **{k: json_value(v) for k, v in arrays.items()}})
     else:
         print(f"case {model.name}: {model.n} coordinates, {lin.n_constraints} constraints "
               f"({eq.n_redundant} redundant), {lin.dof} DOF; equilibrium residual "
@@ -132,7 +132,7 @@ def run(args) -> int:
     return 0
 
 
-def _write(path, arrays, meta):
+def write_arrays(path, arrays, meta):
     if path.suffix not in FORMATS:
         raise CaseError(f"output must end in {', '.join(FORMATS)}", file=str(path), element="--out")
     try:
@@ -148,6 +148,6 @@ def _write(path, arrays, meta):
             scipy.io.savemat(str(path), {**arrays, "coordinate_names": meta["coordinate_names"],
                                          **names})
         else:
-            path.write_text(json.dumps(jsonable({**meta, **{k: _json_value(v) for k, v in arrays.items()}})))
+            path.write_text(json.dumps(jsonable({**meta, **{k: json_value(v) for k, v in arrays.items()}})))
     except OSError as exc:
         raise CaseError(f"cannot write: {exc.strerror or exc}", file=str(path), element="--out") from None

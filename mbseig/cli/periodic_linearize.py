@@ -16,7 +16,7 @@ import numpy as np
 
 from ..studies.periodic import periodic_linearization
 from .common import case_kwargs, print_json
-from .linearize import _json_value, _write
+from .linearize import json_value, write_arrays
 
 SAMPLES = 16  # instants of A(t) written
 
@@ -48,9 +48,9 @@ def run(args, spec) -> int:
         "input_names": [], "output_names": [],
     }
     if args.out:
-        _write(Path(args.out), arrays, meta)
+        write_arrays(Path(args.out), arrays, meta)
     if args.json:
-        print_json({**meta, **{k: _json_value(v) for k, v in arrays.items()}})
+        print_json({**meta, **{k: json_value(v) for k, v in arrays.items()}})
         return 0
     print(f"case {model.name}: periodic, T = {T:.6g} s, {model.n} coordinates, "
           f"{model.n_constraints} constraints, {sys1.dof} DOF; reference: {ref.method}, "

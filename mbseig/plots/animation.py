@@ -24,16 +24,16 @@ import numpy as np
 from ..errors import CaseError
 from .common import STYLE, figure
 from .mechanism import (
-    _draw_guides,
-    _draw_mechanism,
+    draw_guides,
+    draw_mechanism,
     mechanism_layout,
     plane_point,
     project_constraints,
 )
 from .spatial import (
-    _all_points,
-    _set_view,
-    _set_view3d,
+    all_points,
+    set_view,
+    set_view3d,
     draw_spatial,
     spatial_layout,
     view_limits,
@@ -107,16 +107,16 @@ def write_mode_gif(model, q0, shape, path, *, label="", oscillatory=True, frames
         if spatial:
             fig = figure(figsize=(7.6, 3.9))
             layout = spatial_layout(model)
-            centre, half = view_limits(_all_points(model, layout, [q0, *qs]), 0.2 * L)
+            centre, half = view_limits(all_points(model, layout, [q0, *qs]), 0.2 * L)
             ax3 = fig.add_subplot(1, 2, 1, projection="3d")
             ax2 = fig.add_subplot(1, 2, 2)
 
             draw_spatial(ax3, model, layout, q0, lambda P: (P[:, 0], P[:, 1], P[:, 2]),
                          colour="0.7", lw=1.5, symbols=True)
-            _set_view3d(ax3, centre, half)
+            set_view3d(ax3, centre, half)
             front = (lambda P: (P[:, 0], P[:, 2]))
             draw_spatial(ax2, model, layout, q0, front, colour="0.7", lw=1.5, symbols=True)
-            _set_view(ax2, centre, half, 0, 2)
+            set_view(ax2, centre, half, 0, 2)
             ax2.set_xlabel("x [m]")
             ax2.set_ylabel("z [m]")
             ax2.set_title("front (x, z)", fontsize=8)
@@ -136,16 +136,16 @@ def write_mode_gif(model, q0, shape, path, *, label="", oscillatory=True, frames
             fig = figure(figsize=(4.6, 4.4))
             ax = fig.subplots()
 
-            _draw_guides(ax, layout, q0, 4 * half)
-            _draw_mechanism(ax, model, layout, q0, colour="0.7", lw=1.5, labels=True)
-            _set_view(ax, centre, half, 0, 1)
+            draw_guides(ax, layout, q0, 4 * half)
+            draw_mechanism(ax, model, layout, q0, colour="0.7", lw=1.5, labels=True)
+            set_view(ax, centre, half, 0, 1)
             ax.set_xlabel("x [mm]")
             ax.set_ylabel("y [mm]")
             ax.grid(True, lw=0.3)
             axes = (ax,)
 
             def draw(q):
-                _draw_mechanism(ax, model, layout, q, colour="tab:red", lw=2.0)
+                draw_mechanism(ax, model, layout, q, colour="tab:red", lw=2.0)
         fig.suptitle(title, fontsize=8)
         from matplotlib.backends.backend_agg import FigureCanvasAgg
 

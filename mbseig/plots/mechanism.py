@@ -124,7 +124,7 @@ def _zigzag(p, q, n=8, width=0.06):
     return np.array(xs)
 
 
-def _draw_mechanism(ax, model, layout, q, *, colour, lw, alpha=1.0, labels=False, ms=3):
+def draw_mechanism(ax, model, layout, q, *, colour, lw, alpha=1.0, labels=False, ms=3):
     def pt(n):  # a named point in mm
         return plane_point(model.points[n](q)) * 1e3
 
@@ -181,7 +181,7 @@ def _draw_mechanism(ax, model, layout, q, *, colour, lw, alpha=1.0, labels=False
                             xytext=(-9, -10), fontsize=6, color="0.25")
 
 
-def _draw_guides(ax, layout, q, extent):
+def draw_guides(ax, layout, q, extent):
     """Each guide as a dashed line across the drawing (the line the point slides on)."""
     for g in layout["guides"]:
         nrm = g["normal"]
@@ -251,7 +251,7 @@ def mechanism_modes(model, q0, shapes, labels, *, amplitude=0.12, title="", eige
         j = int(np.argmax(np.abs(v)))
         vr = (v * np.exp(-1j * np.angle(v[j]))).real if np.iscomplexobj(v) else v
         vr = vr / max(np.max(np.abs(vr)), 1e-300)
-        _draw_guides(ax, layout, q0, extent)
+        draw_guides(ax, layout, q0, extent)
         s = None if eigenvalues is None else complex(eigenvalues[k])
         if is_real(k):
             # a real mode: the shape decays (s < 0) or grows (s > 0) without oscillating
@@ -259,13 +259,13 @@ def mechanism_modes(model, q0, shapes, labels, *, amplitude=0.12, title="", eige
             for i, t in enumerate((0.0, 1.0, 2.0, 3.0)):
                 a = amplitude * math.exp((1 if growth else -1) * (t - (3.0 if growth else 0.0)))
                 qd, _ = project_constraints(model, q0 + a * L * vr)
-                _draw_mechanism(ax, model, layout, qd, colour="tab:purple", lw=1.1,
+                draw_mechanism(ax, model, layout, qd, colour="tab:purple", lw=1.1,
                                 alpha=0.9 - 0.2 * (i if not growth else 3 - i))
         else:
             for sign, col in ((1.0, "tab:red"), (-1.0, "tab:blue")):
                 qd, _ = project_constraints(model, q0 + sign * amplitude * L * vr)
-                _draw_mechanism(ax, model, layout, qd, colour=col, lw=1.1, alpha=0.85)
-        _draw_mechanism(ax, model, layout, q0, colour="k", lw=2.2, labels=True)
+                draw_mechanism(ax, model, layout, qd, colour=col, lw=1.1, alpha=0.85)
+        draw_mechanism(ax, model, layout, q0, colour="k", lw=2.2, labels=True)
         _draw_loads(ax, model, layout, q0, L * 1e3)
         lim_x = (pts0[:, 0].min(), pts0[:, 0].max())
         lim_y = (pts0[:, 1].min(), pts0[:, 1].max())

@@ -27,7 +27,7 @@ ZETA_GRID = (0.02, 0.05, 0.1, 0.2, 0.4, 0.7, 0.9)
 _ZETA_LABEL_AT = {0.02: 0.42, 0.05: 0.6, 0.1: 0.78}
 
 
-def _zeta_wn_grid(ax, radius):
+def zeta_wn_grid(ax, radius):
     """Lines of constant damping ratio ζ (rays from the origin into the left half-plane) and
     circles of constant natural frequency ω_n, labelled, drawn under the data."""
     for z in ZETA_GRID:
@@ -58,7 +58,7 @@ def pole_map(eigenvalues, *, title="pole map", stability=None, labels=None):
     ax = fig.subplots()
     s = np.asarray(eigenvalues, dtype=complex)
     radius = float(np.max(np.abs(s), initial=0.0)) * 1.08 or 1.0
-    _zeta_wn_grid(ax, radius)
+    zeta_wn_grid(ax, radius)
     seen = set()
     for k, v in enumerate(s):
         st = stability[k] if stability else None

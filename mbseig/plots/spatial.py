@@ -161,7 +161,7 @@ def draw_spatial(ax, model, layout, q, project, *, colour, lw, alpha=1.0, symbol
         ax.plot(*project(xyz(layout["fixed"])), "ks", ms=4)
 
 
-def _all_points(model, layout, qs):
+def all_points(model, layout, qs):
     pts = []
     for q in qs:
         for b in layout["bodies"]:
@@ -182,13 +182,13 @@ def view_limits(points, min_span):
     return centre, half
 
 
-def _set_view(ax, centre, half, h, v):
+def set_view(ax, centre, half, h, v):
     ax.set_xlim(centre[h] - half, centre[h] + half)
     ax.set_ylim(centre[v] - half, centre[v] + half)
     ax.set_aspect("equal", adjustable="box")  # square limits: nothing for matplotlib to override
 
 
-def _set_view3d(ax, centre, half):
+def set_view3d(ax, centre, half):
     ax.set_xlim(centre[0] - half, centre[0] + half)
     ax.set_ylim(centre[1] - half, centre[1] + half)
     ax.set_zlim(centre[2] - half, centre[2] + half)
@@ -227,7 +227,7 @@ def spatial_modes(model, q0, shapes, labels, *, amplitude=0.15, title=""):
             # and rigid bodies rigid (a linear displacement stretches them by O(a²))
             q_plus = project_constraints(model, q0 + d)[0]
             q_minus = project_constraints(model, q0 - d)[0]
-            centre, half = view_limits(_all_points(model, layout, (q0, q_plus, q_minus)),
+            centre, half = view_limits(all_points(model, layout, (q0, q_plus, q_minus)),
                                        0.2 * L)
             ax3 = fig.add_subplot(gs[k, 0], projection="3d")
             for q, col, lw, sym in ((q0, "k", 2.0, True), (q_plus, "tab:red", 1.0, False),
@@ -235,7 +235,7 @@ def spatial_modes(model, q0, shapes, labels, *, amplitude=0.15, title=""):
                 draw_spatial(ax3, model, layout, q, lambda P: (P[:, 0], P[:, 1], P[:, 2]),
                              colour=col, lw=lw, alpha=1.0 if sym else 0.8, symbols=sym,
                              triads=0.08 * L)
-            _set_view3d(ax3, centre, half)
+            set_view3d(ax3, centre, half)
             ax3.set_title(f"{labels[k]} — 3-D", fontsize=8)
             for c, (h, v, name) in enumerate(VIEWS):
                 ax = fig.add_subplot(gs[k, c + 1])
@@ -246,7 +246,7 @@ def spatial_modes(model, q0, shapes, labels, *, amplitude=0.15, title=""):
                                         (q_minus, "tab:blue", 1.0, False)):
                     draw_spatial(ax, model, layout, q, proj, colour=col, lw=lw,
                                  alpha=1.0 if sym else 0.8, symbols=sym)
-                _set_view(ax, centre, half, h, v)
+                set_view(ax, centre, half, h, v)
                 ax.set_xlabel("xyz"[h] + " [m]")
                 ax.set_ylabel("xyz"[v] + " [m]")
                 ax.set_title(name, fontsize=8)

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from .common import colormap, figure, styled
-from .poles import _zeta_wn_grid
+from .poles import zeta_wn_grid
 
 __all__ = ["summary_poles", "tornado"]
 
@@ -23,7 +23,7 @@ def summary_poles(poles, boundaries, *, title="least-damped mode of every config
     ax = fig.subplots()
     s_all = [complex(p["s"]) for p in poles] + [complex(b["s"]) for b in boundaries]
     radius = max((abs(s) for s in s_all), default=0.0) * 1.12 or 1.0
-    _zeta_wn_grid(ax, radius)
+    zeta_wn_grid(ax, radius)
     cmap = colormap("tab10")
     for k, p in enumerate(poles):
         s, c = complex(p["s"]), cmap(k % 10)

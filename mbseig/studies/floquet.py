@@ -69,7 +69,7 @@ class FloquetError(MbseigError, RuntimeError):
     """A periodic computation failed: an integration, a shooting Newton, a basis continuation."""
 
 
-def _positive_period(period, what="period"):
+def positive_period(period, what="period"):
     try:
         T = float(period)
     except (TypeError, ValueError):
@@ -107,7 +107,7 @@ class LinearPeriodicSystem:
 
     @classmethod
     def from_callable(cls, A, period, *, size=None, trace=None):
-        T = _positive_period(period)
+        T = positive_period(period)
         if size is None:
             A0 = np.asarray(A(0.0), dtype=float)
             if A0.ndim != 2 or A0.shape[0] != A0.shape[1]:
@@ -311,7 +311,7 @@ def floquet(A, period=None, *, method="DOP853", rtols=DEFAULT_RTOLS, check_metho
 def frozen_time_eigenvalues(A, period, *, samples=64):
     """(times, eigenvalues) of A(t) frozen at ``samples`` instants of one period: what a
     frozen-time analysis would report (not a stability criterion of a periodic system)."""
-    T = _positive_period(period)
+    T = positive_period(period)
     times = np.linspace(0.0, T, samples, endpoint=False)
     return times, np.array([la.eigvals(np.asarray(A(t), dtype=float)) for t in times])
 

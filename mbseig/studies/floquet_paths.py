@@ -21,7 +21,7 @@ from .floquet import (
     DEFAULT_RTOLS,
     FloquetError,
     LinearPeriodicSystem,
-    _positive_period,
+    positive_period,
     analyze,
 )
 
@@ -108,7 +108,7 @@ def null_space_path(phi_q, phi_q_dot, period, *, segments=16, start=None, period
     ``phi_q_dot(t)`` its total time derivative. ``start`` is the basis at t = 0 (default: from
     the SVD).  Raises FloquetError if Φ_q(T) ≠ Φ_q(0) (the motion does not repeat with T).
     """
-    T = _positive_period(period)
+    T = positive_period(period)
     J0 = np.asarray(phi_q(0.0), dtype=float)
     n = J0.shape[-1]
     J0, JT = _jacobian(J0, n), _jacobian(phi_q(T), n)
@@ -192,7 +192,7 @@ def constrained_system(M, C, K, phi_q, phi_q_dot, period, *, M_dot=None, segment
     ``start``: the basis at t = 0 (default from the SVD), so that two linearizations of one
     motion share their coordinates.
     """
-    T = _positive_period(period)
+    T = positive_period(period)
     path = null_space_path(phi_q, phi_q_dot, T, segments=segments, start=start)
     r = path.bases[0].shape[1]
     if r == 0:
@@ -292,7 +292,7 @@ def periodic_orbit(f, x0, period, *, jac=None, tol=1e-10, max_iter=40, method="D
     ``jac(x, t)`` = ∂f/∂x (central differences of f if None).  Raises FloquetError naming what
     did not converge, from where, and the residual.
     """
-    T = _positive_period(period)
+    T = positive_period(period)
     jac = jac or _fd_jacobian(f)
     x = np.array(x0, dtype=float)
     start = x.copy()

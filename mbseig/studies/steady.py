@@ -177,7 +177,7 @@ def generator(model, motion: Motion):
     return L, lv
 
 
-class _Assembly:
+class SteadyAssembly:
     """Dense blocks of the equations at (q, q̇, Ω, λ, μ) for a model with rolling wheels (their
     holonomic rows are among the model's constraints: :class:`~mbseig.model.rolling.WheelRows`)."""
 
@@ -245,7 +245,7 @@ def steady_state(model, motion: Motion, *, wheels=None, q0=None, tol=1e-12, max_
     In the frame moving with the reference, q̇ = p + ξ(q) (:func:`generator`) and
     q̈ = ṗ + 2 L p + L ξ(q); at the reference p = 0.  Raises ValueError when Newton does not
     reach ``tol`` or the constraints do not allow the motion."""
-    asm = _Assembly(model, wheels)
+    asm = SteadyAssembly(model, wheels)
     q = np.array(model.q_init if q0 is None else q0, float)
     L, l = generator(model, motion)
     nw, n, mh = len(asm.wheels), asm.n, asm.m_h
@@ -316,7 +316,7 @@ def _null(X, n, rank_tol):
 def linearize_steady(model, state: SteadyState, *, wheels=None, naive=False, rank_tol=1e-10):
     """The first-order descriptor system E Ẋ = A X about ``state`` (module docstring).
     ``naive=True`` drops Ã (the velocity rows' derivative w.r.t. the positions)."""
-    asm = _Assembly(model, wheels)
+    asm = SteadyAssembly(model, wheels)
     q = state.q
     nw = len(asm.wheels)
     N = _null(asm.phi_q(q), asm.n, rank_tol)
@@ -340,7 +340,7 @@ def linearize_steady(model, state: SteadyState, *, wheels=None, naive=False, ran
 def full_descriptor(model, state: SteadyState, *, wheels=None, naive=False):
     """(E, A) of the unreduced linearized equations on [δq; δp; δΩ; δλ; δμ] (index 3; many
     infinite eigenvalues): the independent check of the reduction."""
-    asm = _Assembly(model, wheels)
+    asm = SteadyAssembly(model, wheels)
     q = state.q
     n, nw, mh = asm.n, len(asm.wheels), asm.m_h
     Pq = asm.phi_q(q)

@@ -87,9 +87,9 @@ class _Dynamics:
     """The nonlinear equations (module docstring) of a model with rolling wheels."""
 
     def __init__(self, model):
-        from .steady import _Assembly
+        from .steady import SteadyAssembly
 
-        self.model, self.asm = model, _Assembly(model)
+        self.model, self.asm = model, SteadyAssembly(model)
         self.n, self.nw = model.n, len(self.asm.wheels)
         self.nfev = 0
 
