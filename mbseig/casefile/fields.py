@@ -258,3 +258,17 @@ def enabled(item, label, names):
         return evaluate(value, names) != 0
     except MbseigError as exc:
         raise exc.located(element=f"{label}.enabled") from None
+
+
+def beam_end_points(b, f):
+    """(start, end) of a beam's ``points``: two different basic points of the builder ``b``."""
+    pts = f.raw("points")
+    if not isinstance(pts, list) or len(pts) != 2 or not all(isinstance(p, str) for p in pts):
+        raise f.error("points must be a list of two basic point names [start, end]")
+    pa, pb = (template(p, f.names, f) for p in pts)
+    for p in (pa, pb):
+        if p not in b.point_index:
+            raise f.error(f"unknown point {p!r}")
+    if pa == pb:
+        raise f.error("a beam needs two different end points")
+    return pa, pb

@@ -40,7 +40,7 @@ from ..model.beams import (
     section_properties,
 )
 from .fe_bodies import assemble_fe, fe_spec
-from .fields import Fields, check_range, expand, template
+from .fields import Fields, beam_end_points, check_range, expand
 
 __all__ = ["BeamTheoryWarning", "EB_SLENDERNESS", "MIN_SLENDERNESS", "AUTO_START_ELEMENTS",
            "allocate", "assemble", "parse_refinement"]
@@ -97,15 +97,7 @@ def _beam_spec(b, f, mesh_override):
     name = f.text("name")
     if "." in name or name in b.point_index:
         raise f.error(f"beam name {name!r} is used already or contains '.'")
-    pts = f.raw("points")
-    if not isinstance(pts, list) or len(pts) != 2 or not all(isinstance(p, str) for p in pts):
-        raise f.error("points must be a list of two basic point names [start, end]")
-    pa, pb = (template(p, f.names, f) for p in pts)
-    for p in (pa, pb):
-        if p not in b.point_index:
-            raise f.error(f"unknown point {p!r}")
-    if pa == pb:
-        raise f.error("a beam needs two different end points")
+    pa, pb = beam_end_points(b, f)
     init_len = float(np.linalg.norm(b.point_pos[pb] - b.point_pos[pa]))
     length = f.num("length", init_len, positive=True)
     if init_len == 0:

@@ -41,7 +41,7 @@ from ..model.beam3d import (
 )
 from ..model.spatial_body import frame_of, frame_point
 from ..model.spatial_joints import triad_constraint
-from .fields import Fields, check_range, expand, template
+from .fields import Fields, beam_end_points, check_range, expand, template
 
 __all__ = ["allocate", "assemble", "span_elements"]
 
@@ -142,15 +142,7 @@ def _spec(b, f, override, rules):
     name = f.text("name")
     if "." in name or name in b.point_index or name in b.bodies or name == "ground":
         raise f.error(f"beam name {name!r} is used already, is 'ground' or contains '.'")
-    pts = f.raw("points")
-    if not isinstance(pts, list) or len(pts) != 2 or not all(isinstance(p, str) for p in pts):
-        raise f.error("points must be a list of two basic point names [start, end]")
-    pa, pb = (template(p, f.names, f) for p in pts)
-    for p in (pa, pb):
-        if p not in b.point_index:
-            raise f.error(f"unknown point {p!r}")
-    if pa == pb:
-        raise f.error("a beam needs two different end points")
+    pa, pb = beam_end_points(b, f)
     xa, xb = b.point_pos[pa], b.point_pos[pb]
     chord = float(np.linalg.norm(xb - xa))
     if chord == 0:

@@ -22,10 +22,12 @@ Registered as the family ``descriptor`` with its one path ``descriptor-qz`` (doc
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
+
+from .base import QEPSolution
 
 __all__ = ["GEPSolution", "deflate_zero", "descriptor_problem", "solve_descriptor"]
 
@@ -58,26 +60,10 @@ def deflate_zero(E, A, *, rank_tol=1e-11):
 
 
 @dataclass(frozen=True, eq=False)
-class GEPSolution:
+class GEPSolution(QEPSolution):
     """Finite eigenvalues of (s E − A) x = 0 with unit right vectors, conjugated left vectors,
-    backward errors and condition numbers (module docstring); fields as ``QEPSolution``."""
-
-    eigenvalues: np.ndarray
-    vectors: np.ndarray
-    backward_error: np.ndarray
-    condition: np.ndarray
-    solver: str
-    reason: str
-    n_infinite: int = 0
-    norms: tuple = (0.0, 0.0)
-    details: dict = field(default_factory=dict)
-    real_error: object = None
-    left_vectors: object = None
-    partial: bool = False
-    n_dof: int = 0
-    complex_problem: bool = False
-    coverage: object = None
-    problem: object = field(default=None, repr=False)
+    backward errors and condition numbers (module docstring); the fields of ``QEPSolution``,
+    ``norms`` = (‖E‖_F, ‖A‖_F) and ``problem`` = (E, A)."""
 
     @property
     def error_bound(self) -> np.ndarray:
