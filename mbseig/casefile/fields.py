@@ -272,3 +272,17 @@ def beam_end_points(b, f):
     if pa == pb:
         raise f.error("a beam needs two different end points")
     return pa, pb
+
+
+def slenderness_warnings(theory, slender, eb_slenderness, min_slenderness) -> list:
+    """The beam-theory guidance for a beam of slenderness L/d (planar and spatial beams)."""
+    out = []
+    if theory == "euler-bernoulli" and slender < eb_slenderness:
+        out.append(f"Euler–Bernoulli theory at slenderness L/d = {slender:.6g} < "
+                   f"{eb_slenderness:g}: shear deformation and rotary inertia matter; use "
+                   "theory = \"timoshenko\"")
+    if slender < min_slenderness:
+        out.append(f"slenderness L/d = {slender:.6g} < {min_slenderness:g}: beam theory is "
+                   "inaccurate for so stubby a body; use a 2-D/3-D FE model (import it as an "
+                   "fe_body)")
+    return out

@@ -40,7 +40,7 @@ from ..model.beams import (
     section_properties,
 )
 from .fe_bodies import assemble_fe, fe_spec
-from .fields import Fields, beam_end_points, check_range, expand
+from .fields import Fields, beam_end_points, check_range, expand, slenderness_warnings
 
 __all__ = ["BeamTheoryWarning", "EB_SLENDERNESS", "MIN_SLENDERNESS", "AUTO_START_ELEMENTS",
            "allocate", "assemble", "parse_refinement"]
@@ -165,15 +165,8 @@ def _beam_spec(b, f, mesh_override):
     section = BeamSection(E=E, G=G, A=A, I=I, rho=rho, kappa=kappa, theory=theory)
     spec = _BeamSpec(name=name, label=f.label, points=(pa, pb), length=length, section=section,
                      depth=depth, n_elements=n, auto=auto, ends=ends)
-    slender = length / depth
-    if theory == "euler-bernoulli" and slender < EB_SLENDERNESS:
-        spec.warnings.append(
-            f"Euler–Bernoulli theory at slenderness L/d = {slender:.6g} < {EB_SLENDERNESS:g}: "
-            "shear deformation and rotary inertia matter; use theory = \"timoshenko\"")
-    if slender < MIN_SLENDERNESS:
-        spec.warnings.append(
-            f"slenderness L/d = {slender:.6g} < {MIN_SLENDERNESS:g}: beam theory is inaccurate "
-            "for so stubby a body; use a 2-D/3-D FE model (import it as an fe_body)")
+    spec.warnings.extend(slenderness_warnings(theory, length / depth, EB_SLENDERNESS,
+                                              MIN_SLENDERNESS))
     return spec
 
 

@@ -41,7 +41,14 @@ from ..model.beam3d import (
 )
 from ..model.spatial_body import frame_of, frame_point
 from ..model.spatial_joints import triad_constraint
-from .fields import Fields, beam_end_points, check_range, expand, template
+from .fields import (
+    Fields,
+    beam_end_points,
+    check_range,
+    expand,
+    slenderness_warnings,
+    template,
+)
 
 __all__ = ["allocate", "assemble", "span_elements"]
 
@@ -192,16 +199,8 @@ def _spec(b, f, override, rules):
     spec = Beam3DSpec(name=name, label=f.label, points=(pa, pb), length=length, props=props,
                       depth=depth, R0=R0, n_elements=n, auto=auto, ends=ends, spin=spin,
                       stations=stations)
-    EB_SLENDERNESS, MIN_SLENDERNESS = rules["eb_slenderness"], rules["min_slenderness"]
-    slender = length / depth
-    if theory == "euler-bernoulli" and slender < EB_SLENDERNESS:
-        spec.warnings.append(
-            f"Euler–Bernoulli theory at slenderness L/d = {slender:.6g} < {EB_SLENDERNESS:g}: "
-            "shear deformation and rotary inertia matter; use theory = \"timoshenko\"")
-    if slender < MIN_SLENDERNESS:
-        spec.warnings.append(
-            f"slenderness L/d = {slender:.6g} < {MIN_SLENDERNESS:g}: beam theory is inaccurate "
-            "for so stubby a body")
+    spec.warnings.extend(slenderness_warnings(theory, length / depth, rules["eb_slenderness"],
+                                              rules["min_slenderness"]))
     return spec
 
 

@@ -31,34 +31,23 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.integrate import solve_ivp
 
-__all__ = ["SteadyCheck", "SteadyModeCheck", "check_steady"]
+from ..check import ModeCheck
+
+__all__ = ["SteadyCheck", "check_steady", "mode_dict"]
 
 
-@dataclass(frozen=True)
-class SteadyModeCheck:
-    """Predicted against measured δ, ω of one mode (``index`` as listed by ``modes``)."""
+#: the per-mode record of a steady-motion check is the time-domain check's own
+#: (:class:`mbseig.check.ModeCheck`); these are the fields it fills and its JSON lists
+MODE_FIELDS = ("index", "kind", "eigenvalue", "predicted_delta", "predicted_omega",
+               "measured_delta", "measured_omega", "tolerance_delta", "tolerance_omega", "passed",
+               "skipped", "duration", "fit_residual", "constraint_drift", "velocity_drift", "nfev")
 
-    index: int
-    kind: str
-    eigenvalue: complex
-    predicted_delta: float
-    predicted_omega: float
-    measured_delta: float = math.nan
-    measured_omega: float = math.nan
-    tolerance_delta: float = math.nan
-    tolerance_omega: float = math.nan
-    passed: bool | None = None
-    skipped: str = ""
-    duration: float = 0.0
-    fit_residual: float = math.nan
-    constraint_drift: float = 0.0
-    velocity_drift: float = 0.0
-    nfev: int = 0
 
-    def as_dict(self) -> dict:
-        d = {k: getattr(self, k) for k in self.__dataclass_fields__}
-        d["eigenvalue"] = [float(self.eigenvalue.real), float(self.eigenvalue.imag)]
-        return d
+def mode_dict(m: ModeCheck) -> dict:
+    """One mode of a steady-motion check as JSON values."""
+    d = {k: getattr(m, k) for k in MODE_FIELDS}
+    d["eigenvalue"] = [float(m.eigenvalue.real), float(m.eigenvalue.imag)]
+    return d
 
 
 @dataclass(frozen=True)
@@ -80,7 +69,7 @@ class SteadyCheck:
     def as_dict(self) -> dict:
         return {"case": self.name, "linearization": "naive" if self.naive else "exact",
                 "passed": self.passed, "failed": self.failed, "tolerances": dict(self.tolerances),
-                "elapsed": self.elapsed, "modes": [m.as_dict() for m in self.modes]}
+                "elapsed": self.elapsed, "modes": [mode_dict(m) for m in self.modes]}
 
 
 class _Dynamics:
@@ -185,7 +174,7 @@ def check_steady(spec, *, config=None, params=None, indices=None, naive=False, a
         base = {"index": row["index"], "kind": row["kind"], "eigenvalue": s,
                 "predicted_delta": -s.real, "predicted_omega": abs(s.imag)}
         if row["kind"] == "rigid-body":
-            out.append(SteadyModeCheck(**base, skipped="rigid-body (s = 0): not simulated"))
+            out.append(ModeCheck(**base, skipped="rigid-body (s = 0): not simulated"))
             continue
         j = int(np.argmin(np.abs(full.eigenvalues - s)))
         X, yc = full.vectors[:, j], full.left_vectors[:, j]
@@ -216,7 +205,7 @@ def check_steady(spec, *, config=None, params=None, indices=None, naive=False, a
         sol = solve_ivp(dyn.rhs, (0.0, T), np.concatenate([q, qd, spin]), method="DOP853",
                         t_eval=t_eval, rtol=ode_rtol, atol=ode_rtol * amp)
         if not sol.success:
-            out.append(SteadyModeCheck(**base, skipped=f"integration failed: {sol.message}",
+            out.append(ModeCheck(**base, skipped=f"integration failed: {sol.message}",
                                        passed=False))
             continue
         den = yc @ (lin.E @ X)
@@ -239,7 +228,7 @@ def check_steady(spec, *, config=None, params=None, indices=None, naive=False, a
         tol_d = max(delta_rtol * abs(s.real), zero_delta_tol * abs(s))
         tol_w = omega_rtol * max(abs(s.imag), abs(s))
         ok = abs(md - (-s.real)) <= tol_d and abs(mw - abs(s.imag)) <= tol_w
-        out.append(SteadyModeCheck(**base, measured_delta=md, measured_omega=mw,
+        out.append(ModeCheck(**base, measured_delta=md, measured_omega=mw,
                                    tolerance_delta=tol_d, tolerance_omega=tol_w, passed=bool(ok),
                                    duration=T, fit_residual=res, constraint_drift=drift_c,
                                    velocity_drift=drift_v, nfev=dyn.nfev))
