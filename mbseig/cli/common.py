@@ -85,7 +85,10 @@ def moving_case(command, spec):
 
     from ..casefile import motion_kind
 
-    kind = motion_kind(spec.data)
+    try:
+        kind = motion_kind(spec.data)
+    except CaseError as exc:
+        raise exc.located(file=spec.source) from None
     if kind is None:
         return None
     try:
