@@ -8,7 +8,7 @@ mode and projected back onto the constraints.
 from __future__ import annotations
 
 from ..errors import CaseError
-from .common import case_kwargs, moving_case, number_option
+from .common import case_kwargs, case_command, number_option
 
 HELP = "write one period of a mode shape as a looping GIF"
 
@@ -33,12 +33,12 @@ def register(sub):
     p.set_defaults(run=run)
 
 
-def run(args) -> int:
+@case_command("animate")
+def run(args, spec) -> int:
     from pathlib import Path
 
     from ..model.linear_case import LinearCase
     from ..studies import analyze
-    from ..studies.point import as_spec
 
     if args.frames < 2 or args.frames > 500:
         raise CaseError(f"--frames must be an integer from 2 to 500, got {args.frames}",
@@ -48,10 +48,6 @@ def run(args) -> int:
     out = Path(args.out) if args.out else None
     if out is not None and out.suffix.lower() != ".gif":
         raise CaseError(f"--out must name a .gif file, got {args.out!r}", element="command line")
-    spec = as_spec(args.case)
-    moving = moving_case("animate", spec)  # a case with [motion]: its own module, or refused
-    if moving is not None:
-        return moving.run(args, spec)
     kw = case_kwargs(args)
     a = analyze(spec, config=kw["config"], params=kw["params"])
     if isinstance(a.model, LinearCase):

@@ -14,11 +14,10 @@ from ..eigen import dense_solvers
 from ..errors import CaseError, MbseigError, NumericalError
 from ..numerics import DOUBLE_RANGE, watched
 from ..studies import analyze
-from ..studies.point import as_spec
 from .common import (
     add_case_arguments,
     case_kwargs,
-    moving_case,
+    case_command,
     number_option,
     output_notes,
     print_json,
@@ -94,11 +93,8 @@ def _checked(a, args):
     return res
 
 
-def run(args) -> int:
-    spec = as_spec(args.case)
-    moving = moving_case("check", spec)
-    if moving is not None:
-        return moving.run(args, spec)
+@case_command("check")
+def run(args, spec) -> int:
     _options(args)
     a = analyze(args.case, solver=args.solver, **case_kwargs(args))
     res = _checked(a, args)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import json
 import sys
 
@@ -11,7 +12,8 @@ from ..errors import CaseError
 from ..numerics import jsonable
 
 __all__ = ["add_case_arguments", "case_kwargs", "print_json", "print_reactions", "number_option",
-           "output_notes", "equilibrium_notes", "moving_case"]
+           "output_notes", "equilibrium_notes", "moving_case", "case_command",
+           "analyzed"]
 
 
 def add_case_arguments(parser):
@@ -27,9 +29,18 @@ def case_kwargs(args) -> dict:
     return {"config": args.config, "params": parse_param_overrides(args.param)}
 
 
-def print_json(obj):
+def print_json(obj) -> int:
+    """Print ``obj`` as one JSON object; returns the command's exit code 0."""
     json.dump(jsonable(obj), sys.stdout, indent=1, allow_nan=False)
     sys.stdout.write("\n")
+    return 0
+
+
+def analyzed(args, spec, analyze):
+    """``analyze(spec, config=..., params=...)`` with the command line's configuration and
+    parameter overrides (the moving-case analyses take the case as read once)."""
+    kw = case_kwargs(args)
+    return analyze(spec, config=kw["config"], params=kw["params"])
 
 
 def print_reactions(rows):
@@ -99,3 +110,21 @@ def moving_case(command, spec):
         raise CaseError(f"mbseig {command} does not analyse {kind} motions ([motion] with "
                         f"{'period' if kind == 'periodic' else 'speed'})", element="motion",
                         file=spec.source) from None
+
+
+def case_command(command):
+    """Decorate ``run(args, spec)`` of ``mbseig COMMAND`` for a case at rest: the case is read
+    once; a case with a ``[motion]`` table goes to its own module instead (:func:`moving_case`),
+    or is refused in one line."""
+    def wrap(run_static):
+        @functools.wraps(run_static)
+        def run(args) -> int:
+            from ..studies.point import as_spec
+
+            spec = as_spec(args.case)
+            moving = moving_case(command, spec)
+            if moving is not None:
+                return moving.run(args, spec)
+            return run_static(args, spec)
+        return run
+    return wrap

@@ -8,12 +8,11 @@ import numpy as np
 
 from ..errors import CaseError, MbseigError
 from ..studies.frf import frf, frf_json, write_frf
-from ..studies.pipeline import as_spec
 from ..studies.point import linear_stage
 from .common import (
     add_case_arguments,
     case_kwargs,
-    moving_case,
+    case_command,
     number_option,
     print_json,
 )
@@ -52,14 +51,10 @@ def parse_hz(text):
     return np.linspace(lo, hi, count) if lo == 0 else np.geomspace(lo, hi, count)
 
 
-def run(args) -> int:
-    spec = as_spec(args.case)
-    moving = moving_case("frf", spec)
-    if moving is not None:
-        return moving.run(args, spec)
+@case_command("frf")
+def run(args, spec) -> int:
     freq = parse_hz(args.hz) if args.hz is not None else None
     kw = case_kwargs(args)
-    spec = as_spec(args.case)
     model = spec.build(kw["config"], **kw["params"])
     try:
         _, lin = linear_stage(model)

@@ -16,11 +16,11 @@ from ..casefile import load_case
 from ..errors import CaseError, MbseigError
 from ..numerics import jsonable, require_finite
 from ..statics import solved
-from ..studies.point import as_spec, linear_stage
+from ..studies.point import linear_stage
 from .common import (
     add_case_arguments,
     case_kwargs,
-    moving_case,
+    case_command,
     output_notes,
     print_json,
 )
@@ -83,11 +83,8 @@ def _npz_arrays(arrays):
     return out
 
 
-def run(args) -> int:
-    spec = as_spec(args.case)
-    moving = moving_case("linearize", spec)
-    if moving is not None:
-        return moving.run(args, spec)
+@case_command("linearize")
+def run(args, spec) -> int:
     kwargs = case_kwargs(args)
     model = load_case(args.case, config=kwargs["config"], **kwargs["params"])
     try:

@@ -8,12 +8,11 @@ from ..eigen import SOLVERS
 from ..errors import CaseError, MbseigError
 from ..statics.reactions import reaction_forces
 from ..studies import analyze, modes_json
-from ..studies.pipeline import as_spec
 from .common import (
     add_case_arguments,
     case_kwargs,
     equilibrium_notes,
-    moving_case,
+    case_command,
     number_option,
     print_json,
     print_reactions,
@@ -124,11 +123,8 @@ def _design(args, spec, a):
     return sens, energy
 
 
-def run(args) -> int:
-    spec = as_spec(args.case)
-    moving = moving_case("modes", spec)
-    if moving is not None:
-        return moving.run(args, spec)
+@case_command("modes")
+def run(args, spec) -> int:
     a = analyze(spec, solver=args.solver, modes_options=_partial_options(args) or None,
                 refine=_refine_request(args), **case_kwargs(args))
     sens, energy = _design(args, spec, a)

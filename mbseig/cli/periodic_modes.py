@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 
 from ..studies.periodic import floquet_json, frozen_summary, periodic_analysis
-from .common import case_kwargs, print_json
+from .common import analyzed, print_json
 
 
 def exponent_modes(fl) -> list:
@@ -60,12 +60,10 @@ def result_json(a) -> dict:
 
 
 def run(args, spec) -> int:
-    kw = case_kwargs(args)
-    a = periodic_analysis(spec, config=kw["config"], params=kw["params"])
+    a = analyzed(args, spec, periodic_analysis)
     out = result_json(a)
     if args.json:
-        print_json(out)
-        return 0
+        return print_json(out)
     fl, ref = out["floquet"], a.reference
     print(f"case {out['case']}: periodic, T = {fl['period']:.6g} s, {out['n_coordinates']} "
           f"coordinates, {out['n_constraints']} constraints, {out['dof']} DOF")

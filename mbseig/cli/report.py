@@ -2,8 +2,7 @@
 
 from __future__ import annotations
 
-from ..studies.point import as_spec
-from .common import moving_case
+from .common import case_command
 
 
 def register(sub):
@@ -25,11 +24,8 @@ def register(sub):
     p.set_defaults(run=run)
 
 
-def run(args) -> int:
-    spec = as_spec(args.case)
-    moving = moving_case("report", spec)
-    if moving is not None:
-        return moving.run(args, spec)
+@case_command("report")
+def run(args, spec) -> int:
     from ..report import write_report
 
     md, page = write_report(args.case, out_dir=args.out, configs=args.config,

@@ -5,7 +5,7 @@ state, its contact forces and the modes of the first-order descriptor system
 from __future__ import annotations
 
 from ..errors import CaseError
-from .common import case_kwargs, print_json
+from .common import analyzed, print_json
 
 __all__ = ["run"]
 
@@ -29,12 +29,10 @@ def run(args, spec) -> int:
         raise CaseError(f"solver {args.solver!r} does not apply to a steady motion (its "
                         f"linearization is a first-order pencil: descriptor-qz)",
                         element="command line")
-    kw = case_kwargs(args)
-    a = analyze_steady(spec, config=kw["config"], params=kw["params"])
+    a = analyzed(args, spec, analyze_steady)
     out = steady_json(a)
     if args.json:
-        print_json(out)
-        return 0
+        return print_json(out)
     m = out["motion"]
     print(f"case {out['case']}: steady motion at {m['speed']:g} along {m['direction']}"
           + (f", yaw rate {m['yaw_rate']:g}" if m["yaw_rate"] else "")

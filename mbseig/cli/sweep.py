@@ -8,8 +8,7 @@ from pathlib import Path
 
 from ..casefile import parse_param_overrides
 from ..errors import CaseError
-from ..studies.point import as_spec
-from .common import add_case_arguments, moving_case, print_json
+from .common import add_case_arguments, case_command, print_json
 
 
 def register(sub):
@@ -48,13 +47,10 @@ def register(sub):
     p.set_defaults(run=run)
 
 
-def run(args) -> int:
+@case_command("sweep")
+def run(args, spec) -> int:
     from ..studies.sweep import parse_range, progress_bar, run_sweep, write_outputs
 
-    spec = as_spec(args.case)
-    moving = moving_case("sweep", spec)
-    if moving is not None:
-        return moving.run(args, spec)
     ranges = [parse_range(item) for item in args.param if ":" in item]
     fixed = parse_param_overrides([item for item in args.param if ":" not in item])
     if not ranges:
