@@ -109,13 +109,7 @@ def assemble_fe(b, spec, constraints, forces, mass_blocks, lock, error_only):
         terms.append((1.0, b.affine_of(p) - Affine.constant(pos0)))
         if spec["ndof"] == 3:
             terms.append((1.0, Affine.select([t], [0.0])))
-    if spec["eta_idx"]:
-        terms.append((1.0, Affine.select(spec["eta_idx"])))
-    z = combine(terms, stack=True)
-    body = LinearFEBody(spec["label"], z, spec["K"])
-    if body.idx.size:
-        forces.append(body)
-        mass_blocks.append((z.idx, z.idx, z.C.T @ spec["M"] @ z.C))
+    _attach(spec, terms, forces, mass_blocks)
     for p, rot, t in zip(spec["interface"], spec["rotations"], spec["theta_idx"]):
         if rot in ("free", "clamped"):
             continue
@@ -127,6 +121,16 @@ def assemble_fe(b, spec, constraints, forces, mass_blocks, lock, error_only):
             "size": int(spec["M"].shape[0])}
 
 
+def _attach(spec, terms, forces, mass_blocks):
+    """The FE body's coordinates z (interface motions, then its modal coordinates) as one affine
+    map of q, its stiffness as a force and its mass as a block of the model's mass matrix."""
+    if spec["eta_idx"]:
+        terms.append((1.0, Affine.select(spec["eta_idx"])))
+    z = combine(terms, stack=True)
+    body = LinearFEBody(spec["label"], z, spec["K"])
+    if body.idx.size:
+        forces.append(body)
+        mass_blocks.append((z.idx, z.idx, z.C.T @ spec["M"] @ z.C))
 
 
 def _assemble3d(b, spec, forces, mass_blocks):
@@ -135,13 +139,7 @@ def _assemble3d(b, spec, forces, mass_blocks):
     for p, t in zip(spec["interface"], spec["theta_idx"]):
         terms.append((1.0, b.affine_of(p) - Affine.constant(b.point_pos[p])))
         terms.append((1.0, _rotation3d(b, t)))
-    if spec["eta_idx"]:
-        terms.append((1.0, Affine.select(spec["eta_idx"])))
-    z = combine(terms, stack=True)
-    body = LinearFEBody(spec["label"], z, spec["K"])
-    if body.idx.size:
-        forces.append(body)
-        mass_blocks.append((z.idx, z.idx, z.C.T @ spec["M"] @ z.C))
+    _attach(spec, terms, forces, mass_blocks)
     return {"type": "fe_body", "dimension": 3, "interface": list(spec["interface"]),
             "interface_dofs": 6, "rotations": list(spec["rotations"]),
             "modal_coordinates": len(spec["eta_idx"]), "size": int(spec["M"].shape[0])}

@@ -32,6 +32,7 @@ from .expr import evaluate, parse
 
 __all__ = ["Fields", "REQUIRED", "MAX_REPEAT", "MAX_INDEX", "MAX_MAGNITUDE", "MIN_MAGNITUDE",
            "RANGE_RULE", "in_range", "check_range", "template", "expand", "enabled", "uses_time",
+           "two_names", "element_count",
            "TIME"]
 
 TIME = "t"  # the name of time in a periodic case (DESIGN §8, "Periodic motions")
@@ -260,12 +261,31 @@ def enabled(item, label, names):
         raise exc.located(element=f"{label}.enabled") from None
 
 
+def two_names(f, key, message):
+    """The two names of the list ``key`` (templates expanded); ``message`` if it is not one."""
+    pair = f.raw(key)
+    if not isinstance(pair, list) or len(pair) != 2 or not all(isinstance(p, str) for p in pair):
+        raise f.error(message)
+    return tuple(template(p, f.names, f) for p in pair)
+
+
+def element_count(f, auto_start, max_elements, override=None):
+    """(n, auto) of a beam's ``elements``: an integer in 1..max_elements, or ``"auto"`` (start
+    from ``auto_start`` and let refinement decide); ``override`` (a refinement's mesh) wins."""
+    auto = f.raw("elements", "auto") == "auto"
+    if auto:
+        n = auto_start
+    else:
+        n = f.num("elements")
+        if not (float(n).is_integer() and 1 <= n <= max_elements):
+            raise f.error(f'elements must be an integer in 1..{max_elements} or "auto", got {n!r}')
+        n = int(n)
+    return (int(override) if override is not None else n), auto
+
+
 def beam_end_points(b, f):
     """(start, end) of a beam's ``points``: two different basic points of the builder ``b``."""
-    pts = f.raw("points")
-    if not isinstance(pts, list) or len(pts) != 2 or not all(isinstance(p, str) for p in pts):
-        raise f.error("points must be a list of two basic point names [start, end]")
-    pa, pb = (template(p, f.names, f) for p in pts)
+    pa, pb = two_names(f, "points", "points must be a list of two basic point names [start, end]")
     for p in (pa, pb):
         if p not in b.point_index:
             raise f.error(f"unknown point {p!r}")

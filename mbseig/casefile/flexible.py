@@ -40,7 +40,8 @@ from ..model.beams import (
     section_properties,
 )
 from .fe_bodies import assemble_fe, fe_spec
-from .fields import Fields, beam_end_points, check_range, expand, slenderness_warnings
+from .fields import (Fields, beam_end_points, check_range, element_count, expand,
+                     slenderness_warnings)
 
 __all__ = ["BeamTheoryWarning", "EB_SLENDERNESS", "MIN_SLENDERNESS", "AUTO_START_ELEMENTS",
            "allocate", "assemble", "parse_refinement"]
@@ -149,17 +150,7 @@ def _beam_spec(b, f, mesh_override):
         G = check_range(E / (2.0 * (1.0 + nu)), "G = E/(2(1 + nu))", f.label)
     elif not G > 0:
         raise f.error(f"G must be positive, got {G:g}")
-    raw_n = f.raw("elements", "auto")
-    auto = raw_n == "auto"
-    if auto:
-        n = AUTO_START_ELEMENTS
-    else:
-        n = f.num("elements")
-        if not (float(n).is_integer() and 1 <= n <= MAX_ELEMENTS):
-            raise f.error(f'elements must be an integer in 1..{MAX_ELEMENTS} or "auto", got {n!r}')
-        n = int(n)
-    if mesh_override is not None:
-        n = int(mesh_override)
+    n, auto = element_count(f, AUTO_START_ELEMENTS, MAX_ELEMENTS, mesh_override)
     ends = _parse_ends(f)
     f.done()
     section = BeamSection(E=E, G=G, A=A, I=I, rho=rho, kappa=kappa, theory=theory)

@@ -45,6 +45,7 @@ from .fields import (
     Fields,
     beam_end_points,
     check_range,
+    element_count,
     expand,
     slenderness_warnings,
     template,
@@ -166,18 +167,7 @@ def _spec(b, f, override, rules):
     if orientation is None and abs(Iy - Iz) > 1e-12 * max(Iy, Iz):
         raise f.error("orientation is needed: the section's Iy and Iz differ")
     R0 = section_frame(xa, xb, orientation, element=f.label)
-    raw_n = f.raw("elements", "auto")
-    auto = raw_n == "auto"
-    if auto:
-        n = rules["auto_start"]
-    else:
-        MAX_ELEMENTS = rules["max_elements"]
-        n = f.num("elements")
-        if not (float(n).is_integer() and 1 <= n <= MAX_ELEMENTS):
-            raise f.error(f'elements must be an integer in 1..{MAX_ELEMENTS} or "auto", got {n!r}')
-        n = int(n)
-    if override is not None:
-        n = int(override)
+    n, auto = element_count(f, rules["auto_start"], rules["max_elements"], override)
     ends = _ends(b, f)
     table = f.raw("stations", {})
     if not isinstance(table, dict):

@@ -50,7 +50,7 @@ from ..model.spatial_joints import (
 from ..numerics import scatter
 from .batch import LazyPoints
 from .builder import Builder
-from .fields import REQUIRED, Fields, expand, template
+from .fields import REQUIRED, Fields, expand, template, two_names
 from .spatial_readers import (
     UNIT_TOL,
     SpatialElementReaders,
@@ -256,10 +256,8 @@ class SpatialBuilder(SpatialElementReaders, Builder):
         raise f.error(f"{key} must be a point name or a table {{body, at}}")
 
     def _two_bodies(self, f):
-        bodies = f.raw("bodies")
-        if not isinstance(bodies, list) or len(bodies) != 2 or not all(isinstance(b, str) for b in bodies):
-            raise f.error('bodies must be [body1, body2]; use "ground" for the fixed frame')
-        b1, b2 = (template(b, f.names, f) for b in bodies)
+        b1, b2 = two_names(f, "bodies", 'bodies must be [body1, body2]; use "ground" for the '
+                           'fixed frame')
         for b in (b1, b2):
             if b != "ground":
                 self.body(f, b)

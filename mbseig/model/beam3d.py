@@ -78,7 +78,7 @@ from .beam_sections import (
     section_properties,
 )
 from .beam_whirl import SpinningShaft  # noqa: F401
-from .beams import timoshenko_shape_functions
+from .beams import GAUSS_W, GAUSS_X, THEORIES, timoshenko_shape_functions
 
 __all__ = [
     "SHAPES",
@@ -95,11 +95,6 @@ __all__ = [
     "section_properties",
 ]
 
-THEORIES = ("euler-bernoulli", "timoshenko")
-
-_GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(5)  # exact to degree 9 on [−1, 1]
-_GAUSS_X = 0.5 * (_GAUSS_X + 1.0)
-_GAUSS_W = 0.5 * _GAUSS_W
 _FLIP = np.diag([1.0, -1.0, 1.0, -1.0])  # xz-plane: the planar rotation ψ is −θy
 _XY = [1, 5, 7, 11]  # (v₁, θz₁, v₂, θz₂)
 _XZ = [2, 4, 8, 10]  # (w₁, θy₁, w₂, θy₂)
@@ -174,11 +169,11 @@ def _bending_stiffness(EI, L, Phi):
 def _plane_fields(L, Phi, dofs, flip):
     """(N, N′, N_ψ) of one bending plane as (ng, 12) arrays on d (rotation field as ψ of that
     plane: θz in xy, −θy in xz is returned as the rotation about y, i.e. sign restored)."""
-    N, dN, Npsi = timoshenko_shape_functions(_GAUSS_X, L, Phi)
+    N, dN, Npsi = timoshenko_shape_functions(GAUSS_X, L, Phi)
     S = _FLIP if flip else np.eye(4)
     out = []
     for F in (N, dN, Npsi):
-        full = np.zeros((_GAUSS_X.size, 12))
+        full = np.zeros((GAUSS_X.size, 12))
         full[:, dofs] = F @ S
         out.append(full)
     if flip:  # the planar ψ is −θy: the rotation about y is −ψ
@@ -197,7 +192,7 @@ def element_matrices(props: BeamProperties3D, L: float) -> ElementMatrices:
                        ([3, 9], p.G * p.J / L, p.rho * p.polar * L)):
         K[np.ix_(dofs, dofs)] += k * spring
         M[np.ix_(dofs, dofs)] += m * lin
-    wq = _GAUSS_W * L
+    wq = GAUSS_W * L
     psi = {}
     for dofs, flip, I_bend, Phi in ((_XY, False, p.Iz, Phi_y), (_XZ, True, p.Iy, Phi_z)):
         S = _FLIP if flip else np.eye(4)
@@ -270,9 +265,9 @@ class Beam3DElement(Force, ConfigurationMass):
         nodes = Affine(self.frames.idx, S @ self.frames.C, S @ self.frames.d)
         planes = []
         for Phi, I_bend in ((em.Phi_y, p.Iz), (em.Phi_z, p.Iy)):
-            _, dN, _ = timoshenko_shape_functions(_GAUSS_X, l0, Phi)
+            _, dN, _ = timoshenko_shape_functions(GAUSS_X, l0, Phi)
             dphi = dN[:, [1, 3]]
-            Gm = (dphi.T * (_GAUSS_W * l0)) @ dphi / l0
+            Gm = (dphi.T * (GAUSS_W * l0)) @ dphi / l0
             Kb = p.E * I_bend / (l0 * (1 + Phi)) * np.array([[4 + Phi, 2 - Phi],
                                                               [2 - Phi, 4 + Phi]])
             planes.append((Gm, Kb))

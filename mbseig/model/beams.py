@@ -45,15 +45,18 @@ __all__ = [
     "BeamElement",
     "RotationLock",
     "THEORIES",
+    "GAUSS_X",
+    "GAUSS_W",
     "section_properties",
     "timoshenko_shape_functions",
 ]
 
 THEORIES = ("euler-bernoulli", "timoshenko")
 
-_GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(5)  # exact to degree 9 on [−1, 1]
-_GAUSS_X = 0.5 * (_GAUSS_X + 1.0)
-_GAUSS_W = 0.5 * _GAUSS_W
+# Gauss–Legendre points and weights on [0, 1], exact to degree 9 (planar and 3-D beams)
+GAUSS_X, GAUSS_W = np.polynomial.legendre.leggauss(5)
+GAUSS_X = 0.5 * (GAUSS_X + 1.0)
+GAUSS_W = 0.5 * GAUSS_W
 _D = np.array([[-1.0, 0, 0, 1, 0, 0], [0, -1.0, 0, 0, 1, 0]])  # d = D w
 
 
@@ -142,8 +145,8 @@ class BeamElement(Force, ConfigurationMass):
         Phi = s.shear_parameter(l0)
         EI = s.E * s.I
         Kb = EI / (l0 * (1 + Phi)) * np.array([[4 + Phi, 2 - Phi], [2 - Phi, 4 + Phi]])
-        N, dN, Npsi = timoshenko_shape_functions(_GAUSS_X, l0, Phi)
-        wq = _GAUSS_W * l0
+        N, dN, Npsi = timoshenko_shape_functions(GAUSS_X, l0, Phi)
+        wq = GAUSS_W * l0
         # geometric matrix on the relative rotations: w(x) = N₂ φ₁ + N₄ φ₂ (zero end deflections)
         dphi = dN[:, [1, 3]]
         G = (dphi.T * wq) @ dphi / l0

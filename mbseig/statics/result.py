@@ -63,19 +63,19 @@ class StaticStability(Record):
     Jacobian has a skew part (gyroscopic forces may stabilize it); ``self_stress_tol`` and
     ``reason`` (why it was not examined) as recorded."""
 
-    verdict: str
-    dof: int | None = optional()
-    stiffness_tol: float | None = optional()
-    symmetry_tol: float | None = optional()
+    verdict: str  # stable, neutral, unstable, undetermined, not examined
+    dof: int | None = optional()  # size of K_r
+    stiffness_tol: float | None = optional()  # relative to ‖K_r‖: eigenvalues below are zero
+    symmetry_tol: float | None = optional()  # relative asymmetry above which K_r is not symmetric
     symmetric: bool | None = optional()
-    asymmetry: float | None = optional()
-    min_eigenvalue: float | None = optional()
-    index: int | None = optional()
-    zero: int | None = optional()
-    direction: object = optional()
-    gyroscopic: bool | None = optional()
+    asymmetry: float | None = optional()  # ‖K_r − K_rᵀ‖/‖K_r‖ (or the bound that decided)
+    min_eigenvalue: float | None = optional()  # None when Cholesky decided
+    index: int | None = optional()  # negative eigenvalues beyond the tolerance
+    zero: int | None = optional()  # eigenvalues within the tolerance
+    direction: object = optional()  # of the smallest eigenvalue, in full coordinates
+    gyroscopic: bool | None = optional()  # unstable, with a skew velocity Jacobian
     self_stress_tol: float | None = optional()
-    reason: str | None = optional()
+    reason: str | None = optional()  # why it was not examined
 
 
 def solved(model, eq):
