@@ -25,6 +25,8 @@ from .shift_invert import (
     undamped_partial,
 )
 
+UPPER_TOL = 1e-9  # Im s ≥ −UPPER_TOL·|s|: an eigenvalue of the upper half-plane (or real)
+
 
 def symmetric_search(run, want, omega_t, band, max_modes):
     """Undamped modes (ω², v) for the symmetric paths, ranked by ω_n = √|ω²|."""
@@ -105,7 +107,7 @@ def companion_search(run, want, omega_t, band, max_modes):
         if len(sigmas) > 1:
             keep = dedupe(s, X1, 1e-9, scale)
             s, X1, X2 = s[keep], X1[:, keep], X2[:, keep]
-        tol = 1e-9 * np.maximum(np.abs(s), 1e-300)
+        tol = UPPER_TOL * np.maximum(np.abs(s), 1e-300)
         upper = np.flatnonzero(s.imag >= -tol)
         slot = slots(s[upper], X1[:, upper], cluster_tol(scale))
         first = np.flatnonzero(slot == np.arange(slot.size))  # one candidate per slot
@@ -153,8 +155,9 @@ def slepc_search(run, want, omega_t, band):
         if nev > run.limit:
             raise SolverError(f"{want} modes asked of a problem with {run.dof} degrees of "
                               f"freedom: use the dense path")
-        s_all, X_all, info = slepc_solve(Mb, Pb, Qb, nev, 0.0, ncv=run.ncv)
-        if not (np.all(np.isfinite(s_all)) and np.all(np.isfinite(X_all))):
+        s_all, X_up, info = slepc_solve(Mb, Pb, Qb, nev, 0.0, ncv=run.ncv, upper_tol=UPPER_TOL)
+        upper = info.pop("columns")  # X_up holds the vectors of the upper half-plane only
+        if not (np.all(np.isfinite(s_all)) and np.all(np.isfinite(X_up))):
             raise SolverError("partial-slepc returned non-finite eigenpairs (is T(0) = Q "
                               "singular? a rigid-body mode: use partial-companion)")
         # SLEPc guarantees the nev nearest to the target; pairs it converged beyond them are
@@ -162,9 +165,8 @@ def slepc_search(run, want, omega_t, band):
         reach = (float(np.sort(np.abs(s_all))[min(nev, s_all.size) - 1]) if s_all.size
                  else 0.0)
         disc = (0.0 + 0.0j, 1.0 / reach if reach > 0 else np.inf, False)
-        tol = 1e-9 * np.maximum(np.abs(s_all), 1e-300)
-        upper = np.flatnonzero(s_all.imag >= -tol)
-        slot = slots(s_all[upper], X_all[:, upper], cluster_tol(scale))
+        tol = UPPER_TOL * np.maximum(np.abs(s_all), 1e-300)
+        slot = slots(s_all[upper], X_up, cluster_tol(scale))
         first = np.flatnonzero(slot == np.arange(slot.size))
         idx, d, note = pick(np.abs(s_all[upper[first]]), want, 0.0, None, scale)
         idx = np.flatnonzero(np.isin(slot, first[idx]))
@@ -174,7 +176,7 @@ def slepc_search(run, want, omega_t, band):
             break
         nev = min(2 * nev, run.limit)
     cols, conj, s_out = with_partners(upper[idx], s_all, tol)
-    X = expand_pairs(np.asarray(X_all, complex), cols, conj)
+    X = expand_pairs(np.asarray(X_up, complex), np.searchsorted(upper, cols), conj)
     return {"s": s_out, "X1": X, "X2": X, "k": nev, "shifts": [0.0],
             "coverage": {"measure": "|s|", "omega_n": (lo, hi), "note": note, "verified": ok},
             "slepc": info}

@@ -4,13 +4,21 @@ Python that has slepc4py (often the system Python, whose numpy is not the one mb
     python slepc_worker.py IN.npz OUT.npz
 
 IN.npz holds the CSR arrays of M, P, Q (``{M,P,Q}_{data,indices,indptr}``, ``shape``) and the
-options ``nev``, ``target``, ``tol``, ``maxit``, ``ncv``, ``factor`` (LU package), ``ordering``.
+options ``nev``, ``target``, ``tol``, ``maxit``, ``ncv``, ``factor`` (LU package), ``ordering``,
+``upper_tol``.
 The polynomial eigenproblem (M s² + P s + Q) x = 0 is solved by TOAR (a Krylov method on the
 companion linearization that stores one n-vector per basis vector instead of two), spectral
 transformation shift-and-invert at ``target`` (one LU of T(target) = target²M + target P + Q,
 ``preonly`` KSP), eigenpairs nearest ``target`` in magnitude.  OUT.npz holds ``s`` (complex),
-``X`` (complex n × nconv, columns as SLEPc returns them), ``its``, ``nconv`` and the timings.
+``X`` (complex n × k: the vectors of the eigenvalues ``columns``, all of them unless
+``upper_tol`` is given), ``its``, ``nconv`` and the timings.
 Only numpy, petsc4py and slepc4py are imported here (no scipy, no mbseig).
+
+Under MPI (``mpiexec -n P python slepc_worker.py IN.npz OUT.npz``) the same script runs on P
+processes: each reads IN.npz and assembles its own contiguous block of rows (PETSc's split:
+n // P rows each, the first n mod P one more), the LU is a parallel one (the ``factor`` option:
+``mumps``), the eigenvectors are gathered to rank 0, which writes OUT.npz;
+every rank writes its peak resident memory to ``OUT.npz.rank<r>``.
 """
 
 import json
@@ -20,13 +28,37 @@ import time
 import numpy as np
 
 
-def _mat(PETSc, d, key, shape):
-    indptr = d[f"{key}_indptr"].astype(PETSc.IntType)
-    indices = d[f"{key}_indices"].astype(PETSc.IntType)
-    data = d[f"{key}_data"].astype(PETSc.ScalarType)
-    A = PETSc.Mat().createAIJ(size=shape, csr=(indptr, indices, data), comm=PETSc.COMM_SELF)
+def _rows(n, size, rank):
+    """[r0, r1): the rows of ``rank`` in PETSc's default split of n rows over ``size``."""
+    base, extra = divmod(n, size)
+    r0 = rank * base + min(rank, extra)
+    return r0, r0 + base + (1 if rank < extra else 0)
+
+
+def _mat(PETSc, comm, d, key, shape):
+    """The CSR matrix ``key`` of IN.npz as a PETSc AIJ matrix, this process's rows only."""
+    r0, r1 = _rows(shape[0], comm.getSize(), comm.getRank())
+    indptr = d[f"{key}_indptr"]
+    lo, hi = int(indptr[r0]), int(indptr[r1])
+    local = (indptr[r0:r1 + 1] - lo).astype(PETSc.IntType)
+    indices = d[f"{key}_indices"][lo:hi].astype(PETSc.IntType)
+    data = d[f"{key}_data"][lo:hi].astype(PETSc.ScalarType)
+    A = PETSc.Mat().createAIJ(size=((r1 - r0, shape[0]), (r1 - r0, shape[1])),
+                              csr=(local, indices, data), comm=comm)
     A.assemble()
     return A
+
+
+def _gathered(PETSc, v):
+    """The whole of the distributed vector v on rank 0 (None elsewhere)."""
+    if v.getComm().getSize() == 1:
+        return v.getArray().copy()
+    scatter, whole = PETSc.Scatter.toZero(v)
+    scatter.scatter(v, whole, addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+    out = whole.getArray().copy() if v.getComm().getRank() == 0 else None
+    scatter.destroy()
+    whole.destroy()
+    return out
 
 
 def main(path_in, path_out):
@@ -40,12 +72,15 @@ def main(path_in, path_out):
     from petsc4py import PETSc
     from slepc4py import SLEPc
 
+    comm = PETSc.COMM_WORLD
+    rank = comm.getRank()
     d = np.load(path_in)
     opts = json.loads(str(d["options"]))
     shape = tuple(int(x) for x in d["shape"])
-    M, P, Q = (_mat(PETSc, d, k, shape) for k in ("M", "P", "Q"))
+    M, P, Q = (_mat(PETSc, comm, d, k, shape) for k in ("M", "P", "Q"))
+    del d
     t1 = time.perf_counter()
-    pep = SLEPc.PEP().create(comm=PETSc.COMM_SELF)
+    pep = SLEPc.PEP().create(comm=comm)
     pep.setOperators([Q, P, M])
     pep.setProblemType(SLEPc.PEP.ProblemType.GENERAL)
     pep.setType(SLEPc.PEP.Type.TOAR)
@@ -69,15 +104,28 @@ def main(path_in, path_out):
     t2 = time.perf_counter()
     nconv = pep.getConverged()
     n = shape[0]
-    s = np.empty(nconv, complex)
-    X = np.empty((n, nconv), complex)
+    s = np.array([pep.getEigenpair(i) for i in range(nconv)], complex)
+    # a real pencil's eigenpairs come in conjugate pairs: with ``upper_tol`` only the vectors of
+    # the upper half-plane (Im s ≥ −upper_tol·|s|) are returned, their partners being conjugates
+    tol = opts.get("upper_tol")
+    cols = (np.flatnonzero(s.imag >= -tol * np.maximum(np.abs(s), 1e-300)) if tol is not None
+            else np.arange(nconv))
+    X = np.empty((n, cols.size), complex) if rank == 0 else None
     xr, xi = Q.createVecs()
-    for i in range(nconv):
-        s[i] = pep.getEigenpair(i, xr, xi)
-        X[:, i] = xr.getArray() + 1j * xi.getArray()
-    np.savez(path_out, s=s, X=X, its=pep.getIterationNumber(), nconv=nconv,
-             setup=t1 - t0, solve=t2 - t1, extract=time.perf_counter() - t2,
-             reason=int(pep.getConvergedReason()), factor=opts.get("factor", "superlu"))
+    for j, i in enumerate(cols):
+        pep.getEigenpair(int(i), xr, xi)
+        re, im = _gathered(PETSc, xr), _gathered(PETSc, xi)
+        if rank == 0:
+            X[:, j] = re + 1j * im
+    import resource
+
+    with open(f"{path_out}.rank{rank}", "w") as f:  # peak resident memory of this process, kB
+        json.dump({"rank": rank, "peak_rss_kb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss}, f)
+    if rank == 0:
+        np.savez(path_out, s=s, X=X, columns=cols, its=pep.getIterationNumber(), nconv=nconv,
+                 setup=t1 - t0, solve=t2 - t1, extract=time.perf_counter() - t2,
+                 reason=int(pep.getConvergedReason()), factor=opts.get("factor", "superlu"),
+                 ranks=comm.getSize())
 
 
 if __name__ == "__main__":

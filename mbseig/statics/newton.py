@@ -54,8 +54,8 @@ from .linalg import (
 )
 from .position import STATIONARY, constraint_residual, position_solve
 
-__all__ = ["Equilibrium", "solved", "Settings", "newton", "Stall", "Memo", "finish",
-           "settings_for", "diagnose", "CRITERION"]
+__all__ = ["Settings", "Stall", "Solution", "newton", "static_multipliers", "force_scale",
+           "settings_for", "CRITERION"]
 
 CRITERION = ("max_k |Φ_k|/scale_k ≤ tol; Newton correction max(|Δq_i|/ℓ_i, |Δd_b|/L_b) ≤ xtol "
              "(ℓ: length scale for point coordinates, 1 rad for angles; d_b: rigid lengths); "
