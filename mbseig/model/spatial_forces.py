@@ -26,6 +26,7 @@ for an orthonormal triad; :func:`moment_force` evaluates it and its derivatives.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -188,19 +189,33 @@ def bushing_rows(frames, locals_) -> QuadraticMap:
     """Strains of a bushing at a point: d = R₁ᵀ(P₂ − P₁) and the small rotation of b2 relative
     to b1 in b1's axes (module docstring), on the stacked frames."""
     z = combine([(1.0, frames[0]), (1.0, frames[1])], stack=True)
-    S1, S2 = selectors()
+    S1, S2, E1, rotation = _bushing_constants()
     rows = Rows(z)
     D = point_matrix(locals_[1]) @ S2 - point_matrix(locals_[0]) @ S1
-    E1 = [vector_matrix(e) @ S1 for e in np.eye(3)]
-    E2 = [vector_matrix(e) @ S2 for e in np.eye(3)]
     for k in range(3):
         rows.dot(E1[k], D)
-    for i, j in ((2, 1), (0, 2), (1, 0)):  # θ_x = ½(w₁·v₂ − v₁·w₂), cyclic
-        X = 0.5 * (E1[i].T @ E2[j] - E1[j].T @ E2[i])
-        rows.B.append(0.5 * (X + X.T))
+    for B in rotation:
+        rows.B.append(B)
         rows.b.append(np.zeros(rows.p))
         rows.c.append(0.0)
     return rows.build()
+
+
+@functools.lru_cache(maxsize=1)
+def _bushing_constants():
+    """(S1, S2, E1, rotation rows) of every bushing on stacked frames: the frame selectors, b1's
+    axes e_k = E1[k] z, and the quadratic forms of the small rotation θ_x = ½(w₁·v₂ − v₁·w₂),
+    cyclic (the same for every bushing: made once, read-only)."""
+    S1, S2 = selectors()
+    E1 = [vector_matrix(e) @ S1 for e in np.eye(3)]
+    E2 = [vector_matrix(e) @ S2 for e in np.eye(3)]
+    rotation = []
+    for i, j in ((2, 1), (0, 2), (1, 0)):
+        X = 0.5 * (E1[i].T @ E2[j] - E1[j].T @ E2[i])
+        rotation.append(0.5 * (X + X.T))
+    for A in (S1, S2, *E1, *rotation):
+        A.setflags(write=False)
+    return S1, S2, tuple(E1), tuple(rotation)
 
 
 @dataclass(frozen=True, eq=False)
