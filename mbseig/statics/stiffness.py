@@ -240,8 +240,7 @@ def self_stress_states(model, q, *, rank_tol=1e-10, tol=SELF_STRESS_TOL, states=
     changes = []
     for j in range(Uo.shape[1]):
         H = dense(model.constraint_hessian(q, Uo[:, j], dense=True))
-        h = float(np.linalg.norm(H, 2)) or 1.0
-        changes.append((N.T @ H @ N).ravel() / h)
+        changes.append((N.T @ H @ N).ravel() / _carried_stiffness(model, q, Uo[:, j]))
     C = np.array(changes).T  # columns: the change per state
     if not C.size:
         return out
@@ -254,6 +253,20 @@ def self_stress_states(model, q, *, rank_tol=1e-10, tol=SELF_STRESS_TOL, states=
         loaded = sorted({names[i] for i in np.flatnonzero(np.abs(mu) > 1e-3 * np.abs(mu).max())})
         out.append({"constraints": loaded, "mu": mu, "stiffness_change": float(sc[j])})
     return out
+
+
+def _carried_stiffness(model, q, mu) -> float:
+    """Σ_e ‖H_e(μ_e)‖_F: the constraint stiffness a state μ carries, element by element.  The
+    scale of a stiffness change: the norm of the sum H(μ) would be only rounding where the
+    elements' parts cancel (two copies of one rod, one in tension and one in compression), and
+    rounding divided by rounding is not a change."""
+    total, k = 0.0, 0
+    for c in model.constraints:
+        part = mu[k:k + c.n_eq]
+        k += c.n_eq
+        if np.any(part):
+            total += float(np.linalg.norm(dense(c.hess(q, part))))
+    return total if total > 0 and np.isfinite(total) else 1.0
 
 
 def _force_per_multiplier(c, q):
