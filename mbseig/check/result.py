@@ -91,12 +91,28 @@ class ModeCheck:
             "elapsed": float(self.elapsed),
             "coordinate": self.coordinate,
             "probe": None if math.isnan(self.probe_omega) else {
-                "omega_eff": float(self.probe_omega), "omega_ref": float(self.probe_reference)},
+                "omega_eff": float(self.probe_omega), "omega_ref": float(self.probe_reference),
+                "ratio": probe_ratio(self), "checked": probe_text(self)},
             "resolution": {"delta": num(self.resolution_delta), "omega": num(self.resolution_omega)},
             "tolerance": {"delta": num(self.tolerance_delta), "omega": num(self.tolerance_omega)},
             "capped": bool(self.capped),
             "unresolved": self.unresolved or None,
         }
+
+
+def probe_ratio(m) -> float | None:
+    """ω_eff/ω_ref of a rigid-body mode's static probe; None where it is undefined: ω_ref = 0,
+    no force or stiffness anywhere in the model to compare a restoring force with."""
+    return m.probe_omega / m.probe_reference if m.probe_reference > 0 else None
+
+
+def probe_text(m) -> str:
+    """What a rigid-body mode's static probe checked, in words."""
+    if m.probe_reference > 0:
+        return f"static probe: restoring ω_eff vs ω_ref {m.probe_reference:.4g}"
+    found = "0" if m.probe_omega == 0 else f"{m.probe_omega:.3g} rad/s"
+    return ("static probe: no force or stiffness in the model to scale it (ω_ref = 0, no ratio); "
+            f"passes only if moving along the mode restores nothing: ω_eff = {found}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -105,8 +121,10 @@ class CheckResult:
 
     ``passed`` is True when no mode failed (neither a fit nor a rigid-body probe); ``tolerances``
     records every tolerance and option used; ``reactions`` are the equilibrium constraint
-    reactions (see :func:`reaction_forces`) and ``actuators`` the inverse-statics driver records
-    (effort per actuator, :mod:`mbseig.inverse_statics`) of the model, if it has any.
+    reactions (see :func:`reaction_forces`; in :meth:`to_dict` the joints and other constraints
+    as ``reactions``, the bodies' normalization conditions apart as ``reactions_internal``) and
+    ``actuators`` the inverse-statics driver records (effort per actuator,
+    :mod:`mbseig.inverse_statics`) of the model, if it has any.
     """
 
     name: str
@@ -138,7 +156,11 @@ class CheckResult:
             "tolerances": dict(self.tolerances),
             "elapsed": float(self.elapsed),
             "modes": [{**m.to_dict(), "tolerances": per_mode} for m in self.modes],
-            "reactions": [dict(r) for r in self.reactions],
+            "reactions": [dict(r) for r in self.reactions if r.get("kind") != "internal"],
+            "reactions_internal": [
+                {"element": r["element"], "body": r.get("on"), "multipliers": r["multipliers"],
+                 "error": r["reaction_error"]}
+                for r in self.reactions if r.get("kind") == "internal"],
             "actuators": [dict(r) for r in self.actuators],
         }
 
@@ -153,11 +175,11 @@ class CheckResult:
                                 f"{'':>9} {m.predicted_omega:>12.6g} {'':>12} {'':>9}  skip    "
                                 f"({m.skipped})")
                 else:
-                    rel = m.probe_omega / m.probe_reference if m.probe_reference else math.inf
+                    rel = probe_ratio(m)
                     rows.append(f"{m.index:>3} {m.kind:<11} {m.predicted_delta:>12.6g} {'':>12} "
                                 f"{'':>9} {m.predicted_omega:>12.6g} {m.probe_omega:>12.6g} "
-                                f"{rel:>9.2e}  {'pass' if m.passed else 'FAIL':<6}  (static "
-                                f"probe: restoring ω_eff vs ω_ref {m.probe_reference:.4g})")
+                                f"{'n/a' if rel is None else format(rel, '.2e'):>9}  "
+                                f"{'pass' if m.passed else 'FAIL':<6}  ({probe_text(m)})")
                 continue
             rows.append(
                 f"{m.index:>3} {m.kind:<11} {m.predicted_delta:>12.6g} {m.measured_delta:>12.6g} "

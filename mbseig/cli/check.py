@@ -13,11 +13,12 @@ from ..check import INTEGRATORS, check_modes, parse_mode_list
 from ..eigen import dense_solvers
 from ..errors import CaseError, MbseigError, NumericalError
 from ..numerics import DOUBLE_RANGE, watched
+from ..statics.reactions import multiplier_error
 from ..studies import analyze
 from .common import (
     add_case_arguments,
-    case_kwargs,
     case_command,
+    case_kwargs,
     number_option,
     output_notes,
     print_json,
@@ -103,6 +104,7 @@ def run(args, spec) -> int:
         out = res.to_dict()
         out["plots"] = [str(p) for p in plots]
         out["notes"] = output_notes(a.model, a.eq)
+        out["reaction_error"] = multiplier_error(a.model, a.eq)
         print_json(out)
         return 0 if res.passed else 1
     tol = res.tolerances

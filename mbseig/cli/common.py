@@ -44,18 +44,67 @@ def analyzed(args, spec, analyze):
 
 
 def print_reactions(rows):
-    """The reaction table of :func:`mbseig.statics.reactions.reaction_forces`, one line a
-    constraint: multipliers, what they carry (the element's own label and unit), point forces."""
+    """The reaction table of :func:`mbseig.statics.reactions.reaction_forces`: per joint the
+    force and moment on the body it names, about the joint point, in global axes and in that
+    body's axes; per other constraint what it carries and the force on each point.  A value
+    within its error bound is printed as 0; the bodies' normalization conditions (internal to
+    their coordinates) are summarized, not listed."""
     if not rows:
         return
-    print("reactions at equilibrium (multipliers λ; force on each point = −Φ_qᵀλ):")
-    for r in rows:
-        lam = ", ".join(f"{x:.6g}" for x in r["multipliers"])
-        c = r["reaction"]
+    fmt = lambda v: "(" + ", ".join(f"{x:.6g}" for x in v) + ")"
+
+    def _carried_text(r):  # what the multipliers carry as the element states it, its bound
+        c, err = r["reaction"], r["reaction_error"]
         value = c["value"] if isinstance(c["value"], list) else [c["value"]]
-        carried = f"{c['label']} {', '.join(f'{v:.6g}' for v in value)} {c['unit']}".rstrip()
-        forces = "; ".join(f"{p} ({', '.join(f'{v:.6g}' for v in f)})" for p, f in r["forces"].items())
-        print(f"  {r['element']}: λ = {lam}; {carried}; on {forces}")
+        err = err if isinstance(err, list) else [err]
+        return (f"{c['label']} {', '.join(f'{v:.6g}' for v in value)} {c['unit']}".rstrip()
+                + f" (± {max(err, default=0.0):.2g})")
+    bound = max((r.get("lambda_bound", 0.0) for r in rows), default=0.0)
+    print("reactions at equilibrium: per joint the force F and moment M on the body named, about "
+          "the joint point; per other constraint what it carries and the force on each point")
+    print("  (a value within its error bound is printed as 0; the bound of a value a·λ is "
+          f"‖a‖ δλ + γ |a|·|λ| + the position error's share, δλ = (‖g − Φ_qᵀλ‖ + rounding) / "
+          f"σ_min(Φ_q) ≤ {bound:.2g})")
+    internal = [r for r in rows if r.get("kind") == "internal"]
+    for r in rows:
+        kind = r.get("kind")
+        if kind == "internal":
+            continue
+        if kind in ("joint", "shared point", "on body"):
+            b, err = r["on"], r["error"]
+            where = {"shared point": f" (point {r.get('point')}, shared by "
+                                     f"{', '.join(r.get('shared_by', ()))})",
+                     "on body": f" ({_carried_text(r)}; moment about {r['on']}'s origin)"
+                     }.get(kind, "")
+            print(f"  {r['element']}{where} on {b} at {fmt(r['at'])} m:")
+            axes = ("global x, y, z", f"{b} u, v, w")
+            w = max(map(len, axes)) + 1
+            print(f"      {axes[0] + ':':<{w}} F = {fmt(r['force'])} N, M = {fmt(r['moment'])} N m")
+            print(f"      {axes[1] + ':':<{w}} F = {fmt(r['force_body'])} N, "
+                  f"M = {fmt(r['moment_body'])} N m")
+            print(f"      error bound: F {max(err['force_body']):.2g} N, "
+                  f"M {max(err['moment_body']):.2g} N m")
+            continue
+        carried = _carried_text(r)
+        on_body = r.get("forces_body_on", {})
+        parts = []
+        for p, f in r["forces"].items():
+            text = f"{p} {fmt(f)} N"
+            if p in on_body:
+                text += f" = {fmt(r['forces_body'][p])} in {on_body[p]}'s axes"
+            parts.append(text)
+        print(f"  {r['element']}: {carried}; force on point {'; '.join(parts)}")
+    if any(r.get("kind") == "body" or r.get("forces_body_on") for r in rows):
+        print("  (a planar body's axes: x from its first to its second point, y normal, "
+              "counter-clockwise)")
+    if any(r.get("kind") in ("joint", "shared point", "on body") for r in rows):
+        print("  (a spatial body's axes u, v, w are parallel to global x, y, z at the reference)")
+    if internal:
+        owners = list(dict.fromkeys(str(r.get("on") or r["element"].rsplit(" (", 1)[0])
+                                    for r in internal))
+        owners = ", ".join(owners[:4] + ([f"{len(owners) - 4} more"] if len(owners) > 4 else []))
+        print(f"  not listed: {len(internal)} normalization condition(s) of the bodies' unit "
+              f"vectors u, v, w ({owners}): internal to the body coordinates, no joint force")
 
 
 def number_option(name, value, *, positive=False, nonnegative=False, minimum=None):

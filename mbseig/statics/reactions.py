@@ -38,10 +38,13 @@ from ..model.elements import (
     LinearConstraint,
     SpringDamper,
 )
+from ..model.spatial_body import FRAME_SIZE, point_matrix
+from ..model.spatial_joints import frame_wrench
+from .reaction_bounds import EPS, bounded, linear_map, multiplier_error, zeroed
 from .result import solved
 
 __all__ = ["posture", "reactions", "actuator_effort", "rom_flags", "pin_reactions",
-           "reaction_forces"]
+           "reaction_forces", "multiplier_error"]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -79,21 +82,184 @@ def reaction_forces(model, eq) -> list[dict]:
     length, the force on the point of a fixed/slider/attach joint, the torque of a driver, ...)
     under its own key and as ``reaction`` {key, label, value, unit}, and the force −Φ_qᵀλ it
     exerts on each point (``forces``: point → components).  The one table of reactions that
-    ``mbseig check``, ``mbseig modes --reactions`` and the reports print."""
+    ``mbseig check``, ``mbseig modes --reactions`` and the reports print.
+
+    Each row also says where it acts (:func:`_where`): ``kind`` (``joint``: a spatial joint,
+    force and moment on one body about the joint point; ``shared point``: a basic point a
+    spatial body carries, the force on that body there; ``on body``: another spatial
+    constraint, its wrench about the body's origin; ``body``: a planar body's rigid length;
+    ``constraint``: point forces only; ``internal``: a spatial body's normalization conditions
+    (u, v, w unit and orthogonal), no force at any joint), ``on`` (the body), ``at`` (global,
+    at the equilibrium), ``force`` / ``moment`` in global axes, ``force_body`` /
+    ``moment_body`` in the body's axes (spatial: u, v, w, parallel to global x, y, z at the
+    reference; planar: x along its first → second point, y normal, counter-clockwise) and
+    ``error``, each value's bound (:func:`multiplier_error`): a value within it is set to 0."""
     model = solved(model, eq)
-    names = model.coordinate_names
+    names, dim = model.coordinate_names, "xyz"[:getattr(model, "dimension", 3)]
+    dlam = multiplier_error(model, eq)["lambda_bound"]
+    # the configuration's uncertainty: the last Newton correction (directions; × ℓ: positions)
+    ddir = max(float(getattr(eq, "correction", 0.0) or 0.0), 8 * EPS)
+    unc = (dlam, ddir * float(getattr(model, "length_scale", 1.0)), ddir)
     rows = []
     for name, (c, lam) in _constraint_multipliers(model, eq.lam).items():
-        forces: dict = {}
-        for i, val in zip(c.idx, -(c.jac(eq.q).T @ lam)):
+        gen, gen_err = bounded(-_dense(c.jac(eq.q)).T, lam, dlam)
+        forces, errors = {}, {}
+        for i, val, err in zip(c.idx, gen, gen_err):
             point, _, axis = names[i].rpartition(".")
-            forces.setdefault(point, {})[axis] = float(val) + 0.0  # + 0.0: no "-0" in reports
-        r = c.reaction(eq.q, lam)
-        rows.append({"element": name, "multipliers": [float(x) for x in lam], r["key"]: r["value"],
-                     "reaction": r,
-                     "forces": {p: [v.get(ax, 0.0) for ax in "xyz"[:model.dimension]]
-                                for p, v in forces.items()}})
+            forces.setdefault(point, {})[axis] = val
+            errors.setdefault(point, {})[axis] = err
+        value, value_err = _reaction_value(c, eq.q, lam, dlam)
+        r = {**c.reaction(eq.q, lam), "value": value}
+        where = _where(model, c, eq.q, lam, unc, forces, errors)
+        if where["kind"] == "joint":  # the wrench with its term-by-term rounding bound
+            value = r["value"] = where["force"] + where["moment"]
+            value_err = where["error"]["force"] + where["error"]["moment"]
+        if "at" in where:  # a position within the statics' tolerance of 0 is 0
+            where["at"] = zeroed(where["at"], [unc[1]] * len(where["at"]))
+        rows.append({"element": name, "multipliers": bounded(np.eye(lam.size), lam, dlam)[0],
+                     r["key"]: value, "reaction": r, "reaction_error": value_err,
+                     "lambda_bound": dlam,
+                     "forces": {p: [v.get(ax, 0.0) for ax in dim] for p, v in forces.items()},
+                     "forces_error": {p: [v.get(ax, 0.0) for ax in dim]
+                                      for p, v in errors.items()}, **where})
     return rows
+
+
+def _reaction_value(c, q, lam, dlam):
+    """The element's own reaction (a number or a list, linear in λ) and its bounds."""
+    scalar = not isinstance(c.reaction(q, lam)["value"], list)
+    own = lambda x: np.atleast_1d(np.asarray(c.reaction(q, x)["value"], float))
+    _, err = bounded(linear_map(own, lam.size), lam, dlam)
+    value = zeroed(own(lam), err)
+    return (value[0], err[0]) if scalar else (value, err)
+
+
+# ---------------------------------------------------------------------------------------------
+# Where a constraint acts: joint wrenches on bodies, in global and body axes
+# ---------------------------------------------------------------------------------------------
+def _where(model, c, q, lam, unc, forces, errors) -> dict:
+    """Where a constraint acts and its force and moment there (:func:`reaction_forces`)."""
+    bodies = getattr(model, "bodies", {}) or {}
+    if _is_triad(c):
+        return {"kind": "internal", "on": next(
+            (b for b, r in bodies.items() if c.name.startswith(f"{r.get('label')} (")), None)}
+    if getattr(c, "wrench", None) is not None:  # a spatial joint (model.spatial_joints)
+        off, local, body = c.wrench
+        z = c.aff(q)
+        return _wrench(z[off:off + FRAME_SIZE], c.rows.grad(z)[:, off:off + FRAME_SIZE], lam,
+                       unc, local, body)
+    for b, rec in bodies.items():
+        label = rec.get("label")
+        if rec.get("spatial") and c.name.startswith(f"{label} (carries "):
+            return _carried(model, b, c.name[len(label) + 10:-1], c, q, lam, unc)
+    if model.dimension == 2:
+        return _planar(model, c, bodies, q, forces, errors, unc[2])
+    return _on_frame(model, c, q, lam, unc)
+
+
+def _is_triad(c) -> bool:
+    """A frame's rows u·u = v·v = w·w = 1, u·v = v·w = w·u = 0 (spatial_joints.triad_constraint)."""
+    rows = getattr(c, "rows", None)
+    if rows is None or getattr(c, "wrench", None) is not None or rows.c.size != 6:
+        return False
+    return (rows.B.shape[1] == FRAME_SIZE and not np.any(rows.b)
+            and sorted(rows.c.tolist()) == [-1.0, -1.0, -1.0, 0.0, 0.0, 0.0])
+
+
+def _axes(frame_z):
+    """R = [u v w] of a frame vector [r₀; u; v; w]."""
+    return np.asarray(frame_z, float).reshape(4, 3)[1:].T
+
+
+def _dense(J):
+    return J.toarray() if hasattr(J, "toarray") else np.asarray(J, float)
+
+
+def _in_body(R, vec, err, ddir):
+    """A global vector in the body axes R, each within ‖global bounds‖₂ + (ddir + 4ε)‖v‖."""
+    vec = np.asarray(vec, float)
+    bound = float(np.linalg.norm(err)) + (ddir + 4 * EPS) * float(np.linalg.norm(vec))
+    return zeroed(R.T @ vec, [bound] * vec.size), [bound] * vec.size
+
+
+def _wrench(zf, G, lam, unc, local, body, kind="joint"):
+    """Force F and moment M (about the body point ``local``) on a spatial body from the
+    generalized forces f = −Gᵀλ on its frame zf = [r₀; u; v; w] (:func:`frame_wrench`), G the
+    rows' gradient on zf.  Rounding counts every term: |F| ≤ ‖|f_r|‖, |M| ≤ Σ_e ‖e‖ ‖|f_e|‖ +
+    ‖r₀ − r_P‖ ‖|f_r|‖ with |f| = |G|ᵀ|λ|; and the moment the position error gives, ‖F‖ δr."""
+    fabs = (np.abs(G).T @ np.abs(lam)).reshape(4, 3)
+    e = zf.reshape(4, 3)
+    rP = point_matrix(local) @ zf
+    f_scale = float(np.linalg.norm(fabs[0]))
+    m_scale = (sum(float(np.linalg.norm(e[k]) * np.linalg.norm(fabs[k])) for k in (1, 2, 3))
+               + float(np.linalg.norm(e[0] - rP)) * f_scale)
+
+    def wrench(x):
+        return np.concatenate(frame_wrench(zf, -(G.T @ x), local))
+    A = linear_map(wrench, lam.size)
+    _, err = bounded(A, lam, unc[0], scale=[f_scale] * 3 + [m_scale] * 3)
+    arm = unc[1] * float(np.linalg.norm(A[:3] @ lam))
+    err = err[:3] + [e + arm for e in err[3:]]
+    return _wrench_row(kind, body, rP, zeroed(wrench(lam), err), err, _axes(zf), unc[2])
+
+
+def _wrench_row(kind, body, at, values, err, R, ddir) -> dict:
+    """The fields of a row with a force and moment (global, then in the body axes R)."""
+    fb, fb_err = _in_body(R, values[:3], err[:3], ddir)
+    mb, mb_err = _in_body(R, values[3:], err[3:], ddir)
+    return {"kind": kind, "on": body, "at": [float(x) for x in at], "force": values[:3],
+            "moment": values[3:], "force_body": fb, "moment_body": mb,
+            "error": {"force": err[:3], "moment": err[3:], "force_body": fb_err,
+                      "moment_body": mb_err}}
+
+
+def _on_frame(model, c, q, lam, unc):
+    """Any other spatial constraint on a body whose whole frame is coordinates it acts on (a
+    contact, a rolling wheel): its force and moment on that body, about the body's origin."""
+    cols = {int(i): k for k, i in enumerate(c.idx)}
+    for b, rec in model.bodies.items():
+        frame = rec.get("frame")
+        C = np.zeros((0, 0)) if frame is None else np.asarray(frame.C, float)
+        if (C.shape[0] != FRAME_SIZE or np.any((C != 0).sum(axis=1) != 1)
+                or np.any(C[C != 0] != 1)):
+            continue
+        qi = frame.idx[np.argmax(C, axis=1)]  # z_k = q[qi_k]: a frame of free coordinates
+        if any(int(i) not in cols for i in qi):
+            continue
+        G = _dense(c.jac(q))[:, [cols[int(i)] for i in qi]]
+        return _wrench(frame(q), G, lam, unc, np.zeros(3), b, "on body")
+    return {"kind": "constraint", "on": None}
+
+
+def _carried(model, body, point, c, q, lam, unc):
+    """A basic point a spatial body carries, Φ = G (r_P − r_body(ξ)): the force on the body
+    there is +Gᵀλ (the point receives −Gᵀλ), no moment; a joint of the bodies carrying it."""
+    values, err = bounded(np.asarray(c.G, float).T, lam, unc[0])
+    row = _wrench_row("shared point", body, model.points[point](q), values + [0.0] * 3,
+                      err + [0.0] * 3, _axes(model.bodies[body]["frame"](q)), unc[2])
+    shared = [b for b, r in model.bodies.items() if point in (r.get("carried") or ())]
+    return {**row, "point": point, "shared_by": shared}
+
+
+def _planar(model, c, bodies, q, forces, errors, ddir):
+    """A planar constraint's point forces in the axes of the body of each point (its own body
+    for a rigid length, ``kind = "body"``; else the first body listing the point)."""
+    own = next((b for b, r in bodies.items() if c.name == f"{r.get('label')} (rigid length)"), None)
+    out, out_err, which = {}, {}, {}
+    for p, comps in forces.items():
+        b = own if own and p in bodies[own].get("points", ()) else next(
+            (b for b, r in bodies.items() if p in (r.get("points") or ())), None)
+        if b is None:
+            continue
+        pi, pj = bodies[b]["points"]
+        d = np.asarray(model.points[pj](q), float) - np.asarray(model.points[pi](q), float)
+        ex = d / max(float(np.linalg.norm(d)), 1e-300)
+        R = np.column_stack([ex, [-ex[1], ex[0]]])
+        vec = [comps.get(ax, 0.0) for ax in "xy"]
+        out[p], out_err[p] = _in_body(R, vec, [errors[p].get(ax, 0.0) for ax in "xy"], ddir)
+        which[p] = b
+    return {"kind": "body" if own else "constraint", "on": own, "forces_body": out,
+            "forces_body_error": out_err, "forces_body_on": which}
 
 
 def pin_reactions(model, eq) -> list[dict]:
