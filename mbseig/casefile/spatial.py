@@ -69,6 +69,8 @@ class SpatialBuilder(SpatialElementReaders, Builder):
         self.stations: dict[str, list] = {}  # body → [(label, Affine)] where elements act on it
         self.spatial_joints: dict[str, tuple] = {}  # joint name → (kind, b1, b2, at, axis)
         self.station_origin: dict[str, np.ndarray] = {}  # beam station "BEAM.NAME" → its node
+        self.inline: dict[tuple, tuple] = {}  # (element, key) → (body, map, at its station?)
+        self.pending_ends: dict[str, list] = {}  # element → its ends, named in _finish
         self._bound = False
 
     # -- the build ---------------------------------------------------------------------------
@@ -171,10 +173,48 @@ class SpatialBuilder(SpatialElementReaders, Builder):
         mass = model.mass + scatter(model.n, model.n, blocks) if blocks else model.mass
         return dataclasses.replace(
             model, mass=mass.tocsr(), g_const=g, constraints=tuple(constraints), forces=forces,
-            mass_parts=tuple(mass_parts),
+            mass_parts=tuple(mass_parts), element_ends={**model.element_ends, **self._ends()},
             gravity_force=None if gravity is None else g_gravity,
             points=LazyPoints(self.point_index, self.point_pos, self.markers),
             length_scale=self.length_scale)
+
+    def _ends(self) -> dict:
+        """The ends of the elements that act at inline points ``{body, at}`` (springs, bushings),
+        named once the bodies' markers exist: the body's marker of that station ("body.k"), else
+        (the ground, a beam station, a second station of one element on one body) a marker of
+        its own, "body.k" after the others."""
+        out = {}
+        for element, ends in self.pending_ends.items():
+            names = []
+            for end in ends:
+                if isinstance(end, str):
+                    names.append(end)
+                    continue
+                bname, aff, at_station = end
+                rec = self.bodies.get(bname) or {}
+                named = [m for m in rec.get("markers", ()) if self.markers[m] is aff]
+                if not named and at_station:
+                    named = [bname]
+                if not named:
+                    k = sum(1 for m in self.markers if m.rpartition(".")[0] == bname)
+                    named = [f"{bname}.{k}"]
+                    self.markers[named[0]] = aff
+                names.append(named[0])
+            out[element] = tuple(names)
+        return out
+
+    def record_ends(self, element, f, key):
+        """As the generic reader, and inline point references ``{body, at}`` too (:meth:`_ends`
+        names them once the bodies' markers exist)."""
+        refs = f.t.get(key)
+        if not isinstance(refs, list) or not any(isinstance(r, dict) for r in refs):
+            return super().record_ends(element, f, key)
+        ends = [self.inline.get((f.label, f"{key}[{i}]")) if isinstance(r, dict)
+                else template(r, f.names, f) for i, r in enumerate(refs)]
+        if all(e is not None and (not isinstance(e, str) or e in self.point_index
+                                  or e in self.markers) for e in ends):
+            self.pending_ends[element] = ends
+        return None
 
     def _with_stations(self, rotor):
         if rotor.body in self.station_origin:  # a rotor on a beam station: its node's point
@@ -246,6 +286,8 @@ class SpatialBuilder(SpatialElementReaders, Builder):
             sub.done()
             aff = frame_point(self.frame(f, bname), self.local(bname, at))
             self._station(bname, f.label, aff)
+            at_station = bname in self.station_origin and not np.any(self.local(bname, at))
+            self.inline[(f.label, key)] = (bname, aff, at_station)
             return aff, None if bname == "ground" else bname
         if isinstance(ref, str):
             aff = super().point_ref(f, key)

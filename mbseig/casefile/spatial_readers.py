@@ -189,9 +189,12 @@ class SpatialElementReaders:
             raise f.error("stiffness and damping must be finite")
         frames = (self.frame(f, b1), self.frame(f, b2))
         locals_ = (self.local(b1, at), self.local(b2, at))
+        ends = []
         for b, fr, loc in zip((b1, b2), frames, locals_):
-            self._station(b, f.label, frame_point(fr, loc))
+            ends.append((b, frame_point(fr, loc), b in self.station_origin and not np.any(loc)))
+            self._station(b, f.label, ends[-1][1])
         forces.append(QuadraticSpringDamper(f.label, bushing_rows(frames, locals_), K, D))
+        self.pending_ends[f.label] = ends  # drawn between its point on b1 and on b2
 
     def _coefficients(self, f, key, default=None):
         """A bushing's 6×6 stiffness or damping: 6 numbers, a 6×6 matrix, or a table over a
