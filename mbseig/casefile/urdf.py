@@ -326,7 +326,7 @@ def expand_urdf(case: dict, case_path) -> dict:
     if not isinstance(positions, dict):
         raise CaseError("positions must be a table {JOINT = value}", file=file,
                         element="urdf.positions")
-    robot = read_urdf(case_path.parent / fname)
+    robot = read_urdf(case_path.parent / fname, referrer=(file, "urdf.file"))
     tables = urdf_tables(robot, positions=positions, stiffness=table.get("stiffness"),
                          damping=table.get("damping"), floating=floating, where=(file, "urdf"))
     out = {key: value for key, value in case.items() if key != "urdf"}

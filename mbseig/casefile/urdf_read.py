@@ -79,14 +79,20 @@ def _named(el, tag, seen, path):
     return name, f"{tag} {name!r}"
 
 
-def read_urdf(path) -> UrdfRobot:
-    """Parse a URDF file (module docstring); structural checks are in :func:`urdf_tables`."""
+def read_urdf(path, *, referrer=None) -> UrdfRobot:
+    """Parse a URDF file (module docstring); structural checks are in :func:`urdf_tables`.
+    ``referrer`` = (case file, element) that names the URDF, if any: a URDF that cannot be
+    opened is then reported against that case element, naming both files."""
     path = Path(path)
     p = str(path)
     try:
         root = ET.parse(path).getroot()
     except OSError as exc:
-        raise CaseError(f"cannot read URDF file: {exc.strerror or exc}", file=p) from None
+        reason = exc.strerror or str(exc)
+        if referrer is not None:
+            raise CaseError(f"{p}: cannot read URDF file: {reason}", file=str(referrer[0]),
+                            element=referrer[1]) from None
+        raise CaseError(f"cannot read URDF file: {reason}", file=p) from None
     except ET.ParseError as exc:
         raise CaseError(f"malformed XML: {exc}", file=p) from None
     if root.tag != "robot":
