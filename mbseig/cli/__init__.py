@@ -19,7 +19,7 @@ from ..errors import CaseError, MbseigError, ReportedWarning
 __all__ = ["main", "console", "SUBCOMMANDS"]
 
 SUBCOMMANDS = ["linearize", "modes", "frf", "check", "sweep", "report", "bench", "import-urdf",
-               "animate"]
+               "animate", "unbalance"]
 # one line each for ``mbseig --help`` without importing every command's module
 SUBCOMMAND_HELP = {
     "linearize": "equilibrium and reduced linear model M, P, Q (and B, C, D of named signals)",
@@ -31,6 +31,7 @@ SUBCOMMAND_HELP = {
     "bench": "measure speed against accuracy; write reports/benchmarks.md",
     "import-urdf": "write the plain 3-D case of a URDF robot",
     "animate": "write one period of a mode shape as a looping GIF",
+    "unbalance": "synchronous response of a spinning rotor to an unbalance m·e",
 }
 # commands whose output carries the text of every ReportedWarning (beam-theory guidance, notes on
 # the equilibrium: mbseig.cli.common.output_notes), so the warning would only repeat it on stderr

@@ -1,26 +1,32 @@
 """Synchronous unbalance response of a spinning rotor (DESIGN §8, flexible rotors; docs/beams3d.md).
 
-An unbalance m·e at a station P (a beam station ``"BEAM.NAME"``, a body point, any point of the
-case) spinning at Ω about the axis a exerts the rotating force
+An unbalance m·e at a point P (a beam station ``"BEAM.NAME"``, a body — its centre of mass —,
+any point of the case) spinning at Ω about the axis a exerts the rotating force
 
     F(t) = m e Ω² (cos(Ωt + φ) e₁ + sin(Ωt + φ) e₂) = Re(F̂ e^{iΩt}),   F̂ = m e Ω² e^{iφ} (e₁ − i e₂)
 
-((e₁, e₂, a) right-handed, φ the unbalance's angle).  About the equilibrium at that speed the
-reduced linear model M ẍ + P ẋ + Q x = Nᵀ C_Pᵀ F gives the steady response
+((e₁, e₂, a) right-handed, φ the unbalance's angle from e₁ at t = 0).  About the equilibrium at
+that speed the reduced linear model M ẍ + P ẋ + Q x = Nᵀ C_Pᵀ F gives the steady response
 x̂ = (Q − Ω² M + iΩ P)⁻¹ Nᵀ C_Pᵀ F̂; every station S of the case's rotors moves along
 Re(X̂ e^{iΩt}), X̂ = C_S N x̂, reported as the amplitude and phase of its two lateral components
-(along e₁, e₂) and the orbit's major semi-axis r_f + r_b (forward and backward circles, as for
-the whirl).  Ω is the rotor speed of the model at each swept value (the first rotor's
-``speed``), so the swept parameter may be any quantity the speed depends on.
+(along e₁, e₂: x₁(t) = |X₁| cos(Ωt + ∠X₁)) and the orbit's major semi-axis r_f + r_b (forward
+and backward circles, as for the whirl); every named output y = C [x; ẋ] of ``[[outputs]]``
+likewise, Ŷ = C [x̂; iΩ x̂].  Ω is the rotor speed of the model at each swept value (the first
+rotor's ``speed``), so the swept parameter may be any quantity the speed depends on.
+
+For the Jeffcott rotor (a disk m on an isotropic support k, c at its centre of mass)
+X₁ = m e Ω² e^{iφ} / (k − m Ω² + i c Ω), X₂ = −i X₁ (tests/test_unbalance.py).
 """
 
 from __future__ import annotations
 
+import math
+import re
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import CaseError
+from ..errors import CaseError, MbseigError
 from ..linear import linearize
 from ..model.spatial_joints import normal_pair
 from ..model.spatial_whirl import rotors
@@ -28,13 +34,19 @@ from ..numerics import jsonable
 from ..statics import equilibrium, solved
 from .point import as_spec
 
-__all__ = ["UnbalanceResponse", "unbalance_response"]
+__all__ = ["UnbalanceResponse", "unbalance_response", "unbalance_point", "require_rotor",
+           "station_names", "spinning_beams", "UNITS"]
+
+UNITS = {"speed": "rad/s", "amplitude": "m", "phase": "deg", "unbalance": "kg m",
+         "angle": "deg"}
 
 
 @dataclass(frozen=True, eq=False)
 class UnbalanceResponse:
     """Response per speed (rows) and station (columns): complex lateral amplitudes along e₁ and
-    e₂ [m], orbit major semi-axis [m]; ``speeds`` Ω [rad/s] at each ``values`` of ``parameter``."""
+    e₂ [m] (``X1``, ``X2``), the orbit major semi-axis [m] (``major``); per named output its
+    complex amplitude ``Y`` (rows: speeds) in ``output_units``; ``speeds`` Ω [rad/s] at each
+    ``values`` of ``parameter``; ``unbalance`` m·e [kg m] at ``at``, ``angle`` φ [rad]."""
 
     case: str
     parameter: str
@@ -45,6 +57,12 @@ class UnbalanceResponse:
     X2: np.ndarray
     unbalance: float
     at: str
+    angle: float = 0.0
+    outputs: tuple = ()
+    output_units: tuple = ()
+    Y: np.ndarray = None
+    directions: dict = None
+    source: str = ""
 
     @property
     def major(self) -> np.ndarray:
@@ -53,18 +71,48 @@ class UnbalanceResponse:
         return rf + rb
 
     def to_json(self) -> dict:
-        rows = []
-        for j, st in enumerate(self.stations):
-            rows.append({"station": st,
-                         "amplitude_1": [float(x) for x in np.abs(self.X1[:, j])],
-                         "phase_1": [float(x) for x in np.angle(self.X1[:, j])],
-                         "amplitude_2": [float(x) for x in np.abs(self.X2[:, j])],
-                         "phase_2": [float(x) for x in np.angle(self.X2[:, j])],
-                         "major": [float(x) for x in self.major[:, j]]})
+        def deg(z):
+            return [float(x) for x in np.degrees(np.angle(z))]
+
+        rows = [{"station": st,
+                 "amplitude_1": [float(x) for x in np.abs(self.X1[:, j])],
+                 "phase_1": deg(self.X1[:, j]),
+                 "amplitude_2": [float(x) for x in np.abs(self.X2[:, j])],
+                 "phase_2": deg(self.X2[:, j]),
+                 "major": [float(x) for x in self.major[:, j]]}
+                for j, st in enumerate(self.stations)]
+        outs = [{"output": name, "unit": unit,
+                 "amplitude": [float(x) for x in np.abs(self.Y[:, j])],
+                 "phase": deg(self.Y[:, j])}
+                for j, (name, unit) in enumerate(zip(self.outputs, self.output_units))]
         return jsonable({"case": self.case, "parameter": self.parameter,
                          "values": [float(v) for v in self.values],
-                         "speed": [float(v) for v in self.speeds], "unbalance": self.unbalance,
-                         "at": self.at, "stations": rows})
+                         "speed": [float(v) for v in self.speeds],
+                         "unbalance": {"at": self.at, "m_e": self.unbalance,
+                                       "angle": math.degrees(self.angle)},
+                         "directions": self.directions or {}, "units": UNITS,
+                         "stations": rows, "outputs": outs})
+
+    def rows(self):
+        """(value, Ω, name, complex amplitudes (X₁, X₂) or (Y, None), major or |Y|, unit) per
+        speed and station, then per speed and output."""
+        major = self.major
+        for j, st in enumerate(self.stations):
+            for k in range(len(self.speeds)):
+                yield (self.values[k], self.speeds[k], st, self.X1[k, j], self.X2[k, j],
+                       major[k, j], "m")
+        for j, (name, unit) in enumerate(zip(self.outputs, self.output_units)):
+            for k in range(len(self.speeds)):
+                yield (self.values[k], self.speeds[k], name, self.Y[k, j], None,
+                       abs(self.Y[k, j]), unit)
+
+    def peaks(self) -> list:
+        """Per station and output, the row of :meth:`rows` of its largest amplitude."""
+        best = {}
+        for row in self.rows():
+            if np.isfinite(row[5]) and (row[2] not in best or row[5] > best[row[2]][5]):
+                best[row[2]] = row
+        return list(best.values())
 
     def table(self) -> str:
         """A text table: speed, then the major semi-axis at every station."""
@@ -74,48 +122,179 @@ class UnbalanceResponse:
             lines.append("  ".join([f"{w:16.6g}"] + [f"{x:16.6e}" for x in self.major[k]]))
         return "\n".join(lines)
 
+    def listing(self, unit=None) -> str:
+        """A text table, one line a speed and station (then output): the parameter, Ω, the
+        amplitude and phase of each lateral component and the orbit's major semi-axis (for an
+        output: its amplitude and phase).  ``unit``: the parameter's unit for its header."""
+        p = f"{self.parameter} [{unit}]" if unit and unit != "1" else self.parameter
+        same = np.array_equal(np.asarray(self.values, float), np.asarray(self.speeds, float))
+        head = [f"{p:>14s}"] + ([] if same else [f"{'Omega [rad/s]':>14s}"]) + [
+                f"{'station/output':<28s}",
+                f"{'|X1|':>12s}", f"{'phase X1 [deg]':>14s}", f"{'|X2|':>12s}",
+                f"{'phase X2 [deg]':>14s}", f"{'major':>12s}", "unit"]
+        lines = ["  ".join(head)]
+        for v, w, name, a, b, big, u in self.rows():
+            second = (["–".rjust(12), "–".rjust(14)] if b is None else
+                      [f"{abs(b):12.5e}", _phase_text(b)])
+            lines.append("  ".join([f"{v:14.6g}"] + ([] if same else [f"{w:14.6g}"])
+                                   + [f"{name:<28s}", f"{abs(a):12.5e}", _phase_text(a)]
+                                   + second + [f"{big:12.5e}", u or "–"]))
+        return "\n".join(lines)
 
-def _point(model, at):
-    try:
+    def write_csv(self, path):
+        """The table as CSV (complex amplitudes as amplitude and phase in degrees)."""
+        import csv
+
+        with open(path, "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow([self.parameter, "Omega_rad_s", "station", "amplitude_1", "phase_1_deg",
+                         "amplitude_2", "phase_2_deg", "major", "unit"])
+            for v, om, name, a, b, big, u in self.rows():
+                w.writerow([repr(float(v)), repr(float(om)), name, repr(abs(a)),
+                            repr(_deg(a)), "" if b is None else repr(abs(b)),
+                            "" if b is None else repr(_deg(b)), repr(float(big)), u or ""])
+        return path
+
+
+def _deg(z) -> float:
+    return float(np.degrees(np.angle(z)))
+
+
+def _phase_text(z) -> str:
+    """The phase in degrees, "–" where the amplitude is 0 (Ω = 0: no force, no phase)."""
+    return "–".rjust(14) if z == 0 or not np.isfinite(z) else f"{_deg(z):14.3f}"
+
+
+def _map_key(aff):
+    """A canonical key of an affine point map r = C q[idx] + d (columns sorted and summed, zero
+    columns dropped), so two maps of the same point compare equal however they were built."""
+    idx = np.asarray(aff.idx, int)
+    C = np.asarray(aff.C.toarray() if hasattr(aff.C, "toarray") else aff.C, float)
+    cols = {}
+    for j, i in enumerate(idx):
+        cols[int(i)] = cols.get(int(i), 0.0) + C[:, j]
+    keep = sorted(i for i, c in cols.items() if np.any(c != 0))
+    return (tuple(keep), np.array([cols[i] for i in keep]).tobytes(),
+            np.asarray(getattr(aff, "d", 0.0), float).tobytes())
+
+
+def station_names(model, rs):
+    """Readable names of the rotors' stations: a rotor's as ``BODY: label``; a beam node as the
+    case's name of that point (a basic point, ``BEAM.STATION``, else ``BEAM.nK``)."""
+    by_map = {}
+    for name, aff in model.points.items():
+        key = _map_key(aff)
+        auto = re.search(r"\.n\d+$", name) is not None
+        if key not in by_map or (by_map[key][1] and not auto):
+            by_map[key] = (name, auto)
+    out = []
+    for r in rs:
+        for label, aff in r.stations:
+            if getattr(r, "body", None) is not None and hasattr(r, "polar_inertia"):
+                out.append((f"{r.body}: {label}", aff))
+                continue
+            out.append((by_map.get(_map_key(aff), (f"{r.name}: {label}", False))[0], aff))
+    seen, unique = set(), []
+    for name, aff in out:  # a point named twice (a rotor's station on a beam node) listed once
+        if name not in seen:
+            seen.add(name)
+            unique.append((name, aff))
+    return unique
+
+
+def unbalance_point(model, at):
+    """The affine map of the point where the unbalance acts: a point of the case (a basic
+    point, ``BEAM.STATION``, ``BEAM.nK``) or a body name (its centre of mass); a
+    :class:`CaseError` naming ``--at`` otherwise."""
+    if isinstance(at, str) and at in model.points:
         return model.points[at]
-    except (KeyError, TypeError):
-        raise CaseError(f"unbalance: unknown point or station {at!r}", element="unbalance") from None
+    body = model.bodies.get(at) if isinstance(at, str) else None
+    markers = list((body or {}).get("markers") or ())
+    if markers and markers[0] in model.points:
+        return model.points[markers[0]]
+    stations = [n for n in model.points if "." in n and not re.search(r"\.(n?\d+)$", n)]
+    known = ", ".join(sorted(set(stations) | set(model.bodies))[:12]) or "none"
+    raise CaseError(f"unknown point, station or body {at!r} for the unbalance (stations and "
+                    f"bodies: {known})", element="--at", file=getattr(model, "source", None))
+
+
+def spinning_beams(case) -> bool:
+    """Whether the case has a beam with ``spin`` (a rotor at every non-zero speed)."""
+    beams = (getattr(case, "data", None) or {}).get("beams") or []
+    return any(isinstance(b, dict) and b.get("spin") is not None for b in beams)
+
+
+def require_rotor(model, case=None):
+    """The model's rotors (rotor elements, spinning beams), or a one-line :class:`CaseError`
+    (an empty list for a case whose beams spin, at rest)."""
+    rs = rotors(model)
+    if not rs and not (case is not None and spinning_beams(case)):
+        raise CaseError("the case has no spinning rotor (a [[forces]] rotor element or a beam "
+                        "with spin): no unbalance response", element="unbalance",
+                        file=getattr(model, "source", None))
+    return rs
 
 
 def unbalance_response(case, parameter, values, *, at, unbalance, phase=0.0, config=None,
                        fixed=None) -> UnbalanceResponse:
-    """Synchronous response to the unbalance ``unbalance`` = m·e [kg m] at the point ``at`` over
-    ``parameter`` = ``values`` (module docstring)."""
+    """Synchronous response to the unbalance ``unbalance`` = m·e [kg m] at the point ``at`` (at
+    the angle ``phase`` [rad] from e₁) over ``parameter`` = ``values`` (module docstring)."""
     spec = as_spec(case)
     values = np.asarray(values, float)
-    speeds, X1, X2, names = [], [], [], None
+    speeds, per_speed, Ys = [], [], []
+    lin = directions = None
     for v in values:
         model = spec.build(config, **{**(fixed or {}), parameter: float(v)})
-        eq = equilibrium(model)
-        model = solved(model, eq)
-        rs = rotors(model)
-        if not rs:
-            raise CaseError("unbalance response needs a rotor or a spinning beam",
-                            element="unbalance")
-        lin = linearize(model, eq)
+        spinning = require_rotor(model, spec)
+        P = unbalance_point(model, at)
+        if not spinning:  # a spinning beam at rest: no force, no response
+            speeds.append(0.0)
+            per_speed.append({})
+            Ys.append(None)
+            continue
+        try:
+            eq = equilibrium(model)
+            model = solved(model, eq)
+            rs = rotors(model)
+            lin = linearize(model, eq)
+        except MbseigError as exc:
+            raise exc.located(file=spec.source, element=f"{parameter} = {v:g}") from None
         if lin.constraint_jacobian is not None:
             raise CaseError("unbalance response needs the dense reduced model (a smaller case)",
-                            element="unbalance")
+                            element="unbalance", file=spec.source)
         W = float(rs[0].speed)
         axis = rs[0].axis_map()(eq.q)
-        e1, e2 = normal_pair(axis / np.linalg.norm(axis))
-        P = _point(model, at)
+        axis = axis / np.linalg.norm(axis)
+        e1, e2 = normal_pair(axis)
+        directions = {"axis": axis.tolist(), "e1": e1.tolist(), "e2": e2.tolist()}
         F = unbalance * W**2 * np.exp(1j * phase) * (e1 - 1j * e2)
         g = np.zeros(model.n, complex)
         np.add.at(g, P.idx, P.C.T @ F)
         Z = lin.Q - W**2 * lin.M + 1j * W * lin.P
-        x = lin.N @ np.linalg.solve(Z, lin.N.T @ g)
-        stations = [(f"{r.name}: {lab}", aff) for r in rs for lab, aff in r.stations]
-        names = names or tuple(s for s, _ in stations)
-        Xs = [aff.C @ x[aff.idx] for _, aff in stations]
+        xr = np.linalg.solve(Z, lin.N.T @ g)
+        x = lin.N @ xr
+        Xs = {name: aff.C @ x[aff.idx] for name, aff in station_names(model, rs)}
         speeds.append(W)
-        X1.append([e1 @ X for X in Xs])
-        X2.append([e2 @ X for X in Xs])
+        per_speed.append({name: (e1 @ X, e2 @ X) for name, X in Xs.items()})
+        n = lin.dof
+        Ys.append(lin.C[:, :n] @ xr + 1j * W * (lin.C[:, n:] @ xr) if lin.C is not None
+                  else np.zeros(0, complex))
+    # a beam spins (is a rotor) only at a non-zero speed: where a station is missing the
+    # response is 0 at Ω = 0 (no unbalance force), else not known (NaN)
+    names = tuple(dict.fromkeys(n for d in per_speed for n in d))
+    X1 = np.array([[d[n][0] if n in d else (0.0 if w == 0 else np.nan) for n in names]
+                   for d, w in zip(per_speed, speeds)], complex)
+    X2 = np.array([[d[n][1] if n in d else (0.0 if w == 0 else np.nan) for n in names]
+                   for d, w in zip(per_speed, speeds)], complex)
+    if lin is None:
+        raise CaseError(f"no speed of the sweep spins the rotor ({parameter} = "
+                        f"{values[0]:g} … {values[-1]:g})", element="unbalance",
+                        file=spec.source)
+    outputs = tuple(lin.output_names) if lin.C is not None else ()
+    units = tuple(lin.output_units) if outputs and lin.output_units else ("",) * len(outputs)
+    Ys = [np.zeros(len(outputs), complex) if y is None else y for y in Ys]
     return UnbalanceResponse(case=spec.name, parameter=parameter, values=values,
-                             speeds=np.array(speeds), stations=names, X1=np.array(X1),
-                             X2=np.array(X2), unbalance=float(unbalance), at=at)
+                             speeds=np.array(speeds), stations=names, X1=X1, X2=X2, unbalance=float(unbalance), at=at,
+                             angle=float(phase), outputs=outputs, output_units=units,
+                             Y=np.array(Ys).reshape(len(values), len(outputs)),
+                             directions=directions, source=str(spec.source))
