@@ -16,6 +16,8 @@ DPI = 100
 
 
 STYLE = {"svg.hashsalt": "mbseig", "font.size": 9}
+#: the spatial three-view and rotor figures are set one point smaller than the planar ones
+SPATIAL_STYLE = {**STYLE, "font.size": 8}
 
 
 def styled(fn):

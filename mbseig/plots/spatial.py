@@ -1,5 +1,5 @@
 """Figures of spatial models: mode shapes in a true-aspect 3-D view beside three orthographic
-views, and Campbell diagrams.
+views (the Campbell diagram is in :mod:`mbseig.plots.rotor`, re-exported here).
 
 Like :mod:`mbseig.plots`, every function returns a :class:`matplotlib.figure.Figure` built
 without pyplot (no backend switch, no global state) and drawn in a local rc context;
@@ -14,12 +14,14 @@ read by their attributes (duck typing):
 - rotor elements (``body``, ``frame`` the carrier's frame map, ``axis`` in the carrier's
   axes, ``polar_inertia``, ``stations``: the (label, map) of the carrier's centre (or station)
   and of the body's other markers in the same order);
-- a Campbell result: ``values``, ``parameter``, ``speeds``, ``harmonic``, ``frequency``,
-  ``log_decrement``, ``whirl`` (per point, per track), ``critical_speeds`` and, when it has
-  them, ``tolerance`` (per point, per track: each eigenvalue's stability tolerance) and
-  ``units``.
+- ``model.flexible["bodies"]``: the 3-D beams (``type`` "beam", ``dimension`` 3, ``points``
+  its end points, ``elements``, ``ends``); their nodes are the points ``BEAM.nK`` and their
+  triads the coordinates ``BEAM.nK.u.x`` ... ``BEAM.nK.w.z`` (global axes at the reference).
 
-A body is drawn rigid: the displaced configuration q₀ ± a·L·Re(e^{−iφ} x) is projected back
+A beam is drawn as a curve: between its nodes the cubic Hermite interpolation of the nodes'
+displaced positions and tangents (each node's triad turning the reference axis; a clamped end
+keeps it; where a node has no triad of its own, the chord), the deformed shape of the element's
+own bending interpolation.  A body is drawn rigid: the displaced configuration q₀ ± a·L·Re(e^{−iφ} x) is projected back
 onto the constraints Φ(q) = 0 (:func:`mbseig.plots.project_constraints`), and its points are
 affine maps of the body's frame, so they move together.  Each body is drawn as the segments
 from its centre of mass to every point it carries and every joint or spring station on it (a
@@ -36,19 +38,18 @@ import math
 
 import numpy as np
 
-from .common import STYLE, figure, save
+from .common import SPATIAL_STYLE, figure, save
 from .mechanism import project_constraints
+from .rotor import WHIRL_COLOURS, campbell_diagram, campbell_range, speed_unit
 
-#: the three-view and Campbell figures are set one point smaller than the planar ones
-SPATIAL_STYLE = {**STYLE, "font.size": 8}
+__all__ = ["VIEWS", "WHIRL_COLOURS", "campbell_diagram", "campbell_range", "save",
+           "spatial_modes", "spatial_layout", "draw_spatial", "view_limits", "speed_unit",
+           "beam_curve", "SEGMENT_POINTS"]
 
-__all__ = ["VIEWS", "WHIRL_COLOURS", "campbell_diagram", "save", "spatial_modes",
-           "spatial_layout", "draw_spatial", "view_limits", "speed_unit"]
+SEGMENT_POINTS = 8  # points drawn along each beam element (its Hermite interpolation)
 
 #: (horizontal axis, vertical axis, title) of the three orthographic views
 VIEWS = ((0, 1, "top (x, y)"), (0, 2, "front (x, z)"), (1, 2, "side (y, z)"))
-WHIRL_COLOURS = {"forward": "tab:blue", "backward": "tab:red", "mixed": "tab:gray",
-                 "none": "tab:green", None: "k"}
 
 
 def _vec3(p):
@@ -96,7 +97,63 @@ def spatial_layout(model):
     station_points = {s["point"] for s in stations}
     joints = [j for j in dict.fromkeys(joints) if j not in station_points]
     return {"bodies": bodies, "discs": discs, "joints": joints, "fixed": fixed,
-            "stations": stations}
+            "stations": stations, "beams": _beams(model)}
+
+
+def _beams(model):
+    """The 3-D beams: node point names (start, BEAM.n1 ..., end), each node's triad
+    coordinates (None without one), the reference axis and which ends are clamped."""
+    index = {n: i for i, n in enumerate(getattr(model, "coordinate_names", ()) or ())}
+    records = (getattr(model, "flexible", None) or {}).get("bodies") or {}
+    q_ref = getattr(model, "q_init", None)
+    out = []
+    for name, rec in records.items():
+        if rec.get("type") != "beam" or rec.get("dimension") != 3 or q_ref is None:
+            continue
+        ends, n = list(rec.get("points") or ()), int(rec.get("elements") or 0)
+        if len(ends) != 2 or n < 1:
+            continue
+        nodes = [ends[0]] + [f"{name}.n{k}" for k in range(1, n)] + [ends[1]]
+        if not all(p in model.points for p in nodes):
+            continue
+        chord = _vec3(model.points[ends[1]](q_ref)) - _vec3(model.points[ends[0]](q_ref))
+        triads = []
+        for k in range(n + 1):
+            keys = [f"{name}.n{k}.{a}.{c}" for a in "uvw" for c in "xyz"]
+            triads.append([index[c] for c in keys] if all(c in index for c in keys) else None)
+        out.append({"name": name, "nodes": nodes, "triads": triads,
+                    "axis": chord / max(np.linalg.norm(chord), 1e-300),
+                    "clamped": [e == "clamped" for e in (rec.get("ends") or ("", ""))]})
+    return out
+
+
+def beam_curve(model, beam, q, n=SEGMENT_POINTS):
+    """Points (m, 3) of a beam at configuration q: per element the cubic Hermite curve through
+    its end nodes with their tangents R t₀ (R = [u v w] of the node's triad, t₀ the reference
+    axis; a clamped end node keeps t₀; a node without a triad takes the element's chord)."""
+    q = np.asarray(q, float)
+    P = np.array([_vec3(model.points[p](q)) for p in beam["nodes"]])
+    t0, last = beam["axis"], len(P) - 1
+
+    def tangent(k, chord):
+        idx = beam["triads"][k]
+        if idx is not None:
+            u, v, w = q[idx[0:3]], q[idx[3:6]], q[idx[6:9]]
+            return t0[0] * u + t0[1] * v + t0[2] * w
+        if (k == 0 and beam["clamped"][0]) or (k == last and beam["clamped"][1]):
+            return t0
+        return chord / max(np.linalg.norm(chord), 1e-300)
+
+    s = np.linspace(0.0, 1.0, n + 1)[:, None]
+    h00, h10 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s
+    h01, h11 = -2 * s**3 + 3 * s**2, s**3 - s**2
+    pts = [P[:1]]
+    for k in range(last):
+        chord = P[k + 1] - P[k]
+        ell = np.linalg.norm(chord)
+        ta, tb = tangent(k, chord), tangent(k + 1, chord)
+        pts.append((h00 * P[k] + h10 * ell * ta + h01 * P[k + 1] + h11 * ell * tb)[1:])
+    return np.vstack(pts)
 
 
 def _disc_circle(model, q, disc, n=48):
@@ -136,6 +193,11 @@ def draw_spatial(ax, model, layout, q, project, *, colour, lw, alpha=1.0, symbol
                 ax.plot(*project(np.array([c, c + triads * axis])), style, color=colour,
                         lw=max(lw * 0.5, 0.6), alpha=alpha)
 
+    for beam in layout.get("beams", ()):
+        ax.plot(*project(beam_curve(model, beam, q)), "-", color=colour, lw=lw, alpha=alpha,
+                solid_capstyle="round")
+        if symbols:  # the nodes, small, on the equilibrium
+            ax.plot(*project(xyz(beam["nodes"])), ".", color=colour, ms=2, alpha=alpha)
     for b in layout["bodies"]:
         P = xyz(b["points"])
         if len(P) == 1:
@@ -170,6 +232,8 @@ def all_points(model, layout, qs):
             if d["radius"]:
                 pts += list(_disc_circle(model, q, d, n=12))
         pts += [_vec3(model.points[n](q)) for n in layout["fixed"]]
+        for beam in layout.get("beams", ()):
+            pts += list(beam_curve(model, beam, q, n=2))
     return np.array(pts)
 
 
@@ -257,6 +321,9 @@ def spatial_modes(model, q0, shapes, labels, *, amplitude=0.15, title=""):
                    Line2D([], [], ls="none", marker="o", mfc="none", mec="k", ms=6,
                           label="joint"),
                    Line2D([], [], ls="none", marker="s", color="k", ms=4, label="fixed point")]
+        if layout["beams"]:
+            handles.append(Line2D([], [], color="0.3", lw=1.5, marker=".", ms=3,
+                                  label="beam (nodes joined by the element's curve)"))
         if layout["stations"]:
             handles.append(Line2D([], [], ls="none", marker="^", mfc="none", mec="tab:green",
                                   ms=6, label="bearing / spring station"))
@@ -269,85 +336,4 @@ def spatial_modes(model, q0, shapes, labels, *, amplitude=0.15, title=""):
         fig.subplots_adjust(left=0.03, right=0.99, bottom=0.35 / (3.1 * n + 0.5) + 0.06,
                             top=1 - (0.75 if title else 0.35) / (3.1 * n + 0.5), wspace=0.3,
                             hspace=0.45)
-        return fig
-
-
-def speed_unit(res):
-    """The unit of a Campbell diagram's parameter: its unit from the case (``res.units``) when
-    known; else rad/s when the parameter is the rotor speed Ω itself, rpm when it is Ω·60/2π
-    (both to 1e-9), else None."""
-    unit = (getattr(res, "units", None) or {}).get(res.parameter)
-    if unit:
-        return unit
-    x, w = np.asarray(res.values, float), np.asarray(res.speeds, float)
-    scale = max(float(np.max(np.abs(w), initial=0.0)), 1e-300)
-    if np.allclose(x, w, rtol=0, atol=1e-9 * scale):
-        return "rad/s"
-    if np.allclose(x * 2 * math.pi / 60, w, rtol=0, atol=1e-9 * scale):
-        return "rpm"
-    return None
-
-
-def _log_dec_band(res, rtol):
-    """Per point and track, the log decrement's error band 2π tol/ω: ``res.tolerance`` when
-    the result carries the eigenvalues' stability tolerances, else rtol |s| (the floor of
-    mbseig.modal's tolerance rule)."""
-    s = np.asarray(res.tracks)
-    tol = getattr(res, "tolerance", None)
-    tol = np.asarray(tol, float) if tol is not None else rtol * np.abs(s)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(np.abs(s.imag) > 0, 2 * math.pi * tol / np.abs(s.imag), np.nan)
-
-
-def campbell_diagram(res, *, rtol=1e-12, min_log_dec_span=0.05):
-    """Frequency against the swept parameter, coloured by whirl, with the excitation line
-    h·|Ω| (dashed) and the critical speeds (circles); below, the logarithmic decrement.
-
-    A log decrement within its error band (2π tol/ω, the eigenvalue's stability tolerance;
-    ``rtol``·|s| when the result does not carry it) is drawn as 0, on the grey band, so the
-    panel shows the physics and not the rounding; its axis spans at least ±
-    ``min_log_dec_span``."""
-    import matplotlib
-    from matplotlib.lines import Line2D
-
-    with matplotlib.rc_context(SPATIAL_STYLE):
-        fig = figure(figsize=(8.8, 7))
-        a1, a2 = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
-        x = np.asarray(res.values, float)
-        F = np.asarray(res.frequency) / (2 * math.pi)
-        LD = np.asarray(res.log_decrement)
-        band = _log_dec_band(res, rtol)
-        LDp = np.where(np.abs(LD) <= band, 0.0, LD)
-        for j in range(F.shape[1]):
-            for k in range(len(x) - 1):
-                colour = WHIRL_COLOURS.get(res.whirl[k][j], "k")
-                a1.plot(x[k:k + 2], F[k:k + 2, j], "-", color=colour, lw=1.5)
-                a2.plot(x[k:k + 2], LDp[k:k + 2, j], "-", color=colour, lw=1.2)
-        a1.plot(x, res.harmonic * np.abs(res.speeds) / (2 * math.pi), "k--", lw=1)
-        for c in res.critical_speeds:
-            a1.plot(c["value"], c["frequency"] / (2 * math.pi), "o", mfc="none",
-                    color=WHIRL_COLOURS.get(c["whirl"], "k"), ms=7)
-        handles = [Line2D([], [], color=WHIRL_COLOURS[w], label=w) for w in
-                   ("forward", "backward", "mixed", "none")]
-        handles.append(Line2D([], [], color="k", ls="--", label=f"{res.harmonic:g}x excitation"))
-        a1.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0),
-                  borderaxespad=0.0)  # outside the axes, never over the curves
-        a1.set_ylabel("frequency ω_d/2π [Hz]")
-        a1.set_title(f"Campbell diagram of {res.case}: circles = critical speeds")
-        finite = np.abs(LDp[np.isfinite(LDp)])
-        top = max(float(finite.max()) * 1.15 if finite.size else 0.0, min_log_dec_span)
-        lo = min(float(np.nanmin(LDp)) * 1.15 if finite.size else 0.0, -min_log_dec_span)
-        a2.set_ylim(lo, top)
-        bmax = float(np.nanmax(band)) if np.isfinite(band).any() else 0.0
-        a2.axhspan(-bmax, bmax, color="0.8", lw=0, zorder=0)
-        a2.axhline(0.0, color="0.5", lw=0.6, zorder=0)
-        a2.set_ylabel("log decrement Λ = 2πδ/ω_d [–]")
-        a2.legend(handles=[Line2D([], [], color="0.6", lw=4,
-                                  label=f"|Λ| ≤ 2π tol/ω_d (≤ {bmax:.1g}): drawn as 0")],
-                  fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
-        unit = speed_unit(res)
-        a2.set_xlabel(res.parameter + (f" [{unit}]" if unit else ""))
-        a1.grid(True, lw=0.3)
-        a2.grid(True, lw=0.3)
-        fig.tight_layout()
         return fig

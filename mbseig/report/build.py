@@ -14,6 +14,12 @@ GIF a mode (embedded in the HTML), the pole map and the time-domain check of eve
 - ``compare = "constraint_stiffness"``: the eigenvalues of ``config`` with and without the
   constraint-force stiffness Σ λ ∇²Φ.
 
+A sweep over a parameter that sets a rotor's speed (a ``rotor`` element, a beam's ``spin``)
+also gives the rotor's Campbell diagram, its critical speeds and the unbalance response
+(:mod:`mbseig.report.study_blocks`); ``speeds`` = (parameter, values) asks for that section
+without a ``[[report.studies]]`` entry, and ``unbalance`` = (point, m·e [kg m]) places the
+unbalance (default m·e = 1 kg m at the first disk).
+
 Output is deterministic: no dates or timings; figures are PNGs without metadata, animations
 GIFs of the same frames; numbers are formatted at fixed precision.  The HTML embeds every
 figure and animation as a base64 data URI; the files are also written next to report.md, which
@@ -28,11 +34,12 @@ import time
 from pathlib import Path
 
 from ..numerics import user_names
+from ..studies.campbell import is_rotor
 from ..studies.point import as_spec
 from ..studies.report_studies import study_configuration
 from .render import render_html, render_markdown
 from .sections import configuration_blocks
-from .study_blocks import study_section
+from .study_blocks import rotor_section, study_section
 from .summary import comparison_blocks, summary_blocks
 from .text import clean
 from .units import parameter_units
@@ -67,10 +74,11 @@ def provenance(case) -> dict:
 
 
 def build_report(case, *, configs=None, out_dir, run_check=True, jobs=None, studies=True,
-                 sensitivities=True, animations=True):
+                 sensitivities=True, animations=True, speeds=None, unbalance=None):
     """Blocks of the report of ``case`` (a path or a parsed :class:`~mbseig.casefile.CaseSpec`,
     read once) for ``configs`` (list of names; [None] for the base): title, provenance, table
-    of contents, summary, comparison, one section a configuration, the studies."""
+    of contents, summary, comparison, one section a configuration, the studies (and the rotor
+    over ``speeds``, module docstring)."""
     case = as_spec(case)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -97,9 +105,18 @@ def build_report(case, *, configs=None, out_dir, run_check=True, jobs=None, stud
         for st in getattr(base, "report", {}).get("studies", []):  # a linear case has no [report]
             if st.get("config") not in configs and not (len(configs) > 1):
                 continue
-            b, s = study_section(case, st, out_dir, stem, jobs, units)
+            b, s = study_section(case, st, out_dir, stem, jobs, units, unbalance=unbalance)
             study_blocks += b
             study_sums.append(s)
+    if speeds is not None:
+        study_blocks += rotor_section(case, speeds, out_dir, stem, jobs, units,
+                                      config=configs[0], unbalance=unbalance)
+    elif is_rotor(case, base) and not any(b[0] == "h3" and "Campbell" in b[1]
+                                          for b in study_blocks):
+        study_blocks += [("h2", "Rotor"), ("p", "The case has a spinning rotor: a "
+                          "[[report.studies]] sweep over its speed (or a speed range asked of "
+                          "the report) adds its Campbell diagram, critical speeds and unbalance "
+                          "response.")]
     body = summary_blocks(case, summaries, study_sums, units, sensitivities, out_dir=out_dir,
                           stem=stem)
     if len(configs) > 1:
@@ -110,9 +127,11 @@ def build_report(case, *, configs=None, out_dir, run_check=True, jobs=None, stud
 
 
 def write_report(case, *, out_dir=None, configs=None, all_configs=False, run_check=True,
-                 jobs=None, studies=True, sensitivities=True, animations=True):
+                 jobs=None, studies=True, sensitivities=True, animations=True, speeds=None,
+                 unbalance=None):
     """Write report.md and report.html (default directory reports/<case>); returns their paths.
-    ``animations=False`` leaves out the animated mode shapes (one GIF a mode).
+    ``animations=False`` leaves out the animated mode shapes (one GIF a mode); ``speeds`` and
+    ``unbalance``: the rotor section (module docstring).
 
     ``case`` is a path or a parsed :class:`~mbseig.casefile.CaseSpec`; it is read once."""
     case = as_spec(case)
@@ -120,7 +139,8 @@ def write_report(case, *, out_dir=None, configs=None, all_configs=False, run_che
         configs = [None] + sorted(case.configurations)
     out = Path(out_dir) if out_dir else Path("reports") / case.name
     blocks = build_report(case, configs=configs, out_dir=out, run_check=run_check, jobs=jobs,
-                          studies=studies, sensitivities=sensitivities, animations=animations)
+                          studies=studies, sensitivities=sensitivities, animations=animations,
+                          speeds=speeds, unbalance=unbalance)
     md = out / "report.md"
     md.write_text(render_markdown(blocks, out))
     page = out / "report.html"

@@ -15,7 +15,12 @@ from .text import fmt
 from .units import with_unit
 
 __all__ = ["configuration_blocks", "check_blocks", "mode_label", "statics_text", "describe",
-           "animation_blocks"]
+           "animation_blocks", "MAX_DRAWN_MODES"]
+
+#: modes drawn (shape figure, animations) at most, per dimension: the lowest, as the table
+#: lists them; a beam model lists hundreds (the table has them all), and a 3-D mode takes a row
+#: of four views
+MAX_DRAWN_MODES = {2: 12, 3: 6}
 
 
 def configuration_blocks(case, study, out_dir, *, run_check, stem, units, animations=True):
@@ -119,15 +124,19 @@ def configuration_blocks(case, study, out_dir, *, run_check, stem, units, animat
         blocks.append(("p", f"Stability margin: the least-damped mode is mode {least + 1} with "
                             f"δ = {float(md.delta[least]):.5g} 1/s (ζ = {float(md.zeta[least]):.4g}); "
                             f"δ − tol = {min_margin:.4g} 1/s (tol per mode: {tolerance_rule(md.tolerances)})."))
-    labels = [mode_label(k, md) for k in range(len(md))]
+    drawn = min(len(md), MAX_DRAWN_MODES.get(getattr(model, "dimension", 2), 12))
+    labels = [mode_label(k, md) for k in range(drawn)]
+    if not linear_case and drawn < len(md):
+        blocks.append(("p", f"The figures below draw the lowest {drawn} of the {len(md)} modes "
+                            f"(the table lists them all)."))
     if not linear_case:
         if model.dimension == 3:
-            fig = spatial_draw()(model, eq.q, md.shapes, labels,
+            fig = spatial_draw()(model, eq.q, md.shapes[:, :drawn], labels,
                                   title=f"{tag}: equilibrium (black) and mode shapes (±, red/blue)")
         else:
             fig = plots.mechanism_modes(
-                eq.model if eq.model is not None else model, eq.q, md.shapes, labels,
-                eigenvalues=md.eigenvalues, kinds=list(md.kind),
+                eq.model if eq.model is not None else model, eq.q, md.shapes[:, :drawn], labels,
+                eigenvalues=md.eigenvalues[:drawn], kinds=list(md.kind)[:drawn],
                 title=f"{tag}: equilibrium (black) and mode shapes, rigid bodies kept rigid")
         img = plots.save(fig, out_dir / f"{stem}_{tag}_shapes.png")
         blocks.append(("img", img, f"{tag}: mechanism at equilibrium with every element (bodies, "
@@ -137,7 +146,7 @@ def configuration_blocks(case, study, out_dir, *, run_check, stem, units, animat
                                    f"rigid; a real (overdamped) mode is drawn as its decay"))
         if animations:
             blocks += animation_blocks(eq.model if eq.model is not None else model, eq.q, md,
-                                       out_dir, f"{stem}_{tag}")
+                                       out_dir, f"{stem}_{tag}", count=drawn)
     img = plots.save(plots.pole_map(md.eigenvalues, title=f"{tag}: pole map",
                                     stability=md.stability), out_dir / f"{stem}_{tag}_poles.png")
     blocks.append(("img", img, f"{tag}: pole map over lines of constant ζ and circles of constant "
@@ -146,13 +155,13 @@ def configuration_blocks(case, study, out_dir, *, run_check, stem, units, animat
     return blocks
 
 
-def animation_blocks(model, q0, md, out_dir, prefix, *, frames=12, fps=10):
-    """One looping GIF a listed mode (:func:`mbseig.plots.animation.write_mode_gif`), shown
-    side by side."""
+def animation_blocks(model, q0, md, out_dir, prefix, *, frames=12, fps=10, count=None):
+    """One looping GIF a listed mode (the lowest ``count``;
+    :func:`mbseig.plots.animation.write_mode_gif`), shown side by side."""
     from ..plots.animation import oscillates, write_mode_gif
 
     items = []
-    for k in range(len(md)):
+    for k in range(len(md) if count is None else min(len(md), count)):
         path = write_mode_gif(model, q0, md.shapes[:, k], out_dir / f"{prefix}_mode{k + 1}.gif",
                               label=mode_label(k, md),
                               oscillatory=oscillates(md.kind[k], md.eigenvalues[k]),

@@ -1,19 +1,31 @@
 """The report's study sections (``[[report.studies]]``): a sweep's table of first losses of
 stability, range-of-motion exits and boundary curves with its figures, and the comparison with
-and without the constraint-force stiffness; computed by :mod:`mbseig.studies.report_studies`."""
+and without the constraint-force stiffness; computed by :mod:`mbseig.studies.report_studies`.
+A sweep over a rotor's speed also shows the rotor (:func:`rotor_blocks`: the Campbell diagram,
+the critical speeds and the unbalance response, computed by
+:func:`mbseig.studies.campbell.rotor_study`)."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
+import numpy as np
+
+from .. import plots
+from ..plots import rotor as rotor_plots
 from ..studies import write_outputs
+from ..studies.campbell import rotor_study
 from ..studies.report_studies import compare_study, sweep_study
+from .text import fmt
 from .units import with_unit
 
-__all__ = ["study_section", "compare_blocks"]
+__all__ = ["study_section", "compare_blocks", "rotor_blocks", "rotor_section"]
 
 
-def study_section(case, study, out_dir, stem, jobs, units):
+def study_section(case, study, out_dir, stem, jobs, units, *, unbalance=None):
+    """Blocks of one ``[[report.studies]]`` entry and its summary; ``unbalance`` = (point, m·e)
+    of a rotor's unbalance response (default: m·e = 1 kg m at the first disk)."""
     kind = "compare" if "compare" in study else "sweep"
     config = study.get("config")
     title = study.get("title", f"{kind} on {config}")
@@ -79,6 +91,10 @@ def study_section(case, study, out_dir, stem, jobs, units):
     for p in paths:
         if p.suffix == ".png":
             blocks.append(("img", p, f"{title}: {captions.get(p.stem, p.stem.replace('_', ' '))}"))
+    rs = rotor_study(case, name, values, config=config, jobs=jobs, unbalance=unbalance,
+                     xtol_rel=float(study.get("xtol_rel", 1e-10)))
+    if rs is not None:
+        blocks += rotor_blocks(rs, sdir, title, units)
     return blocks, {"title": title, "parameter": name, "config": config, "critical": crit,
                     "curves": sw.curves}
 
@@ -95,3 +111,76 @@ def compare_blocks(cmp):
                   f"and without it (the common omission); largest multiplier |λ| = {cmp.lam_max:.4g}. "
                   f"Verdict with: {cmp.verdict_with}; without: {cmp.verdict_without}."),
             ("table", ["#", "s with Σλ∇²Φ", "s without", "|Δs|/|s|"], rows)]
+
+
+def rotor_section(case, speeds, out_dir, stem, jobs, units, *, config=None, unbalance=None):
+    """A report section of a rotor over ``speeds`` = (parameter, values) asked for by the
+    caller (not a ``[[report.studies]]`` entry): :func:`rotor_blocks`, or a sentence when the
+    parameter does not set a rotor's speed."""
+    name, values = speeds
+    title = f"Rotor over {name}" + (f" ({config})" if config else "")
+    rs = rotor_study(case, name, values, config=config, jobs=jobs, unbalance=unbalance)
+    if rs is None:
+        return [("h2", title), ("p", f"{name} does not set the speed of a rotor of the case: "
+                                     f"no Campbell diagram or unbalance response.")]
+    return [("h2", title)] + rotor_blocks(rs, out_dir / f"{stem}_rotor_{name}", title, units)
+
+
+def rotor_blocks(rs, out_dir, title, units):
+    """The Campbell diagram with its critical-speed table, then the unbalance response (a
+    table of each station's peak, the Bode and polar figures, the full table as CSV) of a
+    :class:`~mbseig.studies.campbell.RotorStudy`."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    name, camp = rs.parameter, rs.campbell
+    unit = units.get(name)
+    camp = dataclasses.replace(camp, units={k: v for k, v in units.items() if v})
+    blocks = [("h3", f"{title}: Campbell diagram and critical speeds")]
+    img = plots.save(rotor_plots.campbell_diagram(camp), out_dir / "campbell.png")
+    blocks.append(("img", img, f"{title}: Campbell diagram (frequency of each mode against "
+                               f"{name}, coloured by whirl; dashed: the {camp.harmonic:g}x "
+                               f"excitation; circles: critical speeds) and log decrements "
+                               f"(within their error bound 2π tol/ω_d: drawn as 0)"))
+    rows = [[str(k + 1), with_unit(f"{c['value']:.8g}", unit), f"{c['speed']:.8g}",
+             f"{c['speed'] * 30 / math.pi:.6g}", f"{c['frequency'] / (2 * math.pi):.6g}",
+             c["whirl"] or "–", str(c["mode"])] for k, c in enumerate(camp.critical_speeds)]
+    xtol = camp.tolerances.get("xtol", 0.0)
+    if rows:
+        blocks.append(("p", f"Critical speeds: where a lateral mode's frequency meets the "
+                            f"{camp.harmonic:g}x excitation line, each located by Brent's method "
+                            f"to xtol = {xtol:.3g} along the track followed by MAC."))
+        blocks.append(("table", ["#", f"critical {name}", "Ω [rad/s]", "Ω [rpm]",
+                                 "ω_d/2π [Hz]", "whirl", "track"], rows))
+    else:
+        blocks.append(("p", f"No critical speed in the swept range (no lateral mode meets the "
+                            f"{camp.harmonic:g}x excitation line)."))
+    blocks += _unbalance_blocks(rs, out_dir, title, unit,
+                                [c["value"] for c in camp.critical_speeds])
+    return blocks
+
+
+def _unbalance_blocks(rs, out_dir, title, unit, critical):
+    ub = rs.unbalance
+    csv = ub.write_csv(out_dir / "unbalance.csv")
+    how = ("m·e = 1 kg m (the case names no unbalance; the response is proportional to m·e: "
+           "multiply by the rotor's own)" if rs.default_unbalance else f"m·e = {rs.me:g} kg m")
+    blocks = [("h3", f"{title}: unbalance response"),
+              ("p", f"Synchronous response to an unbalance {how} at {rs.at}, angle 0 from e₁ "
+                    f"= ({', '.join(f'{x:.3g}' for x in ub.directions['e1'])}), at each "
+                    f"{rs.parameter} of the sweep: the orbit's major semi-axis and the phase of "
+                    f"x₁ (x₁(t) = |X₁| cos(Ωt + phase)) at every rotor station and output; the "
+                    f"whole table (every speed) is in `{out_dir.name}/{csv.name}`.")]
+    rows = []
+    for v, om, st, a, b, big, u in ub.peaks():
+        rows.append([st, with_unit(fmt(v, 6), unit), fmt(om, 6), f"{big:.4e} {u or ''}".strip(),
+                     "–" if a == 0 else f"{np.degrees(np.angle(a)):.1f}"])
+    peak = "peak amplitude per kg m of m·e" if rs.default_unbalance else "peak amplitude"
+    blocks.append(("table", ["station / output", f"{rs.parameter} at the peak",
+                             "Ω at the peak [rad/s]", peak, "phase of x₁ [deg]"], rows))
+    for fig, stem, cap in ((rotor_plots.unbalance_bode(ub, unit=unit, critical=critical),
+                            "unbalance_bode", "Bode diagram: amplitude and phase against "
+                            + rs.parameter + " (dotted: critical speeds)"),
+                           (rotor_plots.unbalance_polar(ub, unit=unit), "unbalance_polar",
+                            "polar diagram of x₁")):
+        blocks.append(("img", plots.save(fig, out_dir / f"{stem}.png"), f"{title}: {cap}"))
+    return blocks
+

@@ -39,6 +39,7 @@ _FIELD_UNITS = {
     ("bodies", None): {"mass": "kg", "inertia": "kg m^2", "length": "m"},
     ("masses", None): {"mass": "kg"},
     ("joints", "angle_driver"): {"angle": "rad"},
+    ("beams", None): {"spin": "rad/s", "E": "Pa", "G": "Pa", "rho": "kg/m^3"},
 }
 
 

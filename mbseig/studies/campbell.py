@@ -33,8 +33,10 @@ from .point import as_spec
 from .records import CampbellPoint
 from .runners import Runner
 from .sweep import mac_matrix, track_line
+from .unbalance import spinning_beams
 
-__all__ = ["CampbellResult", "campbell", "campbell_point", "speed_parameter"]
+__all__ = ["CampbellResult", "campbell", "campbell_point", "speed_parameter", "spinning_beams",
+           "RotorStudy", "rotor_study", "default_unbalance_point", "is_rotor"]
 
 
 def campbell_point(case, config, params):
@@ -47,11 +49,13 @@ def campbell_point(case, config, params):
         return CampbellPoint(params=dict(params), error=exc.one_line())
     model = solved(model, eq)
     rs = rotors(model)
-    if not rs:
+    if not rs and not spinning_beams(case):
         return CampbellPoint(params=dict(params), error=f"{model.name}: the model has no rotor")
+    # a beam with ``spin`` is a rotor only at a non-zero speed: at rest it has no whirl
+    # stations, and its modes no whirl (None: not determined at Ω = 0)
     return CampbellPoint(params=dict(params), error=None, eigenvalues=md.eigenvalues,
                          shapes=md.shapes, tol=md.tolerance, kind=list(md.kind),
-                         stability=list(md.stability), speed=float(rs[0].speed),
+                         stability=list(md.stability), speed=float(rs[0].speed) if rs else 0.0,
                          whirl=[whirl(model, eq.q, md.shapes[:, k], md.eigenvalues[k])
                                 for k in range(len(md))])
 
@@ -60,12 +64,12 @@ def speed_parameter(case, name, values, *, config=None, fixed=None) -> bool:
     """Whether parameter ``name`` sets the speed of a rotor of the case (the rotor speed
     differs between the first and last value)."""
     spec = as_spec(case)
-    speeds = []
+    speeds, spinning = [], spinning_beams(spec)
     for v in (values[0], values[-1]):
         rs = rotors(spec.build(config, **{**(fixed or {}), name: float(v)}))
-        if not rs:
+        if not rs and not spinning:
             return False
-        speeds.append(rs[0].speed)
+        speeds.append(rs[0].speed if rs else 0.0)
     return speeds[0] != speeds[1]
 
 
@@ -111,6 +115,8 @@ class CampbellResult:
     critical_speeds: list
     harmonic: float = 1.0
     tolerances: dict = field(default_factory=dict)
+    tolerance: np.ndarray = None  # (points, tracks): each eigenvalue's stability tolerance [1/s]
+    units: dict = field(default_factory=dict)  # parameter → unit, for the figures' axes
 
     @property
     def frequency(self):
@@ -123,8 +129,20 @@ class CampbellResult:
             w = self.frequency
             return np.where(w > 0, 2 * math.pi * (-self.tracks.real) / w, np.nan)
 
+    @property
+    def log_decrement_bound(self):
+        """The log decrement's error bound 2π tol/ω per point and track (tol: the eigenvalue's
+        stability tolerance; NaN where not known or ω = 0): |Λ| within it is 0 to the
+        eigensolver's accuracy (drawn as 0 with the band)."""
+        if self.tolerance is None:
+            return np.full(self.tracks.shape, np.nan)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            w = self.frequency
+            return np.where(w > 0, 2 * math.pi * np.asarray(self.tolerance, float) / w, np.nan)
+
     def to_json(self) -> dict:
         tracks = []
+        bound = self.log_decrement_bound
         for j in range(self.tracks.shape[1]):
             col = self.tracks[:, j]
             tracks.append({
@@ -132,6 +150,7 @@ class CampbellResult:
                 "frequency": [None if np.isnan(v) else float(abs(v.imag)) for v in col],
                 "delta": [None if np.isnan(v) else float(-v.real) for v in col],
                 "log_decrement": [None if np.isnan(x) else float(x) for x in self.log_decrement[:, j]],
+                "log_decrement_bound": [None if np.isnan(x) else float(x) for x in bound[:, j]],
                 "whirl": [self.whirl[k][j] for k in range(len(self.values))],
                 "kind": [self.kind[k][j] for k in range(len(self.values))],
             })
@@ -171,6 +190,8 @@ def campbell(case, parameter, values, *, config=None, fixed=None, harmonic=1.0, 
         kinds = [[points[k]["kind"][col[k, j]] if col[k, j] >= 0 else None for j in range(n_tr)]
                  for k in range(n_pts)]
         speeds = np.array([p["speed"] for p in points])
+        tol = np.array([[float(np.asarray(points[k]["tol"])[col[k, j]]) if col[k, j] >= 0
+                         else np.nan for j in range(n_tr)] for k in range(n_pts)])
         F = np.abs(S.imag) - harmonic * np.abs(speeds)[:, None]
         searches, meta = [], []
         for j in range(n_tr):
@@ -180,14 +201,85 @@ def campbell(case, parameter, values, *, config=None, fixed=None, harmonic=1.0, 
                         or "rigid-body" in (kinds[k][j], kinds[k + 1][j])
                         or "none" in (whirls[k][j], whirls[k + 1][j])):
                     continue
-                shape = points[k]["shapes"][:, col[k, j]]
+                # the shape followed: at the bracket's end farther from rest (at Ω = 0 a
+                # forward/backward pair is one double eigenvalue, its shapes any mixture)
+                e = k + 1 if abs(speeds[k + 1]) > abs(speeds[k]) else k
+                shape = points[e]["shapes"][:, col[e, j]]
                 searches.append(((spec, config, fixed, parameter, float(values[k]),
                                   float(values[k + 1]), shape, harmonic, xtol, float(a), float(b)),
                                  {}))
                 meta.append(j)
         found = runner.map(_crossing, searches, "critical speeds")
-    critical = sorted(({**res, "mode": j} for j, res in zip(meta, found)),
-                      key=lambda c: c["value"])
+    critical = []
+    for c in sorted(({**res, "mode": j} for j, res in zip(meta, found)),
+                    key=lambda c: c["value"]):
+        # two tracks that followed one mode to the same crossing give it once
+        if not any(abs(c["value"] - d["value"]) <= 10 * xtol and c["whirl"] == d["whirl"]
+                   and abs(c["frequency"] - d["frequency"]) <= 1e-6 * abs(d["frequency"])
+                   for d in critical):
+            critical.append(c)
     return CampbellResult(case=spec.name, parameter=parameter, values=values, speeds=speeds,
                           tracks=S, whirl=whirls, kind=kinds, critical_speeds=critical,
-                          harmonic=harmonic, tolerances={"xtol": xtol, "xtol_rel": xtol_rel})
+                          harmonic=harmonic, tolerances={"xtol": xtol, "xtol_rel": xtol_rel},
+                          tolerance=tol)
+
+
+@dataclass(frozen=True, eq=False)
+class RotorStudy:
+    """What a report shows of a rotor over a speed sweep: the Campbell diagram (with the
+    critical speeds) and the unbalance response to ``me`` [kg m] at ``at`` (``unbalance``)."""
+
+    parameter: str
+    campbell: CampbellResult
+    unbalance: object
+    at: str
+    me: float
+    default_unbalance: bool
+
+
+def default_unbalance_point(case, config=None, fixed=None, parameter=None, value=None) -> str:
+    """Where a report puts its unbalance when the case names none: the body of the first rotor
+    element (a disk), else the middle station of the first spinning beam."""
+    from .unbalance import station_names
+
+    spec = as_spec(case)
+    params = {**(fixed or {}), **({parameter: float(value)} if parameter else {})}
+    model = spec.build(config, **params)
+    rs = rotors(model)
+    body = next((getattr(r, "body", None) for r in rs if getattr(r, "body", None)), None)
+    if body is not None:
+        return body
+    names = [n for n, _ in station_names(model, rs) if n in model.points]
+    if not names:
+        raise CaseError("no rotor station for the unbalance response", element="unbalance",
+                        file=spec.source)
+    return names[len(names) // 2]
+
+
+def rotor_study(case, parameter, values, *, config=None, fixed=None, jobs=1, unbalance=None,
+                xtol_rel=1e-10):
+    """The Campbell diagram over ``parameter`` = ``values`` and the unbalance response over
+    the same values: ``unbalance`` = (point, m·e [kg m]), default m·e = 1 kg m (the response is
+    proportional to it) at :func:`default_unbalance_point`.  None when the parameter does not
+    set a rotor's speed."""
+    from .unbalance import unbalance_response
+
+    spec = as_spec(case)
+    values = np.asarray(values, float)
+    if not speed_parameter(spec, parameter, values, config=config, fixed=fixed):
+        return None
+    camp = campbell(spec, parameter, values, config=config, fixed=fixed, jobs=jobs or 1,
+                    xtol_rel=xtol_rel)
+    default = unbalance is None
+    at, me = unbalance if unbalance else (default_unbalance_point(
+        spec, config, fixed, parameter, values[-1]), 1.0)
+    ub = unbalance_response(spec, parameter, values, at=at, unbalance=me, config=config,
+                            fixed=fixed)
+    return RotorStudy(parameter=parameter, campbell=camp, unbalance=ub, at=at, me=float(me),
+                      default_unbalance=default)
+
+
+def is_rotor(case, model) -> bool:
+    """Whether the model has a rotor element or a spinning beam (or the case a beam with
+    ``spin``, a rotor at any non-zero speed)."""
+    return bool(rotors(model)) or spinning_beams(as_spec(case))
