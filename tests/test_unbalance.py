@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from conftest import write_case
+from conftest import CASES, write_case
 from mbseig.cli import main
 
 # A Jeffcott rotor built from 3-D parts: a disk (m = 10 kg) welded to the middle station of a
@@ -180,3 +180,23 @@ def test_a_spinning_beam_alone_is_a_rotor_at_rest_too(tmp_path, capsys):
     got = np.array(r["amplitude_1"]) * np.exp(1j * np.radians(r["phase_1"]))
     assert got[0] == 0
     np.testing.assert_allclose(got[1:], X[1:], rtol=1e-8)
+
+
+def test_report_rotor_section_from_the_command_line(tmp_path, capsys):
+    """``mbseig report --speeds NAME=START:STOP:COUNT --unbalance AT:M_E`` adds the rotor section
+    (Campbell diagram, critical speeds, unbalance response at the stated m·e) without a
+    [[report.studies]] entry; a malformed option is one line naming it, exit 2."""
+    out = tmp_path / "rep"
+    rotor = str(CASES / "rigid_rotor.toml")
+    assert main(["report", rotor, "--speeds", "Omega=0:800:5", "--unbalance",
+                 "rotor:2e-4", "--no-check", "--no-sensitivities", "--no-studies",
+                 "--out", str(out)]) == 0
+    md = (out / "report.md").read_text()
+    assert "Campbell diagram and critical speeds" in md
+    assert "m·e = 0.0002 kg m" in md and (out / "rigid_rotor_rotor_Omega" / "unbalance.csv").exists()
+    capsys.readouterr()
+    for bad, option in ((["--speeds", "Omega=0:800"], "--speeds"),
+                        (["--unbalance", "rotor:-1"], "--unbalance")):
+        assert main(["report", rotor, "--no-check", "--out", str(out), *bad]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and option in err[0] and "rigid_rotor.toml" in err[0]

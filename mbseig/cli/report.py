@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 from .common import case_command
 
 
@@ -21,16 +23,52 @@ def register(sub):
                    help="leave out the eigenvalue sensitivities of the summary")
     p.add_argument("--jobs", type=int, default=None, metavar="N",
                    help="local worker processes for the studies' sweeps (default: CPU count)")
+    p.add_argument("--speeds", default=None, metavar="NAME=START:STOP:COUNT",
+                   help="a rotor section over this speed range (or a parameter the speed "
+                        "depends on): Campbell diagram, critical speeds, unbalance response")
+    p.add_argument("--unbalance", default=None, metavar="AT:M_E",
+                   help="the unbalance of the rotor section: station, body or point, and m·e "
+                        "[kg m] (default: 1 kg m at the first disk, per unit)")
     p.set_defaults(run=run)
+
+
+def _rotor_options(args, spec):
+    """(speeds, unbalance) of the command line, checked: one line naming the option if bad."""
+    from ..errors import CaseError
+    from ..studies.sweep import parse_range
+
+    speeds = unbalance = None
+    if args.speeds is not None:
+        if ":" not in args.speeds:
+            raise CaseError(f"--speeds must be NAME=START:STOP:COUNT, got {args.speeds!r}",
+                            element="--speeds", file=spec.source)
+        try:
+            speeds = parse_range(args.speeds)
+        except CaseError as exc:  # (its text speaks of --param, the sweep's option)
+            raise CaseError(exc.message.replace("--param expects", "expects"),
+                            element="--speeds", file=spec.source) from None
+    if args.unbalance is not None:
+        at, _, me = args.unbalance.rpartition(":")
+        try:
+            value = float(me)
+        except ValueError:
+            value = math.nan
+        if not at or not (math.isfinite(value) and value > 0):
+            raise CaseError(f"--unbalance must be AT:M_E with m·e > 0 [kg m], got "
+                            f"{args.unbalance!r}", element="--unbalance", file=spec.source)
+        unbalance = (at, value)
+    return speeds, unbalance
 
 
 @case_command("report")
 def run(args, spec) -> int:
     from ..report import write_report
 
+    speeds, unbalance = _rotor_options(args, spec)
     md, page = write_report(args.case, out_dir=args.out, configs=args.config,
                             all_configs=args.all_configs, run_check=not args.no_check,
                             jobs=args.jobs, studies=not args.no_studies,
-                            sensitivities=not args.no_sensitivities)
+                            sensitivities=not args.no_sensitivities, speeds=speeds,
+                            unbalance=unbalance)
     print(f"wrote {md} and {page}")
     return 0
