@@ -150,5 +150,6 @@ def _campbell(args, ranges, fixed, out_dir, paths) -> dict:
     path = Path(out_dir) / "campbell.json"
     path.write_text(json.dumps(out, indent=1, allow_nan=False) + "\n")
     paths.append(path)
-    paths.append(plots_spatial.save(plots_spatial.campbell_diagram(res), Path(out_dir) / "campbell.png"))
+    figure = plots_spatial.campbell_diagram(res, units=_units(args.case))
+    paths.append(plots_spatial.save(figure, Path(out_dir) / "campbell.png"))
     return {"campbell": out, "critical_speeds": out["critical_speeds"]}
