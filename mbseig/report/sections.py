@@ -92,15 +92,32 @@ def configuration_blocks(case, study, out_dir, *, run_check, stem, units, animat
         blocks.append(("table", ["pin (force on the outboard bodies)", "point", "Fx [N]", "Fy [N]", "|F| [N]"],
                        [[p["name"], p["point"], rfmt(p["force"][0], 5), rfmt(p["force"][1], 5),
                          rfmt(p["magnitude"], 5)] for p in rep["pins"]]))
-    rows = []
+    rows, wrenches, internal = [], [], []
     for c in rep["constraints"]:
+        if c.get("kind") == "internal":  # a spatial body's unit-vector conditions: no joint
+            internal.append(c.get("on") or c["element"])
+            continue
+        if c.get("force") is not None and c.get("moment") is not None:
+            wrenches.append(_wrench_row(c, rfmt))
+            continue
         r = c["reaction"]
         value = r["value"] if isinstance(r["value"], list) else [r["value"]]
         carried = f"{r['label']} {', '.join(rfmt(x, 5) for x in value)} {r['unit']}".rstrip()
         rows.append([c["element"], ", ".join(fmt(x, 6) for x in c["multipliers"]), carried])
+    if wrenches:
+        blocks.append(("table", ["joint", "on body", "at [m]", "F global [N]", "M global [N m]",
+                                 "F body axes u, v, w [N]", "M body axes [N m]",
+                                 "error bound F / M"], wrenches))
+        blocks.append(("p", "Force F and moment M on the body named, about the joint point; a "
+                            "value within its error bound (from the multipliers' solve: "
+                            "residual and σ_min(Φ_q)) is printed as 0. A spatial body's axes "
+                            "u, v, w are parallel to global x, y, z at the reference."))
     if rows:
         blocks.append(("table", ["constraint", "multiplier λ (in the constraint's own scaling)",
                                  "reaction"], rows))
+    if internal:
+        blocks.append(("p", f"Not listed: the unit-vector conditions of {', '.join(internal)} "
+                            f"(internal to the body coordinates, no joint force)."))
     if (rows or rep["pins"]) and zero > 0:
         blocks.append(("p", f"Reactions below their error bound ({zero:.2g}: the equilibrium's "
                             f"tolerance times the largest reaction) are rounding residue and "
@@ -248,3 +265,16 @@ def check_blocks(res, run_check):
                              "δ rel. err. [–]", "ω predicted [rad/s]", "ω measured [rad/s]",
                              "ω rel. err. [–]", "result"], rows))
     return blocks
+
+
+def _wrench_row(c, rfmt):
+    """A joint's row of the report's wrench table (:func:`mbseig.statics.reactions.reaction_forces`)."""
+    def vec(v):
+        return "(" + ", ".join(rfmt(x, 5) for x in v) + ")"
+    err = c.get("error") or {}
+    bound = (f"{max(err.get('force') or [0.0]):.1e} / {max(err.get('moment') or [0.0]):.1e}"
+             if err else "")
+    return [c["element"], c.get("on") or "", vec(c.get("at") or []), vec(c["force"]),
+            vec(c["moment"]), vec(c.get("force_body") or []), vec(c.get("moment_body") or []),
+            bound]
+
