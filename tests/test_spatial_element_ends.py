@@ -86,3 +86,30 @@ def test_inline_ends_move_with_the_body(tmp_path):
         for axis, x in zip("xyz", value):
             q[names.index(f"bob.{vec}.{axis}")] = x
     np.testing.assert_allclose(end(q), [0.0, 1.0, 0.1], atol=1e-15)
+
+
+def test_spatial_drawing_shows_springs_and_bushings(tmp_path):
+    """The 3-D drawing takes its springs from element_ends: a coil between two distinct ends
+    (its first and last vertices are the ends, at the reference), a bushing symbol where the
+    two ends meet."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+
+    from mbseig.plots.spatial import draw_spatial, spatial_layout
+
+    model = mbseig.load_case(write_case(tmp_path, CASE))
+    layout = spatial_layout(model)
+    assert len(layout["springs"]) == 3
+    ax = Figure().add_subplot(projection="3d")
+    before = len(ax.lines)
+    draw_spatial(ax, model, layout, model.q_init, lambda P: (P[:, 0], P[:, 1], P[:, 2]),
+                 colour="k", lw=1.0, symbols=True)
+    lines = ax.lines[before:]
+    coils = [ln for ln in lines if len(ln.get_data_3d()[0]) == 13]  # 2·6 turns + 1 vertices
+    assert len(coils) == 2
+    ends = sorted(tuple(np.round(np.array(ln.get_data_3d())[:, k], 12)) for ln in coils
+                  for k in (0, -1))
+    assert ends == sorted([(1.0, 0.0, -1.0), (0.0, 0.0, -1.0), (0.0, 1.0, -1.0), (0.0, 0.1, -1.0)])
+    assert any(ln.get_marker() == "x" for ln in lines)  # the bushing, ends coincident

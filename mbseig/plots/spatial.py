@@ -97,7 +97,33 @@ def spatial_layout(model):
     station_points = {s["point"] for s in stations}
     joints = [j for j in dict.fromkeys(joints) if j not in station_points]
     return {"bodies": bodies, "discs": discs, "joints": joints, "fixed": fixed,
-            "stations": stations, "beams": _beams(model)}
+            "stations": stations, "beams": _beams(model), "springs": _springs(model)}
+
+
+def _springs(model):
+    """(end, end) of every spring-like force whose two ends the reader recorded as points of
+    the model (``model.element_ends``): drawn as a coil between them, or as a bushing symbol
+    where the two ends meet."""
+    ends = getattr(model, "element_ends", {}) or {}
+    out = []
+    for e in getattr(model, "forces", ()):
+        pts = ends.get(getattr(e, "name", None)) or ()
+        if len(pts) == 2 and all(p in model.points for p in pts):
+            out.append(tuple(pts))
+    return out
+
+
+def _coil(a, b, turns=6, width=0.08):
+    """A zigzag from a to b in 3-D, across a direction normal to b − a (``width`` of |b − a|)."""
+    d = b - a
+    length = float(np.linalg.norm(d))
+    axis = np.eye(3)[int(np.argmin(np.abs(d)))]
+    n = np.cross(d, axis)
+    n *= width * length / (float(np.linalg.norm(n)) or 1.0)
+    t = np.linspace(0.0, 1.0, 2 * turns + 1)
+    side = np.zeros(t.size)
+    side[1:-1:2], side[2:-1:2] = 1.0, -1.0
+    return a[None, :] + t[:, None] * d[None, :] + side[:, None] * n[None, :]
 
 
 def _beams(model):
@@ -207,6 +233,12 @@ def draw_spatial(ax, model, layout, q, project, *, colour, lw, alpha=1.0, symbol
             ax.plot(*project(P[[0, k]]), "-", color=colour, lw=lw, alpha=alpha,
                     solid_capstyle="round")
         ax.plot(*project(P[:1]), "o", color=colour, ms=2.5, alpha=alpha)
+    for a, b in layout.get("springs", ()):
+        P = xyz([a, b])
+        if float(np.linalg.norm(P[1] - P[0])) > 1e-9 * (float(np.abs(P).max()) or 1.0):
+            ax.plot(*project(_coil(P[0], P[1])), "-", color=colour, lw=lw * 0.5, alpha=alpha)
+        elif symbols:  # a bushing: its two ends meet at the reference
+            ax.plot(*project(P[:1]), "x", ms=6, mec=colour, mew=0.9, alpha=alpha)
     for d in layout["discs"]:
         if d["radius"]:
             ax.plot(*project(_disc_circle(model, q, d)), "-", color=colour, lw=lw * 0.7,
@@ -234,6 +266,7 @@ def all_points(model, layout, qs):
         pts += [_vec3(model.points[n](q)) for n in layout["fixed"]]
         for beam in layout.get("beams", ()):
             pts += list(beam_curve(model, beam, q, n=2))
+        pts += [_vec3(model.points[n](q)) for ends in layout.get("springs", ()) for n in ends]
     return np.array(pts)
 
 
