@@ -82,6 +82,7 @@ __all__ = ["bench_peer", "bench_peer_spatial", "exudyn_available", "peer_lines"]
 # spatial models
 
 SPATIAL_MIN_REPEATS = 11  # milliseconds per run: the medians take more runs than the chain's
+SMALL_MIN_REPEATS = 51  # the small models stage by stage (a few ms a run)
 
 PENDULUM = {"g": 9.81, "m": 2.0, "l": 0.8, "Jx": 0.02, "Jy": 0.03, "Jz": 0.01,
             "cx": 0.3, "cy": 0.5, "cz": 0.02}
@@ -218,10 +219,14 @@ def bench_peer(sizes, repeats, log, n_check=20):
     """Rows of the peer section (empty with a note when EXUDYN is not installed): the chain at
     each size (:func:`mbseig.bench.peer_chain.chain_rows`), then the spatial models
     (:func:`bench_peer_spatial`)."""
+    from .pipeline_rows import bench_small_stages
+
+    # mbseig's small models stage by stage against the eigen floor, with or without the peer
+    small = bench_small_stages(max(repeats, SMALL_MIN_REPEATS), log)
     if not exudyn_available():
         log("peer: exudyn not installed (pip install exudyn): section skipped")
-        return [], "EXUDYN not installed (`pip install exudyn`, part of the `bench` extra): not run"
-    rows = chain_rows(sizes, repeats, log, n_check)
+        return small, "EXUDYN not installed (`pip install exudyn`, part of the `bench` extra): not run"
+    rows = small + chain_rows(sizes, repeats, log, n_check)
     rows += bench_peer_spatial(max(repeats, SPATIAL_MIN_REPEATS), log)[0]
     return rows, ""
 

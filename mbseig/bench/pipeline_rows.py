@@ -83,24 +83,29 @@ def bench_sweeps(lines, points, log, case="hand_device"):
 
     rows = []
     timed(jobs=1)  # warm: imports and caches, as "after the first" in the goal
-    # the two in-process sweeps: medians of three interleaved runs (one run of ≈ 2 s moved by
-    # ±20 % on this shared machine)
+    # the in-process sweeps, lean (the default) and general (lean=False: the case built and the
+    # command resolved at every value), medians of five interleaved runs (one run of ≈ 1 s
+    # moved by ±20 % on this shared machine): the general path is the floor of the same run
     load_axes = [("f", np.linspace(0.0, 1.5, points)), ("c_a", np.linspace(5.0, 9.0, lines))]
-    runs = {"k_a": [], "load": []}
-    for _ in range(3):
-        runs["k_a"].append(timed(jobs=1))
-        runs["load"].append(timed(load_axes, config="C4", jobs=1))
-    base = float(np.median(runs["k_a"]))
+    runs = {k: [] for k in ("k_a", "load", "k_a general", "load general")}
+    for _ in range(5):
+        for lean, tag in ((True, ""), (False, " general")):
+            runs["k_a" + tag].append(timed(jobs=1, lean=lean))
+            runs["load" + tag].append(timed(load_axes, config="C4", jobs=1, lean=lean))
+    med = {k: float(np.median(v)) for k, v in runs.items()}
+    base = med["k_a"]
     total = lines * points
-    rows.append({"section": "sweeps", "method": "in-process", "n": total, "workers": 1, "time": base,
-                 "rate": total / base, "speedup": 1.0})
-    log(f"sweeps {total} points in-process: {base:.2f} s ({total / base:.1f} points/s)")
-    # the device's load study (C4: tendon load f × damping), whose inverse-statics command
-    # the swept parameters do not enter (settings reused): the rate without re-solving it
-    t = float(np.median(runs["load"]))
-    rows.append({"section": "sweeps", "method": "in-process, C4 load f × c_a (command reused)",
-                 "n": total, "workers": 1, "time": t, "rate": total / t, "speedup": base / t})
-    log(f"sweeps {total} points in-process, C4 load sweep: {t:.2f} s ({total / t:.1f} points/s)")
+    for key, method in (("k_a", "in-process"),
+                        ("k_a general", "in-process, general path (built and resolved at every k_a)"),
+                        ("load", "in-process, C4 load f × c_a (command reused)"),
+                        ("load general", "in-process, C4 load, general path (built at every f)")):
+        t = med[key]
+        general = med[key if key.endswith("general") else key + " general"]
+        rows.append({"section": "sweeps", "method": method, "n": total, "workers": 1, "time": t,
+                     "rate": total / t, "speedup": base / t, "vs_general": general / t,
+                     "spread": (min(runs[key]) / t, max(runs[key]) / t)})
+        log(f"sweeps {total} points, {method}: {t:.2f} s ({total / t:.1f} points/s, "
+            f"{general / t:.2f}x the general path)")
     for w in range(2, cores + 1):
         t = timed(jobs=w)
         rows.append({"section": "sweeps", "method": "local processes", "n": total, "workers": w,
@@ -119,6 +124,54 @@ def bench_sweeps(lines, points, log, case="hand_device"):
         rows.append({"section": "sweeps", "method": "Dask LocalCluster", "n": total, "workers": w,
                      "time": t, "rate": total / t, "speedup": base / t})
         log(f"sweeps {total} points on a Dask LocalCluster of {w}: {t:.2f} s (×{base / t:.2f})")
+    return rows
+
+
+SMALL_CASES = ("spatial_double_pendulum", "spherical_pendulum", "hand_device")
+
+
+def bench_small_stages(repeats, log, cases=SMALL_CASES):
+    """Small models stage by stage, from the parsed case to the eigenvalues (build, equilibrium,
+    linearize, modes with every measure they report), medians of ``repeats`` runs interleaved
+    with the eigen floor of the same run: LAPACK ``geev`` (``scipy.linalg.eig``, right vectors)
+    of the model's 2d first companion matrix, the call a compiled peer's eigen step makes."""
+    import scipy.linalg as sla
+
+    from ..casefile import read_case
+    from ..studies.point import eigen_stage, equilibrium_stage
+
+    rows = []
+    for name in cases:
+        spec = read_case(case_path(name))
+        stages = {k: [] for k in ("build", "equilibrium", "linearize", "modes", "floor")}
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            model = spec.build()
+            t1 = time.perf_counter()
+            eq = equilibrium_stage(model)
+            t2 = time.perf_counter()
+            lin = linearize(model, eq)
+            t3 = time.perf_counter()
+            md = eigen_stage(lin)
+            t4 = time.perf_counter()
+            M, P, Q = (np.asarray(A.toarray() if hasattr(A, "toarray") else A) for A in
+                       (lin.M, lin.P, lin.Q))
+            d = M.shape[0]
+            t5 = time.perf_counter()
+            Minv = np.linalg.inv(M)
+            sla.eig(np.block([[np.zeros((d, d)), np.eye(d)], [-Minv @ Q, -Minv @ P]]))
+            t6 = time.perf_counter()
+            for k, v in zip(stages, (t1 - t0, t2 - t1, t3 - t2, t4 - t3, t6 - t5)):
+                stages[k].append(v)
+        med = {k: float(np.median(v)) for k, v in stages.items()}
+        total = med["build"] + med["equilibrium"] + med["linearize"] + med["modes"]
+        rows.append({"section": "small", "method": name, "n": int(lin.dof), "time": total,
+                     **med, "ratio": total / med["floor"], "solver": md.solver,
+                     "repeats": repeats})
+        log(f"small {name}: build {med['build'] * 1e3:.2f} + equilibrium "
+            f"{med['equilibrium'] * 1e3:.2f} + linearize {med['linearize'] * 1e3:.2f} + modes "
+            f"{med['modes'] * 1e3:.2f} = {total * 1e3:.2f} ms; eig floor "
+            f"{med['floor'] * 1e3:.3f} ms ({total / med['floor']:.0f}x)")
     return rows
 
 

@@ -21,11 +21,13 @@ large      lowest 20 modes of a 1-D chain with n/10 rigid links (bordered pencil
            non-proportional damping, 10⁴ … 10⁶ coordinates: the general partial path (and the
            optional SLEPc backend) against the undamped eigsh shift-invert floor, fresh processes.
 startup    ``mbseig modes`` on the hand device against ``import numpy, scipy.linalg``.
-sweeps     device sweeps: points a second in-process, speed-up on local processes and on a
+sweeps     device sweeps: points a second in-process, by the lean path (the default) and the
+           general path (``lean=False``) interleaved, speed-up on local processes and on a
            Dask LocalCluster (multi-process scheduler), 1 … cores.
-peer       EXUDYN's eigenvalues on a chain with non-proportional damping and on two spatial
-           rigid-body models (damped spherical pendulum, spatial double pendulum) against closed
-           forms (mbseig.bench.peer), when ``exudyn`` is installed.
+peer       small models stage by stage (build, equilibrium, linearize, modes) against the eigen
+           floor of the same run; EXUDYN's eigenvalues on a chain with non-proportional damping
+           and on two spatial rigid-body models (damped spherical pendulum, spatial double
+           pendulum) against closed forms (mbseig.bench.peer), when ``exudyn`` is installed.
 jacobians  analytic K of a 2-D spring network against forward and central differences and the
            complex step.
 constraint linearization with and without the constraint-force stiffness.

@@ -1,7 +1,11 @@
 """The reader entries of planar joints and forces (one per element type) and the inverse-statics
-drivers: fields read, element classes of :mod:`mbseig.model` constructed, nothing solved."""
+drivers: fields read, element classes of :mod:`mbseig.model` constructed, nothing solved; and
+:class:`ScalarUpdate`, the model along a parameter that enters only force scalars (sweeps)."""
 
 from __future__ import annotations
+
+import dataclasses
+import re
 
 import numpy as np
 
@@ -14,7 +18,8 @@ from ..model.elements import (
     SpringDamper,
     TorsionalSpringDamper,
 )
-from .fields import REQUIRED, template
+from .expr import evaluate
+from .fields import REQUIRED, Fields, template
 
 
 class ElementReaders:
@@ -211,3 +216,133 @@ def local_coordinates(builder, body, r, f):
     e = (rj - ri) / L
     n = np.array([-e[1], e[0]])
     return np.array([(r - ri) @ e, (r - ri) @ n]) * (b["length"] / L)
+
+
+# The scalar fields of force elements that a sweep may change without a rebuild
+# (:class:`mbseig.casefile.builder.ScalarUpdate`): case field → element attribute, per type.
+LEAN_FIELDS = {
+    "spring": {"stiffness": "stiffness", "damping": "damping"},
+    "damper": {"stiffness": "stiffness", "damping": "damping"},
+    "spring_damper": {"stiffness": "stiffness", "damping": "damping"},
+    "torsional": {"stiffness": "stiffness", "damping": "damping"},
+    "follower": {"magnitude": "magnitude"},
+}
+
+
+def force_scalar(f, kind, key):
+    """One scalar field of a force element read exactly as :meth:`ElementReaders._force` reads
+    it (same default, same range checks and messages); ``key`` is a field of LEAN_FIELDS."""
+    if kind in ("spring", "damper", "spring_damper"):
+        if key == "stiffness":
+            return f.num("stiffness", 0.0 if kind == "damper" else REQUIRED, nonnegative=True)
+        return f.num("damping", 0.0 if kind == "spring" else REQUIRED,
+                     nonnegative=not f.flag("active", False))
+    if kind == "torsional":
+        return f.num(key, 0.0, nonnegative=True)
+    return f.num("magnitude")
+
+
+# ---------------------------------------------------------------------------------------------
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+_NOT_MODEL = {"parameters", "configurations", "title", "description", "source", "expected",
+              "schema_version", "kind"}  # read, but not evaluated into the model's elements
+
+
+class ScalarUpdate:
+    """The model of a planar case along one parameter that enters only the scalar fields of
+    force elements (LEAN_FIELDS: a spring constant, a damping value, a follower load's
+    magnitude): the elements of one full build at a reference value, those fields re-read at
+    each value (with the reader's own checks).  Equal, element by element, to a full build.
+
+    :meth:`make` returns None (build the case instead) where the parameter, or a parameter
+    computed from it, appears anywhere else in the case (geometry, masses, gravity, joints,
+    repeated elements, the ``[report]`` table): ``reason`` then says where.
+    """
+
+    def __init__(self, data, config, overrides, axis, model0):
+        self.data, self.axis, self.model0, self.reason = data, axis, model0, None
+        self.raw = dict(data.get("parameters", {}))
+        chosen = dict((data.get("configurations") or {}).get(config, {})) if config else {}
+        chosen.pop("description", None)
+        self.raw.update(chosen)
+        self.raw.update({k: v for k, v in overrides.items() if k != axis})
+        deps = {axis}
+        for key, value in self.raw.items():  # parameters computed from the swept one
+            if isinstance(value, str) and deps & set(_NAME.findall(value)):
+                deps.add(key)
+        self.deps, self.updates = deps, []
+        self.order = [key for key in self.raw if key in deps]  # re-evaluated, in table order
+        if data.get("dimension") not in (1, 2) or data.get("kind", "multibody") != "multibody" \
+                or axis not in self.raw:
+            self.reason = "not a planar multibody case"
+            return
+        names = {getattr(f, "name", None) for f in model0.forces}
+        index = {f.name: k for k, f in enumerate(model0.forces)}
+        for k, item in enumerate(data.get("forces") or []):
+            kind = item.get("type") if isinstance(item, dict) else None
+            keys = [key for key in LEAN_FIELDS.get(kind, ())
+                    if isinstance(item.get(key), str) and self._uses(item[key])]
+            if not keys:
+                continue
+            label = f"forces[{k}]" + (f" {item['name']!r}" if isinstance(item.get("name"), str)
+                                      else "")
+            if "repeat" in item or label not in names or len(index) != len(model0.forces):
+                self.reason = f"{label} is repeated or not one element"
+                return
+            self.updates.append((index[label], item, label, kind, keys))
+        where = self._elsewhere(data, "")
+        if where is not None:
+            self.reason = f"{axis} enters {where}"
+        elif self.parameters(model0.parameters[axis], every=True) != model0.parameters:
+            self.reason = "the parameters evaluate differently"  # a safeguard: never seen
+
+    def _uses(self, text):
+        return bool(self.deps & set(_NAME.findall(text)))
+
+    def _elsewhere(self, node, path):
+        """The first place outside LEAN_FIELDS whose expression uses the swept parameter."""
+        if isinstance(node, str):
+            return path if self._uses(node) else None
+        if isinstance(node, dict):
+            for key, value in node.items():
+                sub = f"{path}.{key}" if path else key
+                if (not path and key in _NOT_MODEL) or sub == "report.studies":
+                    continue  # not evaluated into the model, or study definitions
+                if path.startswith("forces[") and path.count(".") == 0 and \
+                        key in LEAN_FIELDS.get(node.get("type"), ()) and "repeat" not in node:
+                    continue  # re-read at each value
+                hit = self._elsewhere(value, sub)
+                if hit is not None:
+                    return hit
+        elif isinstance(node, list):
+            for k, value in enumerate(node):
+                hit = self._elsewhere(value, f"{path}[{k}]")
+                if hit is not None:
+                    return hit
+        return None
+
+    def parameters(self, p, *, every=False):
+        """The ``[parameters]`` values at axis = p, as the case reader evaluates them (in the
+        table's order); only those computed from the swept one are evaluated again unless
+        ``every`` (the others keep the reference build's values, which they equal)."""
+        if every:
+            values = {}
+            for key, value in {**self.raw, self.axis: float(p)}.items():
+                values[key] = evaluate(value, values)
+            return values
+        values = dict(self.model0.parameters)
+        for key in self.order:
+            values[key] = evaluate(float(p) if key == self.axis else self.raw[key], values)
+        return values
+
+    def make(self, p):
+        """The model at axis = p, or None where a full build is needed."""
+        if self.reason is not None:
+            return None
+        params = self.parameters(p)
+        forces = list(self.model0.forces)
+        for k, item, label, kind, keys in self.updates:
+            f = Fields(item, label, params)
+            forces[k] = dataclasses.replace(forces[k], **{
+                LEAN_FIELDS[kind][key]: force_scalar(f, kind, key) for key in keys})
+        return dataclasses.replace(self.model0, forces=tuple(forces), parameters=params)

@@ -17,10 +17,15 @@ first axis varying, the others fixed).  It
 4. for the bifurcation diagram: every branch point with its named angles (``[report]``) or
    coordinates and its stability (static, and modal for small models).
 
-The family p ↦ model(p) builds the case at each value; inverse-statics commands are resolved at
-each value, unless resolving them at two values gave bitwise-equal settings (the swept parameter
-does not enter them, as a follower load does not enter a held position command): then the
-settings are reused (``record["commands"]``).
+The family p ↦ model(p) builds the case once and, where the swept parameter enters only force
+scalars, updates those at each value (:class:`~mbseig.casefile.element_readers.ScalarUpdate`:
+equal to a build field by field), else builds the case at each value (``record["model"]``).
+Inverse-statics commands are resolved at each value, unless resolving them at two values gave
+bitwise-equal settings (the swept parameter does not enter them, as a follower load does not
+enter a held position command): then the settings are reused; or the swept parameter enters
+only the commanded spring's stiffness: then the spring's tension at the commanded posture is
+held (:func:`held_tension`, checked at every value; ``record["commands"]``).
+``lean=False`` builds and resolves every value (the general path, for comparison).
 """
 
 from __future__ import annotations
@@ -29,10 +34,12 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..casefile.element_readers import ScalarUpdate
 from ..eigen import Problem, Request, solve
 from ..errors import MbseigError
 from ..linear import linearize
 from ..modal import stability, tolerances, worst
+from ..model import Model
 from ..model.linear_case import LinearCase
 from ..statics import equilibrium, examine, resolve
 from ..statics.cache import Memo
@@ -45,25 +52,66 @@ from ..statics.solve import solve_statics
 from ..statics.stiffness import static_stability
 from .records import SweepPoint
 
-__all__ = ["sweep_line", "family_maker", "modal_point", "DIAGRAM_MODES_MAX"]
+__all__ = ["sweep_line", "family_maker", "held_tension", "modal_point", "DIAGRAM_MODES_MAX"]
 
 DIAGRAM_MODES_MAX = 60  # DOF up to which every branch point of the diagram gets its modal verdict
 
 
-def family_maker(spec, config, params, axis):
-    """(make, state): make(p) is the model at axis = p with its commands resolved."""
-    state = {"first": None, "reuse": None, "checked": False, "last": None, "presolve": {}}
+def family_maker(spec, config, params, axis, *, lean=True):
+    """(make, state): make(p) is the model at axis = p with its commands resolved.
+
+    The case is built once; where the swept parameter enters only force scalars (a spring
+    constant, a damping value, a load's magnitude) the next values update those
+    (:class:`~mbseig.casefile.element_readers.ScalarUpdate`, equal to a build element by
+    element), elsewhere every value is built (``state["model"]`` says which and why)."""
+    state = {"first": None, "reuse": None, "checked": False, "last": None, "presolve": {},
+             "lean": None, "model": None, "held": 0, "resolved": 0, "made": {}}
+    lean_models = lean_commands = bool(lean)
+
+    def build(p):
+        lean = state["lean"]
+        if lean is not None and lean_models:
+            try:
+                m = lean.make(p)
+            except MbseigError:  # a bad value: the build names the file and the element
+                m = None
+            if m is not None:
+                return m
+        m = spec.build(config, **{**params, axis: float(p)})
+        if state["model"] is None:
+            state["lean"] = lean = (ScalarUpdate(spec.data, config, params, axis, m)
+                                    if isinstance(m, Model) else None)
+            state["model"] = ("built at every value" if lean is None or not lean_models else
+                              f"built at every value ({lean.reason})" if lean.reason else
+                              "built once, force scalars updated at each value")
+        return m
 
     def make(p):
-        m = spec.build(config, **{**params, axis: float(p)})
+        key = float(p)
+        if key in state["made"]:  # the same value again (the first point, asked by the family)
+            return state["made"][key]
+        m = made(p)
+        if len(state["made"]) >= 4:
+            state["made"].pop(next(iter(state["made"])))
+        state["made"][key] = m
+        return m
+
+    def made(p):
+        m = build(p)
         if not getattr(m, "commands", ()):
             return m
         if state["reuse"] is not None:
             r = reuse_commands(m, state["reuse"])
             if r is not None:
                 return r
+        if state["checked"] and lean_commands:
+            r = held_tension(m, state["last"])
+            if r is not None:
+                state["held"] += 1
+                return r
         r = resolve(m, hint=state["last"], cache=state["presolve"])  # from the previous point
         state["last"] = r
+        state["resolved"] += 1
         if state["first"] is None:
             state["first"] = (float(p), r)
         elif not state["checked"] and float(p) != state["first"][0]:
@@ -73,6 +121,59 @@ def family_maker(spec, config, params, axis):
         return r
 
     return make, state
+
+
+def held_tension(model, prev, *, tol=1e-12, posture_tol=1e-10):
+    """``model`` (its one command pending) set from ``prev`` (resolved at another value of a
+    parameter that enters the commanded spring's stiffness alone), or None.
+
+    The same tension T at the same posture q* gives the same forces, so ``prev``'s posture and
+    tension solve the command for any stiffness k of the spring: its free length is
+    l₀ = l* − T/k (the root the resolve's secant finds where the root is unique, as on the
+    crank-slider of the finger device, whose driver holds the spring's ends).  Taken only when
+    every other element is the one ``prev`` has, and checked as
+    :func:`~mbseig.statics.inverse.resolve_commands` checks its own result: at q*, on the device with the driver and without follower loads,
+    the driver's effort (unique: no redundant constraint) is at most ``tol`` × the released
+    effort and the posture is in equilibrium (residual ≤ ``posture_tol`` × the forces).  Else
+    the command is resolved."""
+    if prev is None or len(model.commands) != 1 or len(prev.drivers) != 1:
+        return None
+    driver, targets = model.commands[0]
+    rec = prev.drivers[0]
+    springs = [t for t in targets if t[0] == "force"]
+    if len(springs) != 1 or len(targets) != 1 or len(rec["sets"]) != 1:
+        return None
+    k = springs[0][1]
+    spring, old = model.forces[k], prev.forces[k]
+    if (len(model.forces) != len(prev.forces) or model.constraints != prev.constraints
+            or any(a is not b for j, (a, b) in enumerate(zip(model.forces, prev.forces)) if j != k)
+            or spring.diff is not old.diff or not spring.stiffness > 0
+            or model.g_const is not prev.g_const or model.mass is not prev.mass):
+        return None
+    length, tension = rec["sets"][0]["length"], rec["sets"][0]["tension"]
+    l0 = length - tension / spring.stiffness
+    forces = list(model.forces)
+    forces[k] = replace(spring, free_length=l0)
+    q = np.asarray(prev.q_init, float)
+    device = replace(model, forces=tuple(f for f in forces if not isinstance(
+        getattr(f, "magnitude", None), (int, float))), constraints=model.constraints + (driver,),
+        commands=())
+    with np.errstate(all="ignore"):
+        g = device.generalized_force(q)
+        G = np.asarray(device.phi_q(q, dense=True))
+        lam, _, rank, _ = np.linalg.lstsq(G.T, g, rcond=None)
+        r = g - G.T @ lam
+        scale = max(float(np.max(np.abs(g))), float(np.max(np.abs(G.T) @ np.abs(lam))))
+    effort = abs(float(rec["effort"]))
+    if not (rank == G.shape[0]  # the driver's effort unique (no redundant constraint)
+            and abs(lam[-1]) <= tol * max(effort, np.finfo(float).tiny)
+            and float(np.max(np.abs(r))) <= posture_tol * scale and l0 > 0):
+        return None
+    length_now = float(np.linalg.norm(spring.diff(q)))
+    record = {**rec, "iterations": 0, "residual_effort": -float(lam[-1]),
+              "sets": [{"element": spring.name, "free_length": l0, "length": length_now,
+                        "tension": spring.stiffness * (length_now - l0)}]}
+    return replace(model, forces=tuple(forces), q_init=q, commands=(), drivers=(record,))
 
 
 def modal_point(model, eq, params, *, safety, stability_rtol):
@@ -101,7 +202,7 @@ def _angles(model, q):
 
 
 def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rtol=1e-12,
-               switch=True):
+               switch=True, lean=True):
     """One line of a sweep by continuation (module docstring); a pure, picklable function.
 
     Returns {"points": [point dicts as :func:`mbseig.studies.sweep.evaluate_point`, with
@@ -110,7 +211,7 @@ def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rto
     {"error": message}.
     """
     values = np.asarray(values, dtype=float)
-    make, state = family_maker(case, config, params, axis)
+    make, state = family_maker(case, config, params, axis, lean=lean)
     opts = {"safety": safety, "stability_rtol": stability_rtol}
 
     def point_params(p):
@@ -223,8 +324,9 @@ def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rto
             e["dof"] = int(fam.n - fam.rows.size)
             e["angles"] = diagram[i]["angles"]
         events.append(e)
+    commands = ("reused (the swept parameter does not enter them)" if state["reuse"] is not None
+                else f"resolved at {state['resolved']} values, the spring's tension held at "
+                     f"{state['held']}" if state["held"] else "resolved at every value")
     out.update(branch=diagram, events=events,
-               record={**branch.record, "commands": ("reused (the swept parameter does not "
-                                                     "enter them)" if state["reuse"] is not None
-                                                     else "resolved at every value")})
+               record={**branch.record, "model": state["model"], "commands": commands})
     return out

@@ -14,6 +14,7 @@ import os
 import sys
 
 from ..errors import MbseigError
+from ..eigen.dense import blas_held
 from ..statics.linalg import blas_threads
 
 __all__ = ["Runner", "progress_bar", "blas_threads"]
@@ -39,7 +40,7 @@ def _connect(Client, address, timeout):
 
 def _capped(fn, n, args, kwargs):
     """fn(*args, **kwargs) with BLAS capped (module docstring); module level, so picklable."""
-    with blas_threads(n):
+    with blas_threads(n), blas_held(n):
         return fn(*args, **kwargs)
 
 

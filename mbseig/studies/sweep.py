@@ -87,7 +87,7 @@ def _lines(axes, fixed):
 
 def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None, progress=None,
               xtol_rel=1e-10, safety=10.0, stability_rtol=1e-12, continuation=True,
-              curves=True, curve_values=None, diagram=None, resume=None) -> SweepResult:
+              curves=True, curve_values=None, diagram=None, resume=None, lean=True) -> SweepResult:
     """Sweep ``case`` over ``axes`` = [(name, values), ...] (see the module docstring).
 
     case : a path (read and parsed once, here) or a :class:`~mbseig.casefile.CaseSpec`; the
@@ -103,6 +103,10 @@ def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None,
         instead of computed; the result equals that of an uninterrupted sweep bit for bit.
     diagram : the coordinate or named angle of the bifurcation diagram (default: the named angle,
         else the coordinate, that varies most along the branch).
+    lean : build the case once per line and update only the force scalars the swept parameter
+        enters, holding a commanded spring's tension when only its stiffness is swept
+        (:func:`~mbseig.studies.continuation.family_maker`; the same numbers to rounding);
+        False builds and resolves every value (the general path, for comparison).
     """
     spec = as_spec(case)
     case_arg, case = spec.source, spec
@@ -112,7 +116,7 @@ def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None,
     values0 = np.asarray(values0, dtype=float)
     opts = {"safety": safety, "stability_rtol": stability_rtol}
     # build one point first so that a bad case or parameter fails fast with its own message
-    spec.build(config, **{**fixed, **lines[0], axis0: float(values0[0])})
+    first = spec.build(config, **{**fixed, **lines[0], axis0: float(values0[0])})
     span = abs(float(values0[-1] - values0[0]))
     xtol = xtol_rel * span
     n0 = len(values0)
@@ -127,8 +131,8 @@ def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None,
     with Runner(jobs=jobs, scheduler=scheduler, progress=progress,
                 checkpoint=checkpoint) as runner:
         if continuation:
-            points, branches, events, records = _followed_lines(runner, case, config, fixed,
-                                                                lines, axis0, values0, opts)
+            points, branches, events, records = _followed_lines(
+                runner, case, config, fixed, lines, axis0, values0, {**opts, "lean": bool(lean)})
         else:
             calls = [((case, config, {**fixed, **line, axis0: float(v)}), opts)
                      for line in lines for v in values0]
@@ -151,7 +155,7 @@ def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None,
         if curves and len(axes) == 2 and continuation:
             curve_list = _curves(runner, case, config, fixed, axes, lines, boundaries, span, xtol,
                                  opts, curve_values)
-    diag = _diagram(case, config, fixed, lines, axis0, values0, branches, diagram)
+    diag = _diagram(first, branches, diagram)
     return SweepResult(case=case_arg, config=config, fixed=fixed,
                        axes=[(n, np.asarray(v, dtype=float)) for n, v in axes], lines=lines,
                        points=points, tracks=tracks, tolerances_track=tols, boundaries=boundaries,
@@ -170,6 +174,7 @@ def _followed_lines(runner, case, config, fixed, lines, axis0, values0, opts):
     records) per line; a line whose first point fails is solved point by point instead."""
     results = runner.map(sweep_line, [((case, config, {**fixed, **line}, axis0, values0), opts)
                                       for line in lines], "lines")
+    opts = {k: v for k, v in opts.items() if k != "lean"}
     points, branches, events, records = [], [], [], []
     for line, r in zip(lines, results):
         if r.get("points") is None:  # the first point failed: every point on its own
@@ -290,13 +295,13 @@ def _merge_conjugates(boundaries, xtol):
     return out
 
 
-def _diagram(case, config, fixed, lines, axis0, values0, branches, name):
-    """The variable of the bifurcation diagram, its value at every branch point (in place)."""
+def _diagram(model, branches, name):
+    """The variable of the bifurcation diagram, its value at every branch point (in place);
+    ``model``: the sweep's first point, built (names, kinds and the report's angles)."""
     pts = [b for br in branches for b in br]
     if not pts:
         return {}
     angles = sorted({a for b in pts for a in (b.get("angles") or {})})
-    model = case.build(config, **{**fixed, **lines[0], axis0: float(values0[0])})
     names = list(model.coordinate_names)
     if name is None:
         best, spread = None, -1.0

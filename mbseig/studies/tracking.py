@@ -113,11 +113,10 @@ def track_shapes(points, S):
     for k, pt in enumerate(points):
         if pt.get("error"):
             continue
-        for j in range(S.shape[1]):
-            if np.isnan(S[k, j]):
-                continue
-            c = int(np.flatnonzero(pt["eigenvalues"] == S[k, j])[0])
-            out[(k, j)] = pt["shapes"][:, c]
+        s, X = pt["eigenvalues"], pt["shapes"]  # read once: a record's lookup is not free
+        for j in np.flatnonzero(~np.isnan(S[k])):
+            c = int(np.flatnonzero(s == S[k, j])[0])
+            out[(k, int(j))] = X[:, c]
     return out
 
 
