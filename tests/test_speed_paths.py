@@ -8,7 +8,12 @@ References, each an independent computation in this file:
 - numerics.scatter: the meshgrid assembly it replaced, bitwise;
 - the column-blocked η, κ and componentwise measures: the same functions on one block (the
   measures are per column, so blocking must not change a single bit);
-- the lazy package: every name of ``mbseig.__all__`` resolves to the object its module defines.
+- the lazy package: every name of ``mbseig.__all__`` resolves to the object its module defines;
+- a small model's dense K, C, Φ_q, H on keys made once per model: numerics.scatter of the same
+  element blocks (the assembly they replace), bitwise, on bundled planar and spatial cases;
+- the direct LAPACK calls (triangular solve of the companion path, pivoted QR of the cluster
+  rank): scipy.linalg.solve_triangular and scipy.linalg.qr, bitwise;
+- the all-pairs ball query of the error bounds: the row-by-row search it replaced.
 """
 
 import importlib
@@ -161,3 +166,101 @@ def test_blas_limit_is_a_context():
     assert np.array_equal(x, np.full(3, 0.5))
     with blas_limit(None):
         pass
+
+
+@pytest.mark.parametrize("case", ["hand_device", "four_bar", "spatial_double_pendulum",
+                                  "rssr_four_bar", "chain_damped"])
+def test_dense_model_assembly_is_scatter_bitwise(case):
+    """Reference: numerics.scatter of the model's element blocks (dense), at perturbed q."""
+    from conftest import CASES
+
+    from mbseig.casefile import load_case
+    from mbseig.model.base import BatchForce
+
+    m = load_case(CASES / f"{case}.toml")
+    rng = np.random.default_rng(3)
+    q = m.q_init + 1e-3 * rng.standard_normal(m.n)
+    lam = rng.standard_normal(m.n_constraints)
+    qd = np.zeros(m.n)
+    singles = [f for f in m.forces if not isinstance(f, BatchForce)]
+    parts = [(f.idx, f.jacobians(q, qd)) for f in singles]
+    K, C = m._force_jacobians(q, None, True)
+    batches = [f for f in m.forces if isinstance(f, BatchForce)]
+    Kb = scatter(m.n, m.n, [(i, i, k) for i, (k, _) in parts], dense=True)
+    Cb = scatter(m.n, m.n, [(i, i, c) for i, (_, c) in parts], dense=True)
+    if batches:
+        Kb = Kb + coo_sum(m.n, m.n, [b.jacobian_coo(q, qd)[0] for b in batches], dense=True)
+        Cb = Cb + coo_sum(m.n, m.n, [b.jacobian_coo(q, qd)[1] for b in batches], dense=True)
+    assert np.array_equal(K, Kb) and np.array_equal(C, Cb)
+    off = np.cumsum([0] + [c.n_eq for c in m.constraints])
+    G = scatter(m.n_constraints, m.n, [(np.arange(off[k], off[k + 1]), c.idx, c.jac(q))
+                                       for k, c in enumerate(m.constraints)], dense=True)
+    H = scatter(m.n, m.n, [(c.idx, c.idx, c.hess(q, lam[off[k]:off[k + 1]]))
+                           for k, c in enumerate(m.constraints)], dense=True)
+    assert np.array_equal(m._phi_q(q, True), G)
+    assert np.array_equal(m._constraint_hessian(q, lam, True), H)
+    # and the sparse forms hold the same values
+    assert np.array_equal(m._phi_q(q, False).toarray(), G)
+    assert np.array_equal(m.force_jacobians(q)[0].toarray(), K)
+
+
+def test_direct_lapack_calls_are_scipy_bitwise():
+    """Reference: scipy.linalg.solve_triangular and scipy.linalg.qr(pivoting=True)."""
+    import scipy.linalg as sla
+
+    from mbseig.eigen.dense_paths import _lower_solve
+    from mbseig.modal.bounds import _pivoted_r
+
+    rng = np.random.default_rng(5)
+    for n in (1, 3, 7, 20):
+        L = np.tril(rng.standard_normal((n, n))) + n * np.eye(n)
+        B = rng.standard_normal((n, n))
+        assert np.array_equal(_lower_solve(L, B), sla.solve_triangular(L, B, lower=True))
+        assert np.array_equal(_lower_solve(L, B.T), sla.solve_triangular(L, B.T, lower=True))
+        assert np.array_equal(_lower_solve(L, B, trans=1),
+                              sla.solve_triangular(L, B, lower=True, trans="T"))
+        Bc = B + 1j * rng.standard_normal((n, n))  # complex: scipy's own function
+        assert np.array_equal(_lower_solve(L, Bc), sla.solve_triangular(L, Bc, lower=True))
+        for k in (1, 2, min(n, 4)):
+            X = rng.standard_normal((n, k))
+            Xc = X + 1j * rng.standard_normal((n, k))
+            for A in (X, Xc):
+                assert np.array_equal(np.diag(_pivoted_r(A.copy())),
+                                      np.diag(sla.qr(A, mode="r", pivoting=True)[0]))
+
+
+def test_all_pairs_ball_query_is_the_row_search():
+    """Reference: the row-by-row flatnonzero search the vectorized query replaced."""
+    from mbseig.modal.bounds import AllPairs
+
+    rng = np.random.default_rng(7)
+    for k in (1, 2, 5, 12):
+        pts = rng.standard_normal((k, 2))
+        pts[-1] = pts[0]  # an exact duplicate
+        tree = AllPairs(pts)
+        r = rng.uniform(0, 1.5, k)
+        d = np.abs((pts[:, 0] + 1j * pts[:, 1])[:, None] - tree.z[None, :])
+        assert tree.query_ball_point(pts, r) == [np.flatnonzero(d[i] <= r[i]).tolist()
+                                                 for i in range(k)]
+        assert tree.query_ball_point(pts[0], 0.0) == np.flatnonzero(d[0] <= 0.0).tolist()
+
+
+def test_blas_held_skips_the_small_solve_cap():
+    """Inside a caller's one-thread cap the small dense solve adds none; outside it caps as
+    blas_limit(1) does (a null context too where threadpoolctl is missing)."""
+    import contextlib
+
+    from mbseig.eigen.dense import _small_blas, blas_held
+
+    def null(c):
+        return isinstance(c, contextlib.nullcontext)
+
+    capping = not null(blas_limit(1))
+    assert null(_small_blas(3)) is not capping
+    with blas_held(1):
+        assert null(_small_blas(3))
+        with blas_held(2):  # a cap of two threads: the small solve still caps at one
+            assert null(_small_blas(3)) is not capping
+        assert null(_small_blas(3))
+    assert null(_small_blas(3)) is not capping
+    assert null(_small_blas(500))  # large: never capped here

@@ -33,6 +33,8 @@ halves are candidates for x; the one with the smaller η is kept.
 
 from __future__ import annotations
 
+import contextlib
+import threading
 from dataclasses import replace
 
 import numpy as np
@@ -67,12 +69,34 @@ from .measures import (
 )
 from .pencil import check_regular
 
-__all__ = ["choose_solver", "problem_scaling", "solve_qep"]
+__all__ = ["choose_solver", "problem_scaling", "solve_qep", "blas_held"]
 
 #: cond(M) above which a positive definite M is not mass-normalized (companion, eigh paths)
 COMPANION_COND = 1e5
 STRUCTURED_COND = 1.0 / (1e3 * EPS)
 SMALL_BLAS = 100  # order up to which the dense solve runs on one BLAS thread
+_HELD = threading.local()  # BLAS threads a caller holds capped (mbseig.studies.runners)
+
+
+@contextlib.contextmanager
+def blas_held(n):
+    """Tell the dense solves that the caller holds BLAS at ``n`` threads (a sweep task runs
+    inside one cap): a solve of a small problem then does not cap it again (≈ 0.1–0.2 ms of
+    threadpoolctl per solve, a few per cent of a sweep point)."""
+    before = getattr(_HELD, "n", None)
+    _HELD.n = n
+    try:
+        yield
+    finally:
+        _HELD.n = before
+
+
+def _small_blas(n):
+    """The BLAS cap of a dense solve of order n: one thread up to SMALL_BLAS, unless the caller
+    holds it at one already."""
+    if n > SMALL_BLAS or getattr(_HELD, "n", None) == 1:
+        return contextlib.nullcontext()
+    return blas_limit(1)
 
 
 def _dense(A, what):
@@ -266,7 +290,7 @@ def solve_qep(M, P, Q, *, solver: str = "auto", sym_tol: float = 1e-13,
                            norms0, n_dof=0, complex_problem=complex_problem)
     # small problems on one BLAS thread: a second one only adds synchronization there (and on a
     # loaded machine milliseconds per call, more than the whole solve of a few coordinates)
-    with blas_limit(1 if n <= SMALL_BLAS else None):
+    with _small_blas(n):
         if name == "qz":
             check_regular(M, P, Q, norms)
         sol = SOLVERS[name].kernel(M, P, Q, opts, name, reason, norms)

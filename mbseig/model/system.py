@@ -10,6 +10,7 @@ element kernels of :mod:`mbseig.model.elements` as sparse matrices.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
@@ -95,7 +96,7 @@ class Model:
     def n(self) -> int:
         return len(self.coordinate_names)
 
-    @property
+    @cached_property
     def n_constraints(self) -> int:
         return sum(c.n_eq for c in self.constraints)
 
@@ -103,8 +104,29 @@ class Model:
         return [c.name for c in self.constraints for _ in range(c.n_eq)]
 
     def _row_offsets(self):
+        return self._layout[0]
+
+    @cached_property
+    def _layout(self):
+        """What the dense assembly of a small model repeats at every evaluation, made once per
+        model (the elements are fixed): the constraint row offsets, the flat keys
+        (row · n_cols + column, row-major as each block) of every single force's K and C
+        blocks, of Φ_q's and of H's blocks in element order.  The dense sums are
+        then one bincount of the blocks' values on these keys, as
+        :func:`mbseig.numerics.scatter` forms them (the same sums in the same order)."""
         off = np.cumsum([0] + [c.n_eq for c in self.constraints])
-        return off
+        n = self.n
+
+        def keys(blocks, n_cols):
+            parts = [(np.asarray(r).ravel()[:, None] * n_cols + np.asarray(c).ravel()[None, :]).ravel()
+                     for r, c in blocks]
+            return np.concatenate(parts) if parts else np.zeros(0, np.intp)
+
+        singles = [f for f in self.forces if not isinstance(f, BatchForce)]
+        kf = keys([(f.idx, f.idx) for f in singles], n)
+        kp = keys([(np.arange(off[k], off[k + 1]), c.idx) for k, c in enumerate(self.constraints)], n)
+        kh = keys([(c.idx, c.idx) for c in self.constraints], n)
+        return off, kf, kp, kh
 
     def mass_matrix(self, q=None) -> sp.csr_matrix:
         """M(q): ``mass`` with the configuration-dependent element masses evaluated at q."""
@@ -157,7 +179,10 @@ class Model:
             K, C = f.jacobians(q, qd)
             kb.append((f.idx, f.idx, K))
             cb.append((f.idx, f.idx, C))
-        K, C = scatter(self.n, self.n, kb, dense=dense), scatter(self.n, self.n, cb, dense=dense)
+        if dense:
+            K, C = (_summed(self.n, self.n, self._layout[1], b) for b in (kb, cb))
+        else:
+            K, C = scatter(self.n, self.n, kb), scatter(self.n, self.n, cb)
         if kt:
             K = K + coo_sum(self.n, self.n, kt, dense=dense)
             C = C + coo_sum(self.n, self.n, ct, dense=dense)
@@ -177,8 +202,14 @@ class Model:
 
     def _phi_q(self, q, dense):
         off = self._row_offsets()
+        if dense:
+            jacs = [c.jac(q) for c in self.constraints]
+            return _summed(self.n_constraints, self.n, self._layout[2],
+                           [(None, None, J) for J in jacs],
+                           lambda: [(np.arange(off[k], off[k + 1]), c.idx, jacs[k])
+                                    for k, c in enumerate(self.constraints)])
         blocks = [(np.arange(off[k], off[k + 1]), c.idx, c.jac(q)) for k, c in enumerate(self.constraints)]
-        return scatter(self.n_constraints, self.n, blocks, dense=dense)
+        return scatter(self.n_constraints, self.n, blocks)
 
     def constraint_hessian(self, q, lam, *, dense=False) -> sp.csr_matrix:
         """H(λ) = Σ_k λ_k ∇²Φ_k(q), the stiffness of the constraint forces (CSR; a dense array
@@ -192,7 +223,9 @@ class Model:
     def _constraint_hessian(self, q, lam, dense):
         off = self._row_offsets()
         blocks = [(c.idx, c.idx, c.hess(q, lam[off[k]:off[k + 1]])) for k, c in enumerate(self.constraints)]
-        return scatter(self.n, self.n, blocks, dense=dense)
+        if dense:
+            return _summed(self.n, self.n, self._layout[3], blocks)
+        return scatter(self.n, self.n, blocks)
 
     @property
     def dense_assembly(self) -> bool:
@@ -241,6 +274,20 @@ class Model:
         if not self.constraints:
             return np.zeros(0)
         return np.concatenate([np.full(c.n_eq, c.scale()) for c in self.constraints])
+
+
+def _summed(n_rows, n_cols, keys, blocks, full=None):
+    """The dense sum of the blocks' values on the model's precomputed keys (one bincount, as
+    :func:`mbseig.numerics.scatter` sums them); scatter itself (of ``full()``, the blocks with
+    their indices, when given) where the values do not match the keys."""
+    vals = [np.asarray(v, dtype=float).ravel() for _, _, v in blocks]
+    total = sum(v.size for v in vals)
+    if total != keys.size:
+        return scatter(n_rows, n_cols, full() if full is not None else blocks, dense=True)
+    if not total:
+        return np.zeros((n_rows, n_cols))
+    return np.bincount(keys, weights=np.concatenate(vals),
+                       minlength=n_rows * n_cols).reshape(n_rows, n_cols)
 
 
 def _finite(evaluate) -> bool:
