@@ -1,7 +1,12 @@
 """A sweep of a periodic case over one parameter: the Floquet verdict at every grid point and
 where it changes (DESIGN §8: ``flip`` at μ = −1, ``fold`` at μ = +1, ``secondary`` for a
 complex pair on |μ| = 1), each located to a relative tolerance by Brent's method on the
-characteristic function of its kind (:func:`mbseig.studies.floquet_sweep.verdict_changes`)."""
+characteristic function of its kind (:func:`mbseig.studies.floquet_sweep.verdict_changes`).
+
+Over two parameters, :func:`periodic_chart` gives the stability chart: the verdict and the
+spectral radius max|μ| on the grid (the Ince–Strutt chart of a Mathieu-type system), and the
+grid brackets where the verdict changes along the first parameter (not located: sweep one
+parameter across a bracket to locate its boundary)."""
 
 from __future__ import annotations
 
@@ -9,10 +14,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .floquet_sweep import verdict_changes
+from .floquet import floquet
+from .floquet_sweep import StabilityChart, verdict_changes
 from .periodic import periodic_analysis, periodic_linearization
 
-__all__ = ["PeriodicSweep", "periodic_sweep"]
+__all__ = ["PeriodicSweep", "periodic_sweep", "PeriodicChart", "periodic_chart", "CHART_RTOLS"]
+
+CHART_RTOLS = (1e-7, 1e-9)  # the two monodromy estimates of a chart point (a map, not a boundary)
 
 
 @dataclass(frozen=True)
@@ -62,3 +70,82 @@ def periodic_sweep(spec, name, values, *, config=None, fixed=None, rel_tol=1e-8,
 
     found = verdict_changes(build, values, rel_tol=rel_tol, results=results)
     return PeriodicSweep(spec.name, name, values, tuple(results), found, rel_tol)
+
+
+@dataclass(frozen=True)
+class PeriodicChart:
+    """A stability chart of a periodic case: ``chart.verdicts[i, j]``,
+    ``chart.spectral_radius[i, j]`` and ``error_bounds[i, j]`` (the bound of the multiplier
+    that decided the verdict) at (p1[i], p2[j]); ``edges`` are the grid brackets along p1 where
+    the verdict changes, with the kind read from the dominant multiplier on the less stable side."""
+
+    case: str
+    chart: StabilityChart
+    error_bounds: np.ndarray
+    edges: tuple
+    rtols: tuple
+    fixed: dict
+
+    def to_dict(self) -> dict:
+        c = self.chart
+        return {
+            "case": self.case,
+            "parameters": list(c.names),
+            "fixed": dict(self.fixed),
+            c.names[0]: [float(v) for v in c.p1],
+            c.names[1]: [float(v) for v in c.p2],
+            "values": {c.names[0]: [float(v) for v in c.p1],
+                       c.names[1]: [float(v) for v in c.p2]},
+            "axes": {"rows": c.names[0], "columns": c.names[1]},
+            "verdicts": [[str(v) for v in row] for row in c.verdicts],
+            "spectral_radius": c.spectral_radius.tolist(),
+            "error_bounds": self.error_bounds.tolist(),
+            "boundaries": list(self.edges),
+            "tolerances": {"rtols": list(self.rtols),
+                           "boundaries": "grid brackets, not located (value = bracket midpoint, "
+                                         "xtol = half the bracket)"},
+        }
+
+
+_RANK = {"stable": 0, "critical": 1, "unstable": 2}
+
+
+def _edge(name, other, value, ra, rb, a, b):
+    worse = ra if _RANK[ra.verdict] > _RANK[rb.verdict] else rb
+    k = int(np.argmax(np.abs(worse.multipliers)))
+    mu, bound = worse.multipliers[k], worse.error_bounds[k]
+    kind = ("secondary" if abs(mu.imag) > max(1e3 * bound, 1e-9 * abs(mu))
+            else "flip" if mu.real < 0 else "fold")
+    return {"value": 0.5 * (a + b), "kind": kind,
+            "stability": "loss" if _RANK[rb.verdict] > _RANK[ra.verdict] else "recovery",
+            "parameter": name, "at": {other: float(value)}, "bracket": [float(a), float(b)],
+            "xtol": 0.5 * abs(b - a), "verdicts": [ra.verdict, rb.verdict],
+            "method": "grid bracket (not located)"}
+
+
+def periodic_chart(spec, first, second, *, config=None, fixed=None, rtols=CHART_RTOLS,
+                   progress=None) -> PeriodicChart:
+    """The Floquet verdict of a periodic case over the grid ``first`` × ``second`` (each a
+    (name, values) pair), two monodromy estimates at ``rtols`` per point."""
+    (n1, v1), (n2, v2) = first, second
+    fixed = dict(fixed or {})
+    v1, v2 = np.asarray(v1, dtype=float), np.asarray(v2, dtype=float)
+    verdicts = np.empty((v1.size, v2.size), dtype=object)
+    rho, bounds = np.empty(verdicts.shape), np.empty(verdicts.shape)
+    results = np.empty(verdicts.shape, dtype=object)
+    total, done = v1.size * v2.size, 0
+    for i, a in enumerate(v1):
+        for j, b in enumerate(v2):
+            params = {**fixed, n1: repr(float(a)), n2: repr(float(b))}
+            system = periodic_linearization(spec, config=config, params=params).system.system
+            res = floquet(system, rtols=rtols)
+            results[i, j], verdicts[i, j] = res, res.verdict
+            rho[i, j], bounds[i, j] = res.spectral_radius, res.decided_by[2]
+            done += 1
+            if progress:
+                progress(done, total)
+    edges = tuple(_edge(n1, n2, v2[j], results[i, j], results[i + 1, j], v1[i], v1[i + 1])
+                  for j in range(v2.size) for i in range(v1.size - 1)
+                  if results[i, j].verdict != results[i + 1, j].verdict)
+    chart = StabilityChart(v1, v2, verdicts, rho, (n1, n2))
+    return PeriodicChart(spec.name, chart, bounds, edges, tuple(rtols), fixed)
