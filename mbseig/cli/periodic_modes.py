@@ -1,13 +1,18 @@
 """``mbseig modes CASE`` on a periodic case (DESIGN §8, "Periodic motions"): the reference
 motion, the Floquet multipliers with their error bounds and the verdict; the frozen-time
-eigenvalues are listed beside them as what a frozen-time analysis would (wrongly) conclude."""
+eigenvalues are listed beside them as what a frozen-time analysis would (wrongly) conclude.
+
+``--n-modes K``: the K multipliers of largest modulus by the partial method (Arnoldi on the
+monodromy operator, :mod:`mbseig.studies.periodic_partial`), without forming the monodromy
+matrix; the frozen-time summary is left out (it needs every eigenvalue at 64 instants)."""
 
 from __future__ import annotations
 
 import math
 
+from ..errors import CaseError
 from ..studies.periodic import floquet_json, frozen_summary, periodic_analysis
-from .common import analyzed, print_json
+from .common import analyzed, case_kwargs, print_json
 
 
 def exponent_modes(fl) -> list:
@@ -59,7 +64,57 @@ def result_json(a) -> dict:
     }
 
 
+def partial_json(p) -> dict:
+    """The modes JSON of ``--n-modes K`` (:func:`mbseig.studies.periodic_partial.periodic_partial`)."""
+    lin = p.linearization
+    model, ref = lin.timed.base, lin.reference
+    fl = p.to_dict()
+    return {
+        "case": model.name, "parameters": p.parameters, "n_coordinates": model.n,
+        "n_constraints": model.n_constraints, "n_redundant": 0, "dof": lin.system.dof,
+        "solver": f"floquet (partial): {p.method}",
+        "equilibrium": {"residual": ref.residual, "iterations": ref.iterations},
+        "verdict": p.verdict, "modes": exponent_modes(fl), "floquet": fl,
+    }
+
+
+def _run_partial(args, spec) -> int:
+    from ..studies.periodic_partial import periodic_partial
+
+    if args.band_hz is not None or args.target_hz is not None:
+        raise CaseError("--target-hz and --band-hz select eigenvalues of a static case; a "
+                        "periodic case takes --n-modes K (the K largest |mu|)",
+                        element="command line", file=spec.source)
+    kw = case_kwargs(args)
+    p = periodic_partial(spec, k=args.n_modes, config=kw["config"], params=kw["params"])
+    out = partial_json(p)
+    if args.json:
+        return print_json(out)
+    fl = out["floquet"]
+    print(f"case {out['case']}: periodic, T = {fl['period']:.6g} s, {out['n_coordinates']} "
+          f"coordinates, {out['n_constraints']} constraints, {out['dof']} DOF")
+    print(f"solver: {out['solver']}")
+    print(f"the {len(fl['multipliers'])} largest of {fl['partial']['of']} multipliers:")
+    _table(fl)
+    return 0
+
+
+def _table(fl):
+    print(f"{'k':>3} {'multiplier':>30} {'|mu|':>12} {'bound':>9} {'exponent':>28}")
+    for k, (mu, ex, b) in enumerate(zip(fl["multipliers"], fl["exponents"], fl["error_bounds"])):
+        print(f"{k + 1:>3} {mu[0]:>14.8g} {mu[1]:+14.8g}j {abs(complex(*mu)):>12.8g} {b:>9.1e} "
+              f"{ex[0]:>13.6g} {ex[1]:+13.6g}j")
+    d = fl["decided_by"]
+    print(f"verdict: {fl['verdict']} (multiplier {d['index'] + 1}: |mu| = {d['modulus']:.10g} "
+          f"± {d['bound']:.1e}, margin {d['margin']:.3g})")
+
+
 def run(args, spec) -> int:
+    if getattr(args, "n_modes", None) is not None:
+        if args.n_modes < 1:
+            raise CaseError(f"--n-modes must be a positive integer, got {args.n_modes}",
+                            element="command line", file=spec.source)
+        return _run_partial(args, spec)
     a = analyzed(args, spec, periodic_analysis)
     out = result_json(a)
     if args.json:
@@ -70,13 +125,7 @@ def run(args, spec) -> int:
     print(f"reference motion: {ref.method}; residual {ref.residual:.2e} after {ref.iterations} "
           "iterations")
     print(f"solver: {a.floquet.method}; Liouville check {fl['det_check']:.1e}")
-    print(f"{'k':>3} {'multiplier':>30} {'|mu|':>12} {'bound':>9} {'exponent':>28}")
-    for k, (mu, ex, b) in enumerate(zip(fl["multipliers"], fl["exponents"], fl["error_bounds"])):
-        print(f"{k + 1:>3} {mu[0]:>14.8g} {mu[1]:+14.8g}j {abs(complex(*mu)):>12.8g} {b:>9.1e} "
-              f"{ex[0]:>13.6g} {ex[1]:+13.6g}j")
-    d = fl["decided_by"]
-    print(f"verdict: {fl['verdict']} (multiplier {d['index'] + 1}: |mu| = {d['modulus']:.10g} "
-          f"± {d['bound']:.1e}, margin {d['margin']:.3g})")
+    _table(fl)
     fz = out["frozen_time"]
     print(f"frozen-time eigenvalues ({fz['instants']} instants): max Re s = "
           f"{fz['max_real_part']:.4g}, would say {fz['verdict']} (not a criterion here)")

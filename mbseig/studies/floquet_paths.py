@@ -68,36 +68,37 @@ class NullSpacePath:
         except np.linalg.LinAlgError:
             raise FloquetError(f"Φ_q loses rank at t = {t:g} (redundant or singular constraints "
                                "along the motion)", element="null space") from None
-        P = np.eye(n) - Jp @ J
         B = self.bases[k]
-        S = B.T @ P @ B
+        PB = B - Jp @ (J @ B)  # P B without forming the n×n projector: O(n m r)
+        S = B.T @ PB
         s, V = np.linalg.eigh(S)
         if s[0] < self.min_overlap ** 2:
             raise FloquetError(f"the null space turned too far within segment {k} at t = {t:g} "
                                f"(overlap {math.sqrt(max(s[0], 0)):.2g}); use more segments",
                                element="null space")
         r = 1.0 / np.sqrt(s)
-        return J, Jp, P, B, s, V, r
+        return J, Jp, PB, B, s, V, r
 
     def basis(self, t, k=None):
         k = self.segment(t) if k is None else k
-        _, _, P, B, _, V, r = self._parts(t, k)
-        return P @ B @ (V * r) @ V.T
+        _, _, PB, _, _, V, r = self._parts(t, k)
+        return PB @ ((V * r) @ V.T)
 
     def derivative(self, t, k=None):
-        """(N, Ṅ) at t on segment k."""
+        """(N, Ṅ) at t on segment k (products with the thin factors only: O(n m r + n r²))."""
         k = self.segment(t) if k is None else k
-        J, Jp, P, B, s, V, r = self._parts(t, k)
+        J, Jp, PB, B, s, V, r = self._parts(t, k)
         Jd = _jacobian(self.phi_q_dot(t), J.shape[1])
-        E = Jp @ Jd @ P
-        Pd = -(E + E.T)
-        Sd = V.T @ (B.T @ Pd @ B) @ V
+        # Ṗ B = −(E + Eᵀ) B with E = Φ_q⁺ Φ̇_q P:  E B = Φ_q⁺ (Φ̇_q P B),  Eᵀ B = P Φ̇_qᵀ Φ_q⁺ᵀ B
+        X = Jd.T @ (Jp.T @ B)
+        PdB = -(Jp @ (Jd @ PB) + X - Jp @ (J @ X))
+        Sd = V.T @ (B.T @ PdB) @ V
         sq = np.sqrt(s)
         dk = -1.0 / (sq[:, None] * sq[None, :] * (sq[:, None] + sq[None, :]))
         Rinv = (V * r) @ V.T
         Rinv_dot = V @ (Sd * dk) @ V.T
-        N = P @ B @ Rinv
-        Nd = Pd @ B @ Rinv + P @ B @ Rinv_dot
+        N = PB @ Rinv
+        Nd = PdB @ Rinv + PB @ Rinv_dot
         return N, Nd
 
 

@@ -31,7 +31,8 @@ from .periodic_motion import reference_motion
 
 __all__ = ["PeriodicAnalysis", "periodic_analysis", "PeriodicLinearization",
            "periodic_linearization", "period_of", "check_time_fields",
-           "frozen_time", "frozen_summary", "floquet_json", "TIMED_SECTIONS"]
+           "frozen_time", "frozen_summary", "floquet_json", "reduced_exponents",
+           "forget_kept", "TIMED_SECTIONS"]
 
 TIMED_SECTIONS = ("points", "joints", "forces")  # where a numeric field may use t
 _UNTIMED_KEYS = {"name", "type", "repeat", "enabled", "fixed", "points", "bodies", "point",
@@ -201,6 +202,11 @@ def _kept(kind, spec, config, params, extra, compute):
     return _KEPT[key]
 
 
+def forget_kept():
+    """Drop the results kept in this process (a benchmark measures cold runs)."""
+    _KEPT.clear()
+
+
 def periodic_linearization(spec, *, config=None, params=None, samples=SAMPLES,
                            max_samples=1024) -> PeriodicLinearization:
     """Reference motion and sampled linearization of a periodic case (module docstring)."""
@@ -305,20 +311,27 @@ def floquet_json(analysis) -> dict:
     """The §8 ``"floquet"`` object (and its extras: per-multiplier bounds, the deciding
     multiplier and margin, Liouville's check, the method, tolerances and samples)."""
     out = analysis.floquet.to_dict()
-    res = analysis.floquet
-    T = res.period
-    w = 2 * math.pi / T
-    exps = []
-    for e in res.exponents:  # imaginary parts reduced modulo 2π/T into (−π/T, π/T]
-        im = e.imag - w * math.floor((e.imag + math.pi / T) / w)
-        if im <= -math.pi / T:
-            im += w
-        exps.append([float(e.real), float(im)])
-    out["exponents"] = exps
+    out["exponents"] = reduced_exponents(analysis.floquet.multipliers, analysis.floquet.period)
     out["samples"] = analysis.samples
     out["sampling_difference"] = analysis.sampling_difference
     ref = analysis.reference
     out["reference"] = {"method": ref.method, "residual": ref.residual,
                         "iterations": ref.iterations}
     out["time_dependent"] = list(analysis.timed.time_dependent)
+    return out
+
+
+def reduced_exponents(multipliers, period) -> list:
+    """[re, im] of the exponents ln(μ)/T, imaginary parts reduced modulo 2π/T into
+    (−π/T, π/T]."""
+    T = float(period)
+    w = 2 * math.pi / T
+    out = []
+    for mu in multipliers:
+        with np.errstate(divide="ignore"):
+            e = np.log(complex(mu)) / T
+        im = e.imag - w * math.floor((e.imag + math.pi / T) / w)
+        if im <= -math.pi / T:
+            im += w
+        out.append([float(e.real), float(im)])
     return out

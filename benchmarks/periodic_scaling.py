@@ -1,0 +1,179 @@
+"""Benchmark: how the cost of Floquet analysis grows with the model, full monodromy against the
+partial (Arnoldi) method, on a chain of N pendulums whose pivots are shaken vertically.
+
+The chain: N pendulums (point mass m on a rigid rod l, distance constraints), side by side at
+spacing a, each pivot moved as y = A cos(w t) (the rod's constraint is rheonomic), neighbours
+coupled by weak springs kc between the masses.  2N coordinates (the masses; the reader keeps
+these repeated pivots out of the coordinates), N constraints, N degrees of freedom, 2N
+multipliers.  The hanging chain is an
+exact periodic motion (shooting converges at once), so the timings are those of the
+linearization along it and of the monodromy.  Linearized, the chain's modes decouple into
+Mathieu equations θ'' + (g/l + (kc/m) λ_j − (A w²/l) cos wt) θ = 0, λ_j = 2 − 2 cos(jπ/N)
+(free ends): mode 0 (λ = 0) is the single pendulum, and w = 6.3 puts it in the principal
+tongue (cases/pendulum_shaken_pivot.toml), so the dominant multiplier is that of the single
+pendulum, μ = −1.36824 (checked against the full method at every N).
+
+Measured for each N (wall time, one BLAS thread, median of --repeat runs): the linearization
+(timed model, reference motion, sampled linearization), the full monodromy (two estimates,
+every multiplier, ``periodic_analysis``), and the K largest multipliers by the partial method
+(``periodic_partial``, two estimates).  Growth exponents are fitted on log(time) against
+log(N).
+
+    python benchmarks/periodic_scaling.py [--sizes 10 25 50 75] [--partial-max 10] [--k 2]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import sys
+import tempfile
+import time
+import warnings
+from pathlib import Path
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import numpy as np
+
+CASE = """
+schema_version = 1
+title = "chain of {n} pendulums on shaken pivots"
+dimension = 2
+gravity = [0.0, "-g"]
+
+[parameters]
+n = {n}
+m = 1.0
+l = 1.0
+a = 0.5
+g = 9.81
+A = 0.1
+kc = 0.05
+w = 6.3
+
+[motion]
+period = "2*pi/w"
+
+[[points]]
+repeat = {{ i = [1, "n"] }}
+name = "O{{i}}"
+position = ["i*a", "A*cos(w*t)"]
+fixed = true
+
+[[points]]
+repeat = {{ i = [1, "n"] }}
+name = "P{{i}}"
+position = ["i*a", "A - l"]
+
+[[masses]]
+repeat = {{ i = [1, "n"] }}
+point = "P{{i}}"
+mass = "m"
+
+[[joints]]
+repeat = {{ i = [1, "n"] }}
+type = "distance"
+name = "rod{{i}}"
+points = ["O{{i}}", "P{{i}}"]
+length = "l"
+
+[[forces]]
+repeat = {{ i = [1, "n - 1"] }}
+type = "spring"
+points = ["P{{i}}", "P{{i + 1}}"]
+stiffness = "kc"
+"""
+
+
+def single_pendulum_multiplier(g=9.81, l=1.0, A=0.1, w=6.3):
+    """Dominant multiplier of θ'' + (g/l − (A w²/l) cos wt) θ = 0 (the chain's mode 0), by its
+    own integration (scipy solve_ivp, DOP853, rtol 1e-12): the reference of every N."""
+    from scipy.integrate import solve_ivp
+
+    def f(t, x):
+        k = g / l - A * w * w / l * np.cos(w * t)
+        X = x.reshape(2, 2)
+        return np.array([X[1], -k * X[0]]).ravel()
+    sol = solve_ivp(f, (0.0, 2 * np.pi / w), np.eye(2).ravel(), method="DOP853", rtol=1e-12,
+                    atol=1e-14)
+    mu = np.linalg.eigvals(sol.y[:, -1].reshape(2, 2))
+    return mu[np.argmax(np.abs(mu))]
+
+
+def timed(fn, repeat):
+    times, out = [], None
+    for _ in range(repeat):
+        from mbseig.studies.periodic import forget_kept
+
+        forget_kept()  # a benchmark measures cold runs
+        t = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t)
+    return statistics.median(times), out
+
+
+def run(n, directory, *, k, partial, repeat):
+    from mbseig.casefile import read_case
+    from mbseig.studies.periodic import periodic_analysis, periodic_linearization
+    from mbseig.studies.periodic_partial import periodic_partial
+
+    path = Path(directory) / f"chain{n}.toml"
+    path.write_text(CASE.format(n=n))
+    spec = read_case(path)
+    row = {"n": n}
+    row["linearization"], lin = timed(lambda: periodic_linearization(spec), repeat)
+    row["coordinates"], row["dof"] = lin.timed.base.n, lin.system.dof
+    t_full, a = timed(lambda: periodic_analysis(spec), repeat)
+    row["full"] = t_full - row["linearization"]
+    row["mu_full"] = complex(a.floquet.multipliers[0])
+    row["bound_full"] = float(a.floquet.error_bounds[0])
+    if partial:
+        t_part, p = timed(lambda: periodic_partial(spec, k=k), repeat)
+        row["partial"] = t_part - row["linearization"]
+        row["mu_partial"] = complex(p.multipliers[0])
+        row["products"] = p.products
+    return row
+
+
+def fit(rows, key):
+    pts = [(r["dof"], r[key]) for r in rows if key in r and r[key] > 0]
+    if len(pts) < 2:
+        return float("nan")
+    x, y = np.log([p[0] for p in pts]), np.log([p[1] for p in pts])
+    return float(np.polyfit(x, y, 1)[0])
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sizes", type=int, nargs="+", default=[10, 25, 50, 75])
+    ap.add_argument("--partial-max", type=int, default=10,
+                    help="run the partial method up to this N (it is slower here: see docs)")
+    ap.add_argument("--k", type=int, default=2, help="multipliers of the partial method")
+    ap.add_argument("--repeat", type=int, default=1, help="runs per size (median)")
+    args = ap.parse_args(argv)
+    warnings.simplefilter("ignore")
+    rows = []
+    ref = single_pendulum_multiplier()
+    with tempfile.TemporaryDirectory() as d:
+        for n in args.sizes:
+            row = run(n, d, k=args.k, partial=n <= args.partial_max, repeat=args.repeat)
+            rows.append(row)
+            line = (f"N = {n:4d}: {row['coordinates']:4d} coordinates, {row['dof']:4d} DOF; "
+                    f"linearization {row['linearization']:7.2f} s, full monodromy "
+                    f"{row['full']:8.2f} s (|mu| = {abs(row['mu_full']):.10f} "
+                    f"± {row['bound_full']:.1e}, {abs(row['mu_full'] - ref):.1e} from the single "
+                    "pendulum)")
+            if "partial" in row:
+                line += (f", partial (K = {args.k}) {row['partial']:8.2f} s, {row['products']} "
+                         f"products, |mu| differs by {abs(row['mu_partial'] - row['mu_full']):.1e}")
+            print(line, flush=True)
+    print(f"growth with the DOF r (time ~ r^p): linearization p = {fit(rows, 'linearization'):.2f},"
+          f" full monodromy p = {fit(rows, 'full'):.2f}, partial p = {fit(rows, 'partial'):.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
