@@ -102,3 +102,24 @@ def test_anisotropic_unstable_ranges_confirmed_by_fixed_frame_integration():
             outside = 2 - inside
             assert np.max(np.abs(fixed_frame_multipliers(edge * inside, 200.0))) > 1 + 1e-3
             assert abs(np.max(np.abs(fixed_frame_multipliers(edge * outside, 200.0))) - 1) < 1e-9
+
+
+def test_turning_anchors_do_not_make_the_time_sampling_fail(tmp_path):
+    """Without the case's fixed "frame" corner, the turning anchors set the extent of the points
+    and so every constraint's length scale, which then varies with t with kinks.  That scale only
+    judges residuals: it is held at t = 0 (mbseig.model.timed._MEASURES), so the period is
+    sampled as with the corner (the interpolant meets off-grid builds to 1e-12 with few
+    samples, not 512 with an error of 3e-5) and the multipliers are the same to 1e-10 (both
+    models are the same mechanics; the multipliers' own bounds are ~1e-12)."""
+    from mbseig.studies.periodic import timed_model
+
+    text = (CASES / "asymmetric_rotor_anisotropic_bearings.toml").read_text()
+    start = text.index('[[points]]                     # a fixed frame corner')
+    end = text.index("[[forces]]", start)
+    path = tmp_path / "no_frame.toml"
+    path.write_text(text[:start] + text[end:])
+    spec, ref_spec = read_case(path), read_case(CASES / "asymmetric_rotor_anisotropic_bearings.toml")
+    timed, _ = timed_model(spec)
+    assert timed.samples < 512 and timed.interpolation_error <= 1e-12
+    a, b = periodic_analysis(spec).floquet, periodic_analysis(ref_spec).floquet
+    assert matched(a.multipliers, b.multipliers) <= 1e-10 * np.max(np.abs(b.multipliers))

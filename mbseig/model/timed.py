@@ -37,6 +37,10 @@ __all__ = ["TimedModel", "TrigSeries", "sample_time", "TIME_STEP"]
 
 TIME_STEP = 1e-2  # step along the Taylor curve of the numbers, as a fraction of the period
 _DRIFTING = {"angle_target"}  # element numbers that may advance by whole turns per period
+# element numbers that only judge residuals (a constraint's scale, from the extent of the
+# case's points): held at their value at t = 0, never sampled (a moving anchor would make them
+# vary with kinks, which no interpolant of the period meets to 1e-12)
+_MEASURES = {"length_scale"}
 _MAX_SAMPLES = 512
 
 
@@ -333,7 +337,7 @@ def sample_time(build_at, period, *, samples=16, check=3):
             if not dataclasses.is_dataclass(el):
                 continue
             for path, v in _leaves_of(el, (kind, k)):
-                if _differs(v, _get(probe, path)):
+                if path[-1] not in _MEASURES and _differs(v, _get(probe, path)):
                     candidates.append(path)
     for path in candidates:
         v0, vT = np.asarray(_get(base, path), float), np.asarray(_get(end, path), float)
