@@ -146,6 +146,24 @@ def neighbour_index(points, small=256):
     return cKDTree(points)
 
 
+def _holder_blocks(tree, points, S, eta, safety, first_reach):
+    """The size k of the block each eigenvalue may belong to: the number of eigenvalues within
+    safety·S·η^{1/k} of it, grown from k = 2 until it stops growing (radii in units of the
+    points).  Counting within the first-order reach instead would let an unreliable first-order
+    bound (κη of a nearly defective root: κ ≈ 1e18 for a spinning shaft's free rotation) sweep
+    in far neighbours and make the Hölder radius as large as itself, so that whirl modes at
+    83 rad/s took the zero's bound and were called rigid-body.  The first-order reach still caps
+    the count: a block is never larger than what the first-order bound allows."""
+    k = np.full(points.shape[0], 2)
+    while True:
+        reach = np.minimum(safety * S * eta ** (1.0 / k), first_reach)
+        counts = np.array([len(c) for c in tree.query_ball_point(points, reach)])
+        grown = counts > k
+        if not grown.any():
+            return counts
+        k = np.where(grown, counts, k)
+
+
 def error_bounds(sol, *, safety=10.0, stability_rtol=1e-12, stability_atol=0.0, rank_tol=1e-6):
     """Error bounds, tolerances and clusters of every eigenvalue of ``sol`` (module docstring)."""
     s = np.asarray(sol.eigenvalues)
@@ -186,8 +204,8 @@ def error_bounds(sol, *, safety=10.0, stability_rtol=1e-12, stability_atol=0.0, 
     if k > 1:
         finite = np.flatnonzero(np.isfinite(err) & (err > 0))
         if finite.size:
-            reach = np.minimum(safety * err[finite] / unit, 4.0)
-            counts = np.array([len(c) for c in tree.query_ball_point(points[finite], reach)])
+            counts = _holder_blocks(tree, points[finite], S[finite] / unit, eta[finite], safety,
+                                    np.minimum(safety * err[finite] / unit, 4.0))
             holder_k = S[finite] * eta[finite] ** (1.0 / np.maximum(counts, 1))
             radius[finite] = np.where(counts > 1, np.minimum(err[finite], holder_k), err[finite])
         pairs = set()
