@@ -22,7 +22,8 @@ Force (generalized force g_e(q, q̇) on q[idx])::
 
 A batch of identical elements (:class:`BatchForce`, e.g.
 :class:`~mbseig.model.batched.SpringDamperSet`) offers ``add_force(g, q, q̇)`` and
-``jacobian_coo(q, q̇)`` on the full vectors instead; the model uses those when present.  A
+``jacobian_coo(q, q̇)`` on the full vectors instead, and ``nonfinite_member(q, q̇)`` (which member
+of the batch has a force or stiffness that is not finite); the model uses those when present.  A
 configuration-dependent mass (:class:`ConfigurationMass`: a co-rotational beam) provides
 ``mass(q)`` on idx.
 
@@ -130,4 +131,9 @@ class BatchForce:
         raise NotImplementedError
 
     def jacobian_coo(self, q, qd):
+        raise NotImplementedError
+
+    def nonfinite_member(self, q, qd):
+        """The label of the first member whose force or stiffness is not finite at (q, q̇),
+        or None (the model's input check names the member, not the whole batch)."""
         raise NotImplementedError

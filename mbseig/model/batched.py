@@ -126,6 +126,13 @@ class SpringDamperSet(BatchForce, Force):
         """f (nb, dim): the force of each member on its point a (−f on b)."""
         return spring_forces(*self.members(q, qd))
 
+    def nonfinite_member(self, q, qd):
+        d, dd, k, l0, c, label = self.members(q, qd)
+        parts = (self.member_forces(q, qd), *spring_tangents(d, dd, k, l0, c, label))
+        bad = np.logical_or.reduce([np.reshape(~np.isfinite(p), (len(self), -1)).any(axis=1)
+                                    for p in parts])
+        return label(int(np.argmax(bad))) if bad.any() else None
+
     def add_force(self, g, q, qd):
         f = self.member_forces(q, qd)
         for idx, sign in ((self.ia, 1.0), (self.ib, -1.0)):

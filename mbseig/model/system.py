@@ -17,7 +17,6 @@ import scipy.sparse as sp
 
 from ..numerics import DENSE_ASSEMBLY, coo_sum, scatter
 from .base import BatchForce
-from .batched import spring_tangents
 from .cache import KeptValues
 
 __all__ = ["Model"]
@@ -254,12 +253,9 @@ class Model:
         with np.errstate(all="ignore"):
             for f in self.forces:
                 if isinstance(f, BatchForce):  # a batch: name the member
-                    d, dd, k, l0, c, label = f.members(q, qd)
-                    parts = (f.member_forces(q, qd), *spring_tangents(d, dd, k, l0, c, label))
-                    rows = [np.reshape(~np.isfinite(p), (len(f), -1)).any(axis=1) for p in parts]
-                    bad = np.logical_or.reduce(rows)
-                    if bad.any():
-                        return label(int(np.argmax(bad))), "the force or its stiffness"
+                    member = f.nonfinite_member(q, qd)
+                    if member is not None:
+                        return member, "the force or its stiffness"
                 elif not _finite(lambda: (f.force(q, qd), *f.jacobians(q, qd))):
                     return f.name, "the force or its stiffness"
             for e, _ in self.mass_elements:
