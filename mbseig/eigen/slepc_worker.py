@@ -49,6 +49,21 @@ def _mat(PETSc, comm, d, key, shape):
     return A
 
 
+def _peak_rss_kb():
+    """Peak resident memory of this process in kB: VmHWM (ru_maxrss can carry the peak of the
+    process that started this one across the exec)."""
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1])
+    except OSError:
+        pass
+    import resource
+
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+
+
 def _gathered(PETSc, v):
     """The whole of the distributed vector v on rank 0 (None elsewhere)."""
     if v.getComm().getSize() == 1:
@@ -117,10 +132,8 @@ def main(path_in, path_out):
         re, im = _gathered(PETSc, xr), _gathered(PETSc, xi)
         if rank == 0:
             X[:, j] = re + 1j * im
-    import resource
-
-    with open(f"{path_out}.rank{rank}", "w") as f:  # peak resident memory of this process, kB
-        json.dump({"rank": rank, "peak_rss_kb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss}, f)
+    with open(f"{path_out}.rank{rank}", "w") as f:
+        json.dump({"rank": rank, "peak_rss_kb": _peak_rss_kb()}, f)
     if rank == 0:
         np.savez(path_out, s=s, X=X, columns=cols, its=pep.getIterationNumber(), nconv=nconv,
                  setup=t1 - t0, solve=t2 - t1, extract=time.perf_counter() - t2,
