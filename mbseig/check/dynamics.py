@@ -12,14 +12,18 @@ equations are Lagrange's with M(q):
 
     M(q) q̈ + h(q, q̇) + Φ_qᵀ λ = g(q, q̇),    h = Ṁ q̇ − ½ ∂(q̇ᵀ M q̇)/∂q,
 
-M(q) = ``model.mass_matrix(q)`` at every evaluation.  h is formed element by element from the
-element's own ``mass(q)`` (the :class:`~mbseig.model.base.ConfigurationMass` contract): Ṁ q̇ by a
-central difference along q̇ and each component of ½ ∂(q̇ᵀ M_e q̇)/∂q_j by a central difference
-along q_j (step ``MASS_STEP`` × max(|q_j|, length scale): truncation error ~1e-12 of h, which
-is itself of second order in the perturbation).  Such models carry axial modes orders of
-magnitude stiffer than the bending modes that are checked, so :func:`simulate` integrates them
-with Radau IIA (order 5, implicit) when DOP853 is asked: an explicit method would need steps
-below the axial period (``Simulation.method`` records the one used).
+M(q) = ``model.mass_matrix(q)`` at every evaluation.  h is formed element by element: in closed
+form where the element gives ``velocity_terms(q, q̇)`` (the 3-D beams,
+:mod:`mbseig.model.beam_whirl`), otherwise from the element's own ``mass(q)`` (the
+:class:`~mbseig.model.base.ConfigurationMass` contract): Ṁ q̇ by a central difference along q̇ and
+each component of ½ ∂(q̇ᵀ M_e q̇)/∂q_j by a central difference along q_j (step ``MASS_STEP`` ×
+max(|q_j|, length scale): truncation error ~1e-12 of h, which is itself of second order in the
+perturbation).  The augmented system is then solved sparse (SuperLU: one thread, no BLAS
+contention).  Such models carry axial modes orders of magnitude stiffer than the bending modes
+that are checked, so :func:`simulate` integrates them with Radau IIA (order 5, implicit) when
+DOP853 is asked: an explicit method would need steps below the axial period
+(``Simulation.method`` records the one used).  Its Newton matrix is the exact Jacobian of the
+right-hand side at the equilibrium (:meth:`ForwardDynamics.state_jacobian`).
 """
 
 from __future__ import annotations
@@ -28,23 +32,27 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 from ..errors import CaseError, SimulationError
 from ..model.linear_case import LinearCase
 from ..numerics import dense, min_norm_projection, null_space_basis
 
-__all__ = ["ForwardDynamics", "Simulation", "simulate", "INTEGRATORS"]
+__all__ = ["INTEGRATORS", "ForwardDynamics", "Simulation", "simulate"]
 
 #: integrators offered through ``method=`` (scipy.integrate.solve_ivp names)
 INTEGRATORS = ("DOP853", "Radau", "BDF")
 #: relative central-difference step of the mass derivatives (module docstring)
 MASS_STEP = 1e-6
-#: central-difference step of the constant Newton matrix, relative to the perturbation
-JAC_STEP = 1e-2
 #: stiff models: absolute tolerances at least this many noise levels per sample interval,
 #: relative tolerance at least STIFF_RTOL (simulate)
 NOISE_FACTOR = 10.0
 STIFF_RTOL = 1e-8
+#: stiff models: modes above FAST_FACTOR × the checked |s| are left unresolved (modal_basis)
+FAST_FACTOR = 10.0
+#: their absolute tolerance, relative to the perturbation (they carry ~ε² of it)
+FAST_ATOL = 1e-2
 
 
 class ForwardDynamics:
@@ -137,6 +145,10 @@ class ForwardDynamics:
             vmax = float(np.max(np.abs(v)))
             if vmax == 0.0:
                 continue
+            closed = getattr(el, "velocity_terms", None)
+            if closed is not None:
+                h[idx] += closed(q, qd)
+                continue
             e = self._step / vmax
             dq = np.zeros_like(q)
             dq[idx] = e * v
@@ -165,9 +177,14 @@ class ForwardDynamics:
             if self.stiff:
                 return np.linalg.solve(M, g), np.zeros(0)
             return sla.lu_solve(self._lu, g), np.zeros(0)
-        J = self.phi_q(q)
         gam = self.model.gamma(q, qd)
         n = self.n
+        if self.stiff and not self.redundant:  # sparse: M(q) and Φ_q are banded for beams
+            Js = self.model.phi_q(q)
+            A = sp.bmat([[self.model.mass_matrix(q), Js.T], [Js, None]], format="csc")
+            sol = spla.splu(A).solve(np.concatenate([g, gam]))
+            return sol[:n], sol[n:]
+        J = self.phi_q(q)
         A = np.zeros((n + self.m, n + self.m))
         A[:n, :n] = M
         A[:n, n:] = J.T
@@ -194,20 +211,44 @@ class ForwardDynamics:
         acc = np.array([self.rhs(0.0, y + t * dy)[n:] for t in range(11)])
         return float(np.max(np.abs(np.diff(acc, 2, axis=0)), initial=0.0)) / 4.0
 
-    def state_jacobian(self, scale_u: float, scale_v: float):
-        """∂(rhs)/∂y at the equilibrium by central differences (steps ``JAC_STEP`` times the
-        perturbation's scales: above the rounding noise of the stiff forces): the constant Newton matrix Radau uses for a configuration-dependent mass (the
-        motion stays within the perturbation of q₀, where it is exact to that order)."""
-        n = self.n
-        J = np.zeros((2 * n, 2 * n))
-        y0 = np.zeros(2 * n)
-        for j in range(2 * n):
-            hj = JAC_STEP * (scale_u if j < n else scale_v)
-            yp, ym = y0.copy(), y0.copy()
-            yp[j] += hj
-            ym[j] -= hj
-            J[:, j] = (self.rhs(0.0, yp) - self.rhs(0.0, ym)) / (2.0 * hj)
-        return J
+    def state_jacobian(self):
+        """∂(rhs)/∂y at the equilibrium, exact: the constant Newton matrix Radau uses for a
+        configuration-dependent mass (the motion stays within the perturbation of q₀).  At
+        (q₀, q̇ = 0) q̈ = 0 and h, γ are quadratic in q̇, so
+
+            ┌ M   Φ_qᵀ ┐ ┌ ∂q̈/∂u  ∂q̈/∂v ┐   ┌ −(K + H(λ₀))  −C ┐
+            └ Φ_q   0  ┘ └   ·       ·    ┘ = └      0         0 ┘
+
+        with (K, C) = −(∂g/∂q, ∂g/∂q̇) and H(λ₀) = ∂(Φ_qᵀλ₀)/∂q of the reactions λ₀ at q₀."""
+        n, m, q0 = self.n, self.m, self.q0
+        K, C = self.model.force_jacobians(q0, np.zeros(n))
+        K, C = sp.csc_matrix(K), sp.csc_matrix(C)
+        if m:
+            lam0 = self.acceleration(q0, np.zeros(n))[1]
+            K = K + sp.csc_matrix(self.model.constraint_hessian(q0, lam0))
+            Js = self.model.phi_q(q0)
+            A = sp.bmat([[self.model.mass_matrix(q0), Js.T], [Js, None]], format="csc")
+        else:
+            A = sp.csc_matrix(self.model.mass_matrix(q0))
+        rhs = np.zeros((n + m, 2 * n))
+        rhs[:n, :n], rhs[:n, n:] = -K.toarray(), -C.toarray()
+        X = spla.splu(A).solve(rhs)[:n]
+        return np.block([[np.zeros((n, n)), np.eye(n)], [X]])
+
+    def modal_basis(self, Mr, Qr, N):
+        """(V, ω): a basis of the coordinates for a stiff model's integration, V = [N X, R]
+        (n × n), X the undamped modes of the reduced model (eigh of the symmetric parts of Q_r,
+        M_r), ω = √|λ| their frequencies, R the directions normal to the constraints (ω = 0);
+        columns scaled to a largest entry of 1, so a component is a length like u."""
+        Ms, Qs = 0.5 * (Mr + Mr.T), 0.5 * (Qr + Qr.T)
+        lam, X = sla.eigh(Qs, Ms)
+        cols = [N @ X]
+        if N.shape[1] < self.n:
+            cols.append(sla.null_space(N.T))
+        V = np.hstack(cols)
+        V = V / np.abs(V).max(axis=0)
+        omega = np.concatenate([np.sqrt(np.abs(lam)), np.zeros(V.shape[1] - lam.size)])
+        return V, omega
 
     # -- projections ------------------------------------------------------------------------
     def constraint_violation(self, u, v):
@@ -256,14 +297,23 @@ class Simulation:
     velocity_drift: float
     max_projection: float
     max_velocity_projection: float
+    fast_modes: int = 0  # modes integrated unresolved (stiff models: simulate's ``modal``)
 
 
 def simulate(dynamics: ForwardDynamics, u0, v0, t_eval, *, segment_samples: int,
              method: str = "DOP853", rtol: float = 1e-10, atol_position: float,
-             atol_velocity: float) -> Simulation:
+             atol_velocity: float, modal=None) -> Simulation:
     """Integrate from (u0, v0) through the sample times ``t_eval`` (t_eval[0] = 0), projecting
     onto the constraints every ``segment_samples`` samples.  A model with a configuration-
-    dependent mass runs Radau where DOP853 is asked (module docstring)."""
+    dependent mass runs Radau where DOP853 is asked (module docstring).
+
+    ``modal`` = (V, ω, ω_cut) of :meth:`ForwardDynamics.modal_basis` (stiff models): the state
+    is integrated in the components w of u = V w, v = V ẇ, and the modes above ω_cut get the
+    absolute tolerance ``FAST_ATOL`` × the perturbation (× ω for velocities).  The nonlinear
+    terms excite the stiff axial modes at second order (~ε² of the perturbation); resolving
+    them would cost thousands of steps per period of the checked mode, while Radau (L-stable)
+    damps them unresolved and the modal coordinate of the checked mode is blind to them to
+    first order.  The error of the resolved modes is controlled as without ``modal``."""
     from scipy.integrate import (
         solve_ivp,  # imported here: it costs ~0.2 s at import mbseig
     )
@@ -277,9 +327,8 @@ def simulate(dynamics: ForwardDynamics, u0, v0, t_eval, *, segment_samples: int,
         if method == "DOP853":
             method = "Radau"  # stiff axial modes (module docstring)
         su = max(float(np.max(np.abs(u0), initial=0.0)), atol_position / rtol)
-        sv = max(float(np.max(np.abs(v0), initial=0.0)), atol_velocity / rtol)
         if method in ("Radau", "BDF"):
-            extra["jac"] = dynamics.state_jacobian(su, sv)
+            extra["jac"] = dynamics.state_jacobian()
         # the stiff forces are computed from absolute coordinates: their rounding noise σ (in q̈)
         # bounds what any step can resolve; tolerances below it would shrink the steps to
         # nothing, so the absolute tolerances are floored at NOISE_FACTOR σ per sample interval
@@ -290,6 +339,25 @@ def simulate(dynamics: ForwardDynamics, u0, v0, t_eval, *, segment_samples: int,
         rtol = max(rtol, STIFF_RTOL)
     atol = np.concatenate([np.full(n, atol_position), np.full(n, atol_velocity)])
     u, v, _, _ = dynamics.project(np.asarray(u0, float), np.asarray(v0, float))
+    fun, to_w, n_fast = dynamics.rhs, None, 0
+    if modal is not None:
+        Vb, omega, cut = modal
+        Vi = np.linalg.inv(Vb)
+        fast = omega > cut
+        n_fast = int(fast.sum())
+        a_fast = FAST_ATOL * max(float(np.max(np.abs(u0), initial=0.0)), atol_position)
+        atol[:n][fast] = a_fast
+        atol[n:][fast] = a_fast * omega[fast]
+
+        def to_w(x):
+            return np.concatenate([Vi @ x[:n], Vi @ x[n:]])
+
+        def fun(t, w):
+            return to_w(dynamics.rhs(t, np.concatenate([Vb @ w[:n], Vb @ w[n:]])))
+
+        if "jac" in extra:
+            W, Wi = sla.block_diag(Vb, Vb), sla.block_diag(Vi, Vi)
+            extra["jac"] = Wi @ extra["jac"] @ W
     U, V = [u], [v]
     drift = vdrift = proj = vproj = 0.0
     n_seg = 0
@@ -298,8 +366,11 @@ def simulate(dynamics: ForwardDynamics, u0, v0, t_eval, *, segment_samples: int,
     while k < len(t_eval) - 1:
         k1 = min(k + segment_samples, len(t_eval) - 1)
         ts = t_eval[k:k1 + 1]
-        sol = solve_ivp(dynamics.rhs, (ts[0], ts[-1]), np.concatenate([u, v]), method=method,
+        y0 = np.concatenate([u, v])
+        sol = solve_ivp(fun, (ts[0], ts[-1]), y0 if to_w is None else to_w(y0), method=method,
                         t_eval=ts[1:], rtol=rtol, atol=atol, **extra)
+        if to_w is not None:
+            sol.y = np.vstack([Vb @ sol.y[:n], Vb @ sol.y[n:]])
         if sol.status != 0:
             t_fail = sol.t[-1] if sol.t.size else ts[0]
             raise SimulationError(f"integration failed at t = {t_fail:.6g}: {sol.message}",
@@ -318,4 +389,5 @@ def simulate(dynamics: ForwardDynamics, u0, v0, t_eval, *, segment_samples: int,
     return Simulation(t=np.asarray(t_eval, float), u=np.array(U).T, v=np.array(V).T, method=method,
                       rtol=rtol, atol_position=atol_position, atol_velocity=atol_velocity,
                       n_segments=n_seg, nfev=dynamics.nfev - nfev0, constraint_drift=drift,
-                      velocity_drift=vdrift, max_projection=proj, max_velocity_projection=vproj)
+                      velocity_drift=vdrift, max_projection=proj, max_velocity_projection=vproj,
+                      fast_modes=n_fast)

@@ -65,7 +65,9 @@ adds an apparent δ, ω of order ode_rtol·|s|, measured far below that), the me
 
     u_δ = max(resolution_k · σ_δ, ode_rtol·|s_p|),   u_ω = max(resolution_k · σ_ω, ode_rtol·|s_p|)
 
-and a mode passes when
+(ode_rtol is the relative tolerance the run kept: for a stiff model, whose absolute
+tolerances are floored at the rounding noise of its forces, the floored atol over the
+perturbation when larger) and a mode passes when
 
     |δ_m − δ_p| ≤ max(delta_rtol·|δ_p|, u_δ)   and   |ω_m − ω_p| ≤ max(omega_rtol·ω_p, u_ω)
 
@@ -104,7 +106,7 @@ from ..errors import CaseError, SimulationError
 from ..model.linear_case import LinearCase
 from ..statics import solved
 from ..statics.reactions import reaction_forces
-from .dynamics import ForwardDynamics, simulate
+from .dynamics import FAST_FACTOR, ForwardDynamics, simulate
 from .fit import (
     amplification,
     fit_exponential,
@@ -161,7 +163,8 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
         (module docstring); zero_delta_tol : a δ resolved no better than zero_delta_tol·|s| is
         reported in ``unresolved``.
     resolution_k : standard errors of the fitted slopes counted as the run's resolution.
-    max_fast_periods : cap of the run length in periods of the fastest listed mode.
+    max_fast_periods : cap of the run length in periods of the fastest listed mode (explicit
+        integration only: a model with a configuration-dependent mass runs implicit, uncapped).
     recheck_amplification, defective_amplification : a mode whose modal coordinate amplifies
         state errors by more than the first (a nearly defective pair, near critical damping) is
         run again at a tenth of the amplitude, the difference counted into its resolution; above
@@ -196,10 +199,14 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
                      np.asarray(lin.N, float))
     names = list(model.coordinate_names)
     fastest = float(np.max(np.abs(modes.eigenvalues), initial=0.0))
-    t_cap = max_fast_periods * 2 * np.pi / fastest if fastest > 0 else np.inf
+    # the cap bounds an explicit method's cost; an implicit one (stiff models) steps over the
+    # fast modes, so the run keeps its asked length there
+    t_cap = (max_fast_periods * 2 * np.pi / fastest if fastest > 0 and not dyn.stiff
+             else np.inf)
     opts = dict(amplitude=amplitude, periods=periods, efolds=efolds,
                 samples_per_period=samples_per_period, min_samples=min_samples, method=method,
-                ode_rtol=ode_rtol, length=length, t_cap=t_cap)
+                ode_rtol=ode_rtol, length=length, t_cap=t_cap,
+                basis=dyn.modal_basis(Mr, Qr, N) if dyn.stiff else None)
     results = []
     for k in idx:
         j = k - 1
@@ -225,15 +232,15 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
                         f"{amp:.2g}): no modal coordinate isolates it, not simulated"))
             continue
         try:
-            mc = _check_one(dyn, Mr, Pr, N, s, x, yh, names, base, opts)
+            mc, eff = _check_one(dyn, Mr, Pr, N, s, x, yh, names, base, opts)
             if amp > recheck_amplification:  # nearly defective: the amplitude's share, measured
-                small = _check_one(dyn, Mr, Pr, N, s, x, yh, names, base,
-                                   {**opts, "amplitude": opts["amplitude"] / 10})
-                mc = smaller_amplitude(mc, small)
+                small, eff_small = _check_one(dyn, Mr, Pr, N, s, x, yh, names, base,
+                                              {**opts, "amplitude": opts["amplitude"] / 10})
+                mc, eff = smaller_amplitude(mc, small), max(eff, eff_small)
         except SimulationError as exc:
             raise exc.located(file=getattr(model, "source", None), element=f"mode {k}") from None
         results.append(replace(judge(replace(mc, amplification=amp), s, delta_rtol, omega_rtol,
-                                      zero_delta_tol, resolution_k, ode_rtol),
+                                      zero_delta_tol, resolution_k, eff),
                                elapsed=time.perf_counter() - t0))
     reactions = tuple(reaction_forces(model, eq))
     return CheckResult(
@@ -291,7 +298,8 @@ def _check_one(dyn, Mr, Pr, N, s, x, yh, names, base, o):
     seg = max(1, int(round(seg_len / (T / n_samples))))
     sim = simulate(dyn, u0, v0, t_eval, segment_samples=seg, method=o["method"], rtol=o["ode_rtol"],
                    atol_position=o["ode_rtol"] * smallest,
-                   atol_velocity=o["ode_rtol"] * smallest * abs(s))
+                   atol_velocity=o["ode_rtol"] * smallest * abs(s),
+                   modal=None if o["basis"] is None else (*o["basis"], FAST_FACTOR * abs(s)))
     # modal coordinate from the reduced state x = Nᵀ u, ẋ = Nᵀ v
     X, Xd = N.T @ sim.u, N.T @ sim.v
     den = yh @ ((2 * s * Mr + Pr) @ x)
@@ -307,6 +315,9 @@ def _check_one(dyn, Mr, Pr, N, s, x, yh, names, base, o):
     pred_omega = abs(s.imag)
     scale_w = pred_omega if pred_omega > 0 else abs(s)
     err_w = abs(meas_omega - pred_omega) / scale_w
+    # the relative tolerance the run kept: a stiff model's absolute tolerances are floored at
+    # the rounding noise of its forces (simulate), which the resolution must then count
+    eff = max(o["ode_rtol"], sim.rtol, sim.atol_velocity / (smallest * abs(s)))
     return ModeCheck(
         **base, measured_delta=meas_delta, measured_omega=meas_omega,
         rel_error_delta=math.nan, rel_error_omega=err_w, duration=T, periods=n_per,
@@ -314,4 +325,4 @@ def _check_one(dyn, Mr, Pr, N, s, x, yh, names, base, o):
         fit_residual=resid, fit_amplitude=eta0, constraint_drift=sim.constraint_drift,
         velocity_drift=sim.velocity_drift, max_projection=sim.max_projection, nfev=sim.nfev,
         coordinate=names[jmax], t=sim.t, eta=eta, response=sim.u[jmax], se_delta=se_d,
-        se_omega=se_w, capped=capped, unresolved=unresolved)
+        se_omega=se_w, capped=capped, unresolved=unresolved), eff

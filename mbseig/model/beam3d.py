@@ -77,7 +77,7 @@ from .beam_sections import (
     section_frame,
     section_properties,
 )
-from .beam_whirl import SpinningShaft  # noqa: F401
+from .beam_whirl import SpinningShaft, velocity_map_z, velocity_terms_z
 from .beams import GAUSS_W, GAUSS_X, THEORIES, timoshenko_shape_functions
 
 __all__ = [
@@ -218,10 +218,6 @@ def frames_to_local(R0: np.ndarray) -> np.ndarray:
     return np.kron(np.eye(2), node)
 
 
-def _skew(a):
-    return np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]], dtype=a.dtype)
-
-
 _D = np.zeros((3, 24))
 _D[:, 12:15] = np.eye(3)
 _D[:, 0:3] = -np.eye(3)
@@ -341,21 +337,12 @@ class Beam3DElement(Force, ConfigurationMass):
     # -- velocity map ------------------------------------------------------------------------
     def velocity_map(self, q) -> np.ndarray:
         """T (12 × |idx|): local nodal velocities ḋ = T q̇[idx] in the current element frame."""
-        z = self._nodes(q)
-        d = _D @ z
-        e1 = d / np.linalg.norm(d)
-        ybar = z[6:9] + z[18:21]
-        e3 = np.cross(e1, ybar)
-        e3 /= np.linalg.norm(e3)
-        Re = np.column_stack([e1, np.cross(e3, e1), e3])
-        T = np.zeros((12, 24))
-        for n in range(2):
-            o = 12 * n
-            T[6 * n:6 * n + 3, o:o + 3] = Re.T
-            for k in range(3):
-                vec = z[o + 3 + 3 * k:o + 6 + 3 * k]
-                T[6 * n + 3:6 * n + 6, o + 3 + 3 * k:o + 6 + 3 * k] = 0.5 * Re.T @ _skew(vec)
-        return T @ self._nodes.C
+        return velocity_map_z(self._nodes(q)) @ self._nodes.C
+
+    def velocity_terms(self, q, qd) -> np.ndarray:
+        """h = Ṁ q̇ − ½ ∂(q̇ᵀ M q̇)/∂q on idx, in closed form (:mod:`mbseig.model.beam_whirl`)."""
+        C = self._nodes.C
+        return C.T @ velocity_terms_z(self._nodes(q), C @ qd[self.idx], self._em.M)
 
     # -- force element interface ------------------------------------------------------------
     def force(self, q, qd):
