@@ -20,6 +20,10 @@ def _f(x, fmt=".3g"):
     return format(x, fmt)
 
 
+def _seconds(x):
+    return _f(x) + (" s" if isinstance(x, (int, float)) and math.isfinite(x) else "")
+
+
 def _rows(res, section):
     return [r for r in res["rows"] if r["section"] == section]
 
@@ -266,6 +270,16 @@ def write_report(res, out_dir):
                "rounding); for the complex step itself, its difference from the analytic K.",
                "| method | coordinates | time | error |", jac,
                lambda r: f"| {r['method']} | {r['n']} | {r['time']:.2e} s | {r['error']:.1e} |")
+    rotor = _rows(res, "rotor")
+    if rotor:
+        _table(L, "Rotor: Campbell diagram of the overhung rotor (Friswell 5.9.x), mbseig and ROSS",
+               "Time of the whole Campbell diagram (whirl, log decrements, critical speeds) and per "
+               "speed, median of the stated runs; the agreement rows are the largest relative "
+               "difference of the eigenvalues from ROSS at the same mesh (benchmarks/"
+               "ross_friswell.py).",
+               "| method | speeds | time | per speed | error | note |", rotor,
+               lambda r: f"| {r['method']} | {r['n']} | {_seconds(r['time'])} | "
+                         f"{_seconds(r['per_speed'])} | {_f(r['error'], '.1e')} | {r['note']} |")
     cs = _rows(res, "constraint")
     if cs:
         L += ["", "## Linearization with and without the constraint-force stiffness", "",

@@ -80,7 +80,7 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
     out_dir.mkdir(parents=True, exist_ok=True)
     repeats = repeats or (1 if quick else 3)
     all_sections = ("dense", "structured", "partial", "large", "startup", "peer", "sweeps",
-                    "jacobians", "constraint", "timedomain", "failures", "nlevp")
+                    "jacobians", "constraint", "timedomain", "failures", "nlevp", "rotor")
     sections = sections or all_sections
     cfg = {
         "quick": quick, "repeats": repeats, "threads": threads,
@@ -126,6 +126,10 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
             res["timedomain_note"] = why
         if "nlevp" in sections:
             res["rows"] += bench_nlevp(log)
+        if "rotor" in sections:  # ROSS only where MBSEIG_ROSS_PYTHON names a Python with it
+            from .rotor_rows import bench_rotor
+
+            res["rows"] += bench_rotor(log, repeats=repeats, n_speeds=9 if quick else 41)
         if "failures" in sections:
             res["failures"] = [{k: getattr(c, k) for k in ("name", "naive_method", "naive", "mbseig",
                                                            "reference", "naive_wrong", "mbseig_right")}

@@ -11,8 +11,9 @@ def register(sub):
     p.add_argument("--threads", type=int, default=1,
                    help="BLAS threads during the measurements (0: library default)")
     p.add_argument("--sections", nargs="+", default=None,
-                   choices=["dense", "structured", "partial", "large", "startup", "peer", "sweeps", "jacobians", "constraint", "timedomain", "failures",
-                            "nlevp"],
+                   choices=["dense", "structured", "partial", "large", "startup", "peer",
+                            "sweeps", "jacobians", "constraint", "timedomain", "failures", "nlevp",
+                            "rotor"],
                    help="run only these sections")
     p.set_defaults(run=run)
 
