@@ -1,8 +1,8 @@
 """report.html in a real browser: one animation per listed mode, and each one renders and moves.
 
 ``mbseig report`` (the fastest options: no time-domain check, studies or sensitivities) writes
-report.html for a small planar case (the double pendulum, two modes) and a small spatial one
-(the spherical pendulum, three modes).  Each page is opened in headless Chromium through
+report.html for the hand-rehabilitation device (planar, three modes: the case the reports are
+for) and a small spatial case (the spherical pendulum, three modes).  Each page is opened in headless Chromium through
 chromedriver's WebDriver protocol (W3C WebDriver, plain HTTP: no client package needed), and
 
 - the page's own script context decodes every gallery animation (``ImageDecoder``, the browser's
@@ -39,9 +39,10 @@ pytestmark = pytest.mark.skipif(
     reason="headless Chromium and chromedriver are not installed (e.g. apt-get install "
            "chromium chromium-driver); the browser test of report.html needs both")
 
-#: (case, number of modes it lists: the double pendulum's two swings; the spherical pendulum's
-#: two swings and the spin of the bob about the rod, closed form of the cases' [expected])
-CASES_SHOWN = [("double_pendulum.toml", 2), ("spherical_pendulum.toml", 3)]
+#: (case, number of modes it lists: the device's three degrees of freedom (its base
+#: configuration); the spherical pendulum's two swings and the spin of the bob about the rod,
+#: closed form of the case's [expected])
+CASES_SHOWN = [("hand_device.toml", 3), ("spherical_pendulum.toml", 3)]
 
 PROBE = """
 const done = arguments[arguments.length - 1];
