@@ -17,6 +17,9 @@ basis N (one coordinate of each link eliminated), so the reduced problem
   constrained model (the path ``auto`` picks, with every check it makes).
 - ``slepc20``: for reference, SLEPc asked for 20 eigenvalues (10 modes) at its default-like
   tolerance 1e-8: a figure sometimes quoted for "SLEPc on this problem" that is not the same work.
+- ``pslepc`` and ``bslepc``: mbseig's ``partial-slepc`` path (with its checks) against a direct
+  SLEPc solve of the very matrices that path gives SLEPc (the bordered pencil, UMFPACK LU, 41
+  eigenvalues at 1e-14, the worker's own time): the cost of mbseig around SLEPc.
 
     python benchmarks/slepc_reduced.py [--sizes 10000 100000 1000000] [--repeats 3]
 
@@ -69,21 +72,29 @@ def worker(kind, n):
 
     M, C, K, G = large_chain(n)
     t0 = time.perf_counter()
-    if kind == "mbseig":
+    if kind in ("mbseig", "pslepc"):
         from mbseig.eigen import Problem, Request, solve
 
-        sol = solve(Problem(M, C, K, G=G), Request("auto", n_modes=20))
+        path = "auto" if kind == "mbseig" else "partial-slepc"
+        sol = solve(Problem(M, C, K, G=G), Request(path, n_modes=20))
         out = {"seconds": time.perf_counter() - t0, "rss_mb": _peak_rss_mb(),
                "solver": sol.solver, "eta": float(np.max(sol.backward_error)),
                "lowest": float(np.min(np.abs(sol.eigenvalues)))}
     else:
         from mbseig.eigen.slepc import slepc_solve
 
-        Mr, Pr, Qr = reduced(M, C, K, G)
+        if kind == "bslepc":  # the bordered pencil partial-slepc hands to SLEPc, its options
+            from mbseig.eigen.shift_invert import bordered
+
+            Mr, Pr, Qr, _ = bordered(M, C, K, G)
+            factor = "umfpack"
+        else:
+            Mr, Pr, Qr = reduced(M, C, K, G)
+            factor = "petsc"
         del M, C, K, G
-        nev, tol = (41, 1e-14) if kind == "slepc" else (20, 1e-8)
+        nev, tol = (20, 1e-8) if kind == "slepc20" else (41, 1e-14)
         t0 = time.perf_counter()
-        s, X, info = slepc_solve(Mr, Pr, Qr, nev, tol=tol, factor="petsc")
+        s, X, info = slepc_solve(Mr, Pr, Qr, nev, tol=tol, factor=factor, upper_tol=1e-9)
         # SLEPc's own time: matrix assembly and PEPSolve inside the worker (its process start
         # and the file transfer, part of ``wall``, are not counted against it)
         out = {"seconds": info["setup"] + info["solve"], "wall": time.perf_counter() - t0,
@@ -97,7 +108,8 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[10_000, 100_000, 1_000_000])
     ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--kinds", nargs="+", default=["slepc", "mbseig", "slepc20"])
+    ap.add_argument("--kinds", nargs="+", default=["slepc", "mbseig", "slepc20"],
+                    choices=["slepc", "mbseig", "slepc20", "pslepc", "bslepc"])
     ap.add_argument("--worker", nargs=2, metavar=("KIND", "N"), help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
     if a.worker:
@@ -111,11 +123,11 @@ def main(argv=None):
                 r = json.loads(p.stdout.strip().splitlines()[-1])
                 print(json.dumps(r), flush=True)
                 rows.setdefault((n, kind), []).append(r)
-    print(f"\n{'n':>9} {'kind':>8} {'median s':>9} {'spread s':>15} {'peak MB':>8} {'/ slepc':>8} "
-          f"{'mem / slepc':>11}")
+    print(f"\n{'n':>9} {'kind':>8} {'median s':>9} {'spread s':>15} {'peak MB':>8} {'/ ref':>8} "
+          f"{'mem / ref':>11}   (ref: slepc, or bslepc for pslepc)")
     for n in a.sizes:
-        ref = rows.get((n, "slepc"))
         for kind in a.kinds:
+            ref = rows.get((n, "bslepc" if kind == "pslepc" else "slepc"))
             rs = rows[(n, kind)]
             t = statistics.median(r["seconds"] for r in rs)
             m = statistics.median(r["rss_mb"] for r in rs)
