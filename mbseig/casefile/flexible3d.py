@@ -77,6 +77,7 @@ class Beam3DSpec:
     pos: list = field(default_factory=list)  # Affine of each node's point (None: set later)
     triad: list = field(default_factory=list)  # triad coordinate indices, "clamped" or a body
     warnings: list = field(default_factory=list)
+    spinning: bool = False  # spin given: whirl stations even at zero speed
 
 
 def span_elements(lengths, n: int) -> list[int]:
@@ -182,12 +183,14 @@ def _spec(b, f, override, rules):
         if not (-tol <= s <= length + tol):
             raise sf.error(f"station {sname!r} at s = {s:g} is outside the beam [0, {length:g}]")
         stations[sname] = min(max(s, 0.0), length)
+    spinning = f.raw("spin", None) is not None  # a spinning shaft, even at zero speed
     spin = f.num("spin", 0.0)
     f.done()
     props = f.formed("the beam's section properties", lambda: BeamProperties3D(
         E=E, G=G, rho=rho, A=A, Iy=Iy, Iz=Iz, J=J, kappa_y=kappa, kappa_z=kappa, theory=theory))
     spec = Beam3DSpec(name=name, label=f.label, points=(pa, pb), length=length, props=props,
                       depth=depth, R0=R0, n_elements=n, auto=auto, ends=ends, spin=spin,
+                      spinning=spinning,
                       stations=stations)
     spec.warnings.extend(slenderness_warnings(theory, length / depth, rules["eb_slenderness"],
                                               rules["min_slenderness"]))
@@ -298,7 +301,7 @@ def assemble(b, forces, constraints, mass_elements, mass_blocks, g_const, gravit
             b.register_station(f"{spec.name}.{s}", frames[k], spec.node_pos[k], points[k])
         for k in range(1, spec.n_elements):
             b.markers[f"{spec.name}.n{k}"] = points[k]
-        if spec.spin:
+        if spec.spinning:  # at Ω = 0 too: its gyroscopic matrix is zero, its whirl stations not
             stack = combine([(1.0, frames[0])] + [(1.0, Affine(fr.idx, fr.C[3:], fr.d[3:]))
                                                   for fr in frames[1:]], stack=True)
             shafts.append(SpinningShaft(
