@@ -138,7 +138,7 @@ def test_bad_inertia(case, tmp_path, capsys):
     assert "\n" not in err and message in err, err
 
 
-# --- after the patch of /tmp/helper_D_requests.md (whirl in modes --json) ---
+# --- whirl in modes --json ---
 def test_modes_json_whirl(capsys):
     """modes --json: "whirl" per mode of a rotor case (mbseig.model.spatial_whirl; the values
     are checked against the mode shapes in tests/test_spatial_rotor.py), none without a rotor."""
