@@ -13,7 +13,8 @@ from ..numerics import jsonable
 
 __all__ = ["add_case_arguments", "case_kwargs", "print_json", "print_reactions", "number_option",
            "output_notes", "equilibrium_notes", "moving_case", "case_command",
-           "analyzed"]
+           "analyzed",
+           "parameter_units_of"]
 
 
 def add_case_arguments(parser):
@@ -34,6 +35,17 @@ def print_json(obj) -> int:
     json.dump(jsonable(obj), sys.stdout, indent=1, allow_nan=False)
     sys.stdout.write("\n")
     return 0
+
+
+def parameter_units_of(spec) -> dict:
+    """``{parameter: unit}`` of a read case for the figures' axes (mbseig.report.units), only
+    the parameters with a unit; {} when the case's text cannot be read for them."""
+    from ..report.units import parameter_units
+
+    try:
+        return {k: v for k, v in parameter_units(spec).items() if v}
+    except (OSError, AttributeError, TypeError):
+        return {}
 
 
 def analyzed(args, spec, analyze):

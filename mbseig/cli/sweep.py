@@ -8,7 +8,7 @@ from pathlib import Path
 
 from ..casefile import parse_param_overrides
 from ..errors import CaseError
-from .common import add_case_arguments, case_command, print_json
+from .common import add_case_arguments, case_command, parameter_units_of, print_json
 
 
 def register(sub):
@@ -56,14 +56,15 @@ def run(args, spec) -> int:
     if not ranges:
         raise CaseError("give at least one --param NAME=START:STOP:COUNT", element="--param")
     show = args.progress if args.progress is not None else sys.stderr.isatty()
-    res = run_sweep(args.case, ranges, config=args.config, fixed=fixed, jobs=args.jobs,
+    res = run_sweep(spec, ranges, config=args.config, fixed=fixed, jobs=args.jobs,
                     scheduler=args.scheduler, progress=progress_bar() if show else None,
                     xtol_rel=args.xtol_rel, continuation=args.continuation, curves=args.curves,
                     diagram=args.diagram, resume=args.resume)
     stem = Path(args.case).stem + (f"-{args.config}" if args.config else "")
     out_dir = args.out or f"sweep-{stem}"
-    paths = write_outputs(res, out_dir, units=_units(args.case))
-    camp = _campbell(args, ranges, fixed, out_dir, paths)
+    units = parameter_units_of(spec)
+    paths = write_outputs(res, out_dir, units=units)
+    camp = _campbell(args, spec, ranges, fixed, out_dir, paths, units)
     lift = _lift_offs(spec, ranges, fixed, args.config)
     if args.json:
         out = {**res.to_json(), **camp}
@@ -118,18 +119,7 @@ def _lift_offs(spec, ranges, fixed, config) -> tuple:
     return contact_boundaries(spec, name, values, config=config, fixed=fixed)
 
 
-def _units(case) -> dict:
-    """Parameter units for the plots' axis labels (mbseig.report.units), {} if not found."""
-    from ..report.units import parameter_units
-    from ..studies.point import as_spec
-
-    try:
-        return {k: v for k, v in parameter_units(as_spec(case)).items() if v}
-    except (OSError, AttributeError, TypeError):
-        return {}
-
-
-def _campbell(args, ranges, fixed, out_dir, paths) -> dict:
+def _campbell(args, spec, ranges, fixed, out_dir, paths, units) -> dict:
     """A sweep of one parameter that sets a rotor's speed also gives the Campbell diagram
     (mbseig.studies.campbell): campbell.json, campbell.png and, in the sweep's JSON,
     ``campbell`` and ``critical_speeds``."""
@@ -141,15 +131,15 @@ def _campbell(args, ranges, fixed, out_dir, paths) -> dict:
     except ImportError:  # the spatial layer is not part of this installation
         return {}
     name, values = ranges[0]
-    if len(ranges) != 1 or not speed_parameter(args.case, name, values, config=args.config,
+    if len(ranges) != 1 or not speed_parameter(spec, name, values, config=args.config,
                                                fixed=fixed):
         return {}
-    res = campbell(args.case, name, values, config=args.config, fixed=fixed, jobs=args.jobs,
+    res = campbell(spec, name, values, config=args.config, fixed=fixed, jobs=args.jobs,
                    xtol_rel=args.xtol_rel)
     out = res.to_json()
     path = Path(out_dir) / "campbell.json"
     path.write_text(json.dumps(out, indent=1, allow_nan=False) + "\n")
     paths.append(path)
-    figure = plots_spatial.campbell_diagram(res, units=_units(args.case))
+    figure = plots_spatial.campbell_diagram(res, units=units)
     paths.append(plots_spatial.save(figure, Path(out_dir) / "campbell.png"))
     return {"campbell": out, "critical_speeds": out["critical_speeds"]}

@@ -10,7 +10,13 @@ from pathlib import Path
 
 from ..casefile import parse_param_overrides
 from ..errors import CaseError
-from .common import add_case_arguments, case_command, number_option, print_json
+from .common import (
+    add_case_arguments,
+    case_command,
+    number_option,
+    parameter_units_of,
+    print_json,
+)
 
 
 def register(sub):
@@ -41,15 +47,6 @@ def register(sub):
     p.set_defaults(run=run)
 
 
-def _units(spec) -> dict:
-    from ..report.units import parameter_units
-
-    try:
-        return {k: v for k, v in parameter_units(spec).items() if v}
-    except (OSError, AttributeError, TypeError):
-        return {}
-
-
 @case_command("unbalance")
 def run(args, spec) -> int:
     from ..studies.sweep import parse_range
@@ -70,7 +67,7 @@ def run(args, spec) -> int:
     if unknown:
         raise CaseError(f"unknown station or output {unknown[0]!r} (known: "
                         f"{', '.join(sorted(known))})", element="--station", file=spec.source)
-    unit = _units(spec).get(name)
+    unit = parameter_units_of(spec).get(name)
     paths = write_unbalance(res, args.out, unit=unit, stations=args.station) if args.out else []
     if args.json:
         return print_json(res.to_json())
