@@ -23,7 +23,8 @@ from mbseig.casefile import read_case
 from mbseig.casefile.element_readers import ScalarUpdate
 from mbseig.errors import MbseigError
 from mbseig.studies import run_sweep
-from mbseig.studies.continuation import family_maker, held_tension
+from mbseig.statics.inverse import held_tension
+from mbseig.studies.continuation import family_maker
 
 from conftest import CASES
 

@@ -40,7 +40,7 @@ from ..model.driver import check_command
 from .cache import Memo
 from .linalg import NewtonMatrix, augmented
 
-__all__ = ["resolve_commands", "reuse_commands", "command_settings"]
+__all__ = ["resolve_commands", "reuse_commands", "command_settings", "held_tension"]
 
 
 def resolve_commands(model, equilibrium, *, tol=1e-12, max_iter=30, hint=None, cache=None):
@@ -211,3 +211,57 @@ def reuse_commands(model, resolved):
 def command_settings(model) -> tuple:
     """The values a resolved model's commands set (free lengths and lengths), in order."""
     return tuple(s.get("free_length", s.get("length")) for d in model.drivers for s in d["sets"])
+
+
+def held_tension(model, prev, *, tol=1e-12, posture_tol=1e-10):
+    """``model`` (its one command pending) set from ``prev`` (resolved at another value of a
+    parameter that enters the commanded spring's stiffness alone), or None.
+
+    The same tension T at the same posture q* gives the same forces, so ``prev``'s posture and
+    tension solve the command for any stiffness k of the spring: its free length is
+    l₀ = l* − T/k (the root the resolve's secant finds where the root is unique, as on the
+    crank-slider of the finger device, whose driver holds the spring's ends).  Taken only when
+    every other element is the one ``prev`` has, and checked as :func:`resolve_commands` checks
+    its own result: at q*, on the device with the driver and without follower loads, the
+    driver's effort (unique: no redundant constraint) is at most ``tol`` × the released effort
+    and the posture is in equilibrium (residual ≤ ``posture_tol`` × the forces).  Else the
+    command is resolved (by the caller)."""
+    if prev is None or len(model.commands) != 1 or len(prev.drivers) != 1:
+        return None
+    driver, targets = model.commands[0]
+    rec = prev.drivers[0]
+    springs = [t for t in targets if t[0] == "force"]
+    if len(springs) != 1 or len(targets) != 1 or len(rec["sets"]) != 1:
+        return None
+    k = springs[0][1]
+    spring, old = model.forces[k], prev.forces[k]
+    if (len(model.forces) != len(prev.forces) or model.constraints != prev.constraints
+            or any(a is not b for j, (a, b) in enumerate(zip(model.forces, prev.forces)) if j != k)
+            or spring.diff is not old.diff or not spring.stiffness > 0
+            or model.g_const is not prev.g_const or model.mass is not prev.mass):
+        return None
+    length, tension = rec["sets"][0]["length"], rec["sets"][0]["tension"]
+    l0 = length - tension / spring.stiffness
+    forces = list(model.forces)
+    forces[k] = dataclasses.replace(spring, free_length=l0)
+    q = np.asarray(prev.q_init, float)
+    device = dataclasses.replace(model, forces=tuple(f for f in forces if not isinstance(
+        getattr(f, "magnitude", None), (int, float))), constraints=model.constraints + (driver,),
+        commands=())
+    with np.errstate(all="ignore"):
+        g = device.generalized_force(q)
+        G = np.asarray(device.phi_q(q, dense=True))
+        lam, _, rank, _ = np.linalg.lstsq(G.T, g, rcond=None)
+        r = g - G.T @ lam
+        scale = max(float(np.max(np.abs(g))), float(np.max(np.abs(G.T) @ np.abs(lam))))
+    effort = abs(float(rec["effort"]))
+    if not (rank == G.shape[0]  # the driver's effort unique (no redundant constraint)
+            and abs(lam[-1]) <= tol * max(effort, np.finfo(float).tiny)
+            and float(np.max(np.abs(r))) <= posture_tol * scale and l0 > 0):
+        return None
+    length_now = float(np.linalg.norm(spring.diff(q)))
+    record = {**rec, "iterations": 0, "residual_effort": -float(lam[-1]),
+              "sets": [{"element": spring.name, "free_length": l0, "length": length_now,
+                        "tension": spring.stiffness * (length_now - l0)}]}
+    return dataclasses.replace(model, forces=tuple(forces), q_init=q, commands=(),
+                               drivers=(record,))
