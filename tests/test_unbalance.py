@@ -200,3 +200,43 @@ def test_report_rotor_section_from_the_command_line(tmp_path, capsys):
         assert main(["report", rotor, "--no-check", "--out", str(out), *bad]) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and option in err[0] and "rigid_rotor.toml" in err[0]
+
+
+def _rotor_study_case(tmp_path, unbalance, sweep="Omega"):
+    text = (CASES / "rigid_rotor.toml").read_text() + (
+        f'\n[[report.studies]]\ntitle = "speed"\nsweep = "{sweep}"\n'
+        f'range = [100.0, 700.0]\ncount = 4\n' + (f"unbalance = {unbalance}\n" if unbalance else ""))
+    return str(write_case(tmp_path, text.replace("cy = 0.0 ", "cy = 400.0 ").replace(
+        "cz = 0.0", "cz = 600.0"), name="rotor.toml"))
+
+
+def test_report_study_names_its_unbalance(tmp_path, capsys):
+    """A ``[[report.studies]]`` sweep over a rotor's speed takes its own ``unbalance = {at, me}``.
+    Reference: the synchronous response is linear in m·e, so the amplitudes at m·e = 2e-4 kg m are
+    2e-4 times those of the default 1 kg m at the same point (rtol 1e-12: rounding of one scaling).
+    A bad entry is one line naming the entry, exit 2."""
+    import csv
+
+    tables = {}
+    for tag, ub in (("own", '{ at = "rotor", me = 2e-4 }'), ("default", None)):
+        out = tmp_path / tag
+        assert main(["report", _rotor_study_case(tmp_path, ub), "--no-check",
+                     "--no-sensitivities", "--out", str(out)]) == 0
+        md = (out / "report.md").read_text()
+        assert ("m·e = 0.0002 kg m at rotor" in md) == (tag == "own")
+        [path] = out.glob("*/unbalance.csv")
+        with open(path) as fh:
+            rows = list(csv.DictReader(fh))
+        tables[tag] = np.array([[float(v) for k, v in r.items() if k.startswith("amplitude")]
+                                for r in rows])
+    assert tables["own"].shape == tables["default"].shape and tables["own"].max() > 0
+    np.testing.assert_allclose(tables["own"], 2e-4 * tables["default"], rtol=1e-12, atol=0)
+    capsys.readouterr()
+    for ub, sweep, words in (('{ at = "nowhere", me = 1e-4 }', "Omega", "unknown point"),
+                             ('{ at = "rotor", me = -1.0 }', "Omega", "me must be"),
+                             ('{ at = "rotor", m = 1.0 }', "Omega", "unknown field"),
+                             ('{ at = "rotor", me = 1e-4 }', "ky", "rotor's speed")):
+        assert main(["report", _rotor_study_case(tmp_path, ub, sweep), "--no-check",
+                     "--no-sensitivities", "--out", str(tmp_path / "bad")]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "report.studies[0].unbalance" in err[0] and words in err[0], err

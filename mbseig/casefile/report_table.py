@@ -12,7 +12,9 @@ MAX_STUDY_POINTS = 10_000  # points of one [[report.studies]] sweep (a stated li
 __all__ = ["parse_report"]
 
 _REPORT_KEYS = {"actuator", "angles", "pins", "studies"}
-_STUDY_KEYS = {"title", "config", "sweep", "range", "count", "lines", "xtol_rel", "compare"}
+_STUDY_KEYS = {"title", "config", "sweep", "range", "count", "lines", "xtol_rel", "compare",
+               "unbalance"}
+_UNBALANCE_KEYS = {"at", "me"}
 
 
 def parse_report(table, builder) -> dict:
@@ -91,8 +93,24 @@ def parse_report(table, builder) -> dict:
             xtol = item.get("xtol_rel", 1e-10)
             if not (_number(xtol) and 0 < xtol < 1):
                 raise CaseError("xtol_rel must be a number in (0, 1)", element=label)
+            if "unbalance" in item:
+                _check_unbalance(item["unbalance"], f"{label}.unbalance")
         out["studies"].append(dict(item))
     return out
+
+
+def _check_unbalance(ub, label):
+    """``unbalance = {at = "POINT, STATION or BODY", me = m·e [kg m] > 0}`` of a rotor study
+    (whether ``at`` names a point of the built model is checked when the study runs)."""
+    if not isinstance(ub, dict):
+        raise CaseError("must be a table {at = \"POINT\", me = m·e [kg m]}", element=label)
+    unknown = sorted(set(ub) - _UNBALANCE_KEYS)
+    if unknown:
+        raise CaseError(f"unknown field {unknown[0]!r} (at, me)", element=label)
+    if not isinstance(ub.get("at"), str) or not ub["at"]:
+        raise CaseError("at must name a point, beam station or body", element=label)
+    if not (_number(ub.get("me")) and ub["me"] > 0):
+        raise CaseError(f"me must be a number m·e > 0 [kg m], got {ub.get('me')!r}", element=label)
 
 
 def _number(x) -> bool:

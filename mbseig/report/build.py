@@ -102,10 +102,11 @@ def build_report(case, *, configs=None, out_dir, run_check=True, jobs=None, stud
         summaries.append(s)
     study_blocks, study_sums = [], []
     if studies:
-        for st in getattr(base, "report", {}).get("studies", []):  # a linear case has no [report]
+        for k, st in enumerate(getattr(base, "report", {}).get("studies", [])):  # a linear case has no [report]
             if st.get("config") not in configs and not (len(configs) > 1):
                 continue
-            b, s = study_section(case, st, out_dir, stem, jobs, units, unbalance=unbalance)
+            b, s = study_section(case, st, out_dir, stem, jobs, units, unbalance=unbalance,
+                                 label=f"report.studies[{k}]")
             study_blocks += b
             study_sums.append(s)
     if speeds is not None:

@@ -13,6 +13,7 @@ import math
 import numpy as np
 
 from .. import plots
+from ..errors import CaseError
 from ..plots import rotor as rotor_plots
 from ..studies import write_outputs
 from ..studies.campbell import rotor_study
@@ -23,10 +24,12 @@ from .units import with_unit
 __all__ = ["study_section", "compare_blocks", "rotor_blocks", "rotor_section"]
 
 
-def study_section(case, study, out_dir, stem, jobs, units, *, unbalance=None):
-    """Blocks of one ``[[report.studies]]`` entry and its summary; ``unbalance`` = (point, m·e)
-    of a rotor's unbalance response (default: m·e = 1 kg m at the first disk)."""
+def study_section(case, study, out_dir, stem, jobs, units, *, unbalance=None, label=None):
+    """Blocks of one ``[[report.studies]]`` entry (``label`` names it in errors) and its
+    summary; the rotor's unbalance response takes the entry's own ``unbalance = {at, me}``,
+    else ``unbalance`` = (point, m·e) of the command line, else m·e = 1 kg m at the first disk."""
     kind = "compare" if "compare" in study else "sweep"
+    where = f"{label or 'report.studies'}.unbalance"
     config = study.get("config")
     title = study.get("title", f"{kind} on {config}")
     blocks = [("h2", title)]
@@ -91,10 +94,21 @@ def study_section(case, study, out_dir, stem, jobs, units, *, unbalance=None):
     for p in paths:
         if p.suffix == ".png":
             blocks.append(("img", p, f"{title}: {captions.get(p.stem, p.stem.replace('_', ' '))}"))
-    rs = rotor_study(case, name, values, config=config, jobs=jobs, unbalance=unbalance,
-                     xtol_rel=float(study.get("xtol_rel", 1e-10)))
+    own = study.get("unbalance")
+    try:
+        rs = rotor_study(case, name, values, config=config, jobs=jobs,
+                         unbalance=(own["at"], float(own["me"])) if own else unbalance,
+                         xtol_rel=float(study.get("xtol_rel", 1e-10)))
+    except CaseError as exc:
+        if own and exc.element == "--at":  # the entry's own point: name the entry
+            raise CaseError(exc.message, file=exc.file, element=where) from None
+        raise
     if rs is not None:
         blocks += rotor_blocks(rs, sdir, title, units)
+    elif own:
+        raise CaseError(f"an unbalance response needs a sweep over a rotor's speed; {name} does "
+                        f"not set the speed of a rotor", element=where,
+                        file=getattr(case, "source", None))
     return blocks, {"title": title, "parameter": name, "config": config, "critical": crit,
                     "curves": sw.curves}
 

@@ -150,8 +150,8 @@ class UnbalanceResponse:
             w.writerow([self.parameter, "Omega_rad_s", "station", "amplitude_1", "phase_1_deg",
                          "amplitude_2", "phase_2_deg", "major", "unit"])
             for v, om, name, a, b, big, u in self.rows():
-                w.writerow([repr(float(v)), repr(float(om)), name, repr(abs(a)),
-                            repr(_deg(a)), "" if b is None else repr(abs(b)),
+                w.writerow([repr(float(v)), repr(float(om)), name, repr(float(abs(a))),
+                            repr(_deg(a)), "" if b is None else repr(float(abs(b))),
                             "" if b is None else repr(_deg(b)), repr(float(big)), u or ""])
         return path
 
