@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..model.cache import KeptValues
+from .linalg import SMALL, multipliers
 
 
 class Memo:
@@ -15,11 +16,16 @@ class Memo:
 
     SIZE = 6
 
-    def __init__(self, model):
+    def __init__(self, model, *, q=None, known=None):
         self._model = model
         self._cache = KeptValues(self.SIZE)
+        self._solves = KeptValues(2)  # least-squares multipliers at the last q
         # a small model's Jacobians as dense arrays (mbseig.numerics.DENSE_ASSEMBLY)
         self._dense = bool(getattr(model, "dense_assembly", False))
+        # evaluations at q made elsewhere ({"g", "phi", "phi_q": value}, each as this cache
+        # would compute it: :meth:`mbseig.statics.family.Family.known`)
+        for what, value in (known or {}).items():
+            self._cache.get((what, q.tobytes()), lambda v=value: v)
 
     def __getattr__(self, name):
         return getattr(self._model, name)
@@ -50,6 +56,20 @@ class Memo:
             return self._model.force_jacobians(q, qd, dense=self._dense)
         return self._get(("K", q.tobytes()),
                          lambda: self._model.force_jacobians(q, dense=self._dense))
+
+    def least_squares(self, q, rank_tol, check):
+        """:func:`~mbseig.statics.linalg.multipliers` of Φ_q(q), g(q) (λ, rank, how), computed
+        once per q: the force scale, the Newton's multipliers and the record ask for it at the
+        same q.  Up to ``SMALL`` unknowns one SVD gives λ and the rank, and a call without
+        ``check`` returns that λ (the same λ: the rank only reads the singular values) with
+        the rank m it reports unchecked.  λ is a copy."""
+        m, n = self._model.n_constraints, self._model.n
+        small = m + n <= SMALL
+        full = bool(check) or small
+        lam, rank, how = self._solves.get(
+            (q.tobytes(), float(rank_tol), full),
+            lambda: multipliers(self.phi_q(q), self.generalized_force(q), rank_tol, check=full))
+        return lam.copy(), (rank if check else m), how
 
     def constraint_hessian(self, q, lam, *, dense=None):
         return self._get(("H", q.tobytes(), np.asarray(lam).tobytes()),

@@ -169,6 +169,7 @@ class _Follower:
             if landed:
                 newp.grid_index = self.k_next
                 self.br.grid[self.k_next] = newp
+                self.fam.pin(newp.p, newp.y)
                 self.k_next += 1
             else:
                 self._pass_grid_values(new_z, t_new)
@@ -282,6 +283,7 @@ class _Follower:
             gp = branch_point_at(fam, gz, gt, "grid", self.segment, res[1])
             gp.grid_index = self.k_next
             br.grid[self.k_next] = gp
+            fam.pin(p_g, gp.y)
             br.points.append(gp)
             self.k_next += 1
 

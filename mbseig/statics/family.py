@@ -45,6 +45,8 @@ class Family:
         self.dense = bool(getattr(model0, "dense_assembly", False))
         self.evaluations = 0
         self._memo_store: dict = {}
+        self._evals: dict = {}  # g, Φ and Φ_q by q (the comment above _kept())
+        self._pinned: dict = {}  # those at the grid points, for the records (pin())
 
     def model(self, p):
         key = float(p)
@@ -79,6 +81,65 @@ class Family:
             self._memo_store[key] = hit
         return hit
 
+    # ---- the model's evaluations at q, kept for the last few q -------------------------------
+    # g(q) belongs to one model (one p); Φ(q) and Φ_q(q) to its constraint elements, which the
+    # models of a lean family share (only force scalars change with p), so the model at the
+    # previous grid value (the difference ∂R/∂p) reuses them.  Kept values are the arrays the
+    # model returned, never changed in place.
+    EVALS = 12
+
+    def _kept(self, what, owner, q, compute, same):
+        key = (what, id(owner) if what == "g" else None, q.tobytes())
+        hit = self._evals.get(key)
+        if hit is not None and same(hit[0], owner):
+            return hit[1]
+        value = compute()
+        if len(self._evals) >= self.EVALS:
+            self._evals.pop(next(iter(self._evals)))
+        self._evals[key] = (owner, value)
+        return value
+
+    def _g(self, model, q):
+        return self._kept("g", model, q, lambda: model.generalized_force(q), _same_model)
+
+    def _phi(self, model, q):
+        return self._kept("phi", model.constraints, q, lambda: model.phi(q), _same_elements)
+
+    def _phi_q(self, model, q):
+        return self._kept("phi_q", model.constraints, q,
+                          lambda: model.phi_q(q, dense=self.dense), _same_elements)
+
+    def pin(self, p, y):
+        """Keep the evaluations made at the grid point (p, y) for :meth:`known` (a small model's:
+        dense, a few hundred numbers a point; the sweep records the grid points after the
+        whole line is followed)."""
+        if not self.dense:
+            return
+        model, q = self.model(p), y[:self.n]
+        for what, owner in (("g", model), ("phi", model.constraints),
+                            ("phi_q", model.constraints)):
+            key = (what, id(owner) if what == "g" else None, q.tobytes())
+            hit = self._evals.get(key)
+            if hit is not None:
+                self._pinned[(float(p),) + key] = hit
+
+    def known(self, p, q) -> dict:
+        """The evaluations of model(p) at q the family made, by name ("g", "phi", "phi_q"; Φ_q
+        as model.phi_q(q, dense=model.dense_assembly) gives it): a :class:`~mbseig.statics.cache.Memo`
+        of the model starts from them instead of evaluating them again."""
+        model = self.model(p)
+        out = {}
+        for what, owner, same in (("g", model, _same_model),
+                                  ("phi", model.constraints, _same_elements),
+                                  ("phi_q", model.constraints, _same_elements)):
+            key = (what, id(owner) if what == "g" else None, q.tobytes())
+            hit = self._evals.get(key) or self._pinned.get((float(p),) + key)
+            if hit is not None and same(hit[0], owner):
+                out[what] = hit[1]
+        if bool(getattr(model, "dense_assembly", False)) != self.dense:
+            out.pop("phi_q", None)
+        return out
+
     def R(self, y, p):
         return self._memo("R", y, p, lambda: self._R(y, p))
 
@@ -92,11 +153,11 @@ class Family:
         model = self.model(p)
         q, lam = y[:self.n], y[self.n:]
         with np.errstate(all="ignore"):
-            g = model.generalized_force(q)
+            g = self._g(model, q)
             if not self.m:
                 return g
-            Phi_q = model.phi_q(q, dense=self.dense)[self.rows]
-            return np.concatenate([g - Phi_q.T @ lam, -model.phi(q)[self.rows]])
+            Phi_q = self._phi_q(model, q)[self.rows]
+            return np.concatenate([g - Phi_q.T @ lam, -self._phi(model, q)[self.rows]])
 
     def _J(self, y, p):
         model = self.model(p)
@@ -105,7 +166,7 @@ class Family:
             K, _ = model.force_jacobians(q, dense=self.dense)
             if not self.m:
                 return K if self.dense else K.tocsr()
-            Phi_q = model.phi_q(q, dense=self.dense)[self.rows]
+            Phi_q = self._phi_q(model, q)[self.rows]
             H = model.constraint_hessian(q, self.lam_full(y), dense=self.dense)
             return saddle(K + H, Phi_q)
 
@@ -127,3 +188,12 @@ class Family:
         w[:self.n] = 1.0 / self.scales.ell**2
         w[-1] = 1.0 / self.p_scale**2
         return w
+
+
+def _same_model(a, b) -> bool:
+    return a is b
+
+
+def _same_elements(a, b) -> bool:
+    """Whether two tuples of constraint elements hold the same element objects."""
+    return a is b or (len(a) == len(b) and all(x is y for x, y in zip(a, b)))

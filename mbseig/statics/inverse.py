@@ -213,7 +213,7 @@ def command_settings(model) -> tuple:
     return tuple(s.get("free_length", s.get("length")) for d in model.drivers for s in d["sets"])
 
 
-def held_tension(model, prev, *, tol=1e-12, posture_tol=1e-10):
+def held_tension(model, prev, *, tol=1e-12, posture_tol=1e-10, cache=None):
     """``model`` (its one command pending) set from ``prev`` (resolved at another value of a
     parameter that enters the commanded spring's stiffness alone), or None.
 
@@ -225,7 +225,9 @@ def held_tension(model, prev, *, tol=1e-12, posture_tol=1e-10):
     its own result: at q*, on the device with the driver and without follower loads, the
     driver's effort (unique: no redundant constraint) is at most ``tol`` × the released effort
     and the posture is in equilibrium (residual ≤ ``posture_tol`` × the forces).  Else the
-    command is resolved (by the caller)."""
+    command is resolved (by the caller).  ``cache``: a dict kept by the caller across the values
+    of one sweep line, which holds the device's Φ_q at q* (the constraints, the driver and q*
+    are ``prev``'s at every value, so it is the same matrix)."""
     if prev is None or len(model.commands) != 1 or len(prev.drivers) != 1:
         return None
     driver, targets = model.commands[0]
@@ -250,7 +252,7 @@ def held_tension(model, prev, *, tol=1e-12, posture_tol=1e-10):
         commands=())
     with np.errstate(all="ignore"):
         g = device.generalized_force(q)
-        G = np.asarray(device.phi_q(q, dense=True))
+        G = _device_phi_q(device, prev, driver, q, cache)
         lam, _, rank, _ = np.linalg.lstsq(G.T, g, rcond=None)
         r = g - G.T @ lam
         scale = max(float(np.max(np.abs(g))), float(np.max(np.abs(G.T) @ np.abs(lam))))
@@ -265,3 +267,19 @@ def held_tension(model, prev, *, tol=1e-12, posture_tol=1e-10):
                         "tension": spring.stiffness * (length_now - l0)}]}
     return dataclasses.replace(model, forces=tuple(forces), q_init=q, commands=(),
                                drivers=(record,))
+
+
+def _device_phi_q(device, prev, driver, q, cache):
+    """Φ_q at q of the device (``prev``'s constraints and the driver): kept in ``cache`` for
+    the same ``prev``, driver and q (then the same constraint elements at the same q)."""
+    if cache is not None:
+        hit = cache.get("device_phi_q")
+        if (hit is not None and hit[0] is prev and hit[1] is driver and hit[2] is device.constraints[-1]
+                and hit[3] == q.tobytes() and len(hit[4]) == len(device.constraints)
+                and all(a is b for a, b in zip(hit[4], device.constraints))):
+            return hit[5]
+    G = np.asarray(device.phi_q(q, dense=True))
+    if cache is not None:
+        cache["device_phi_q"] = (prev, driver, device.constraints[-1], q.tobytes(),
+                                 device.constraints, G)
+    return G

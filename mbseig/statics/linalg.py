@@ -44,6 +44,7 @@ __all__ = ["SMALL", "DENSE_LIMIT", "StepScales", "NewtonMatrix", "multipliers",
 SMALL = 300  # augmented size up to which the Newton matrix is decomposed by the SVD
 DENSE_LIMIT = 4000  # size up to which a singular sparse factor falls back to the dense SVD
 RCOND = 1e-14  # singular values below RCOND·σ_max of the equilibrated matrix count as zero
+LU_RCOND = 1e-8  # a small Newton matrix of the statics' Newton is solved by LU above this rcond
 
 
 def blas_threads(n):
@@ -53,6 +54,9 @@ def blas_threads(n):
     a 200×200 solve measured 0.33 s with two OpenBLAS threads on a loaded 2-core machine.
     (:func:`mbseig.numerics.blas_limit`: one controller per process.)"""
     return blas_limit(n)
+
+
+_SCALES: dict = {}  # StepScales.of: the last few scales by their model's elements
 
 
 class StepScales:
@@ -82,6 +86,23 @@ class StepScales:
             self.inv_len = np.array(inv_len)
         else:
             self.D = None
+
+    @classmethod
+    def of(cls, model):
+        """The scales of ``model``, made once for the models that share its constraint elements,
+        coordinate kinds, length scale and dimension (everything :class:`StepScales` reads): a
+        solve builds several models of one device (inverse statics, the points of a sweep)."""
+        constraints = tuple(model.constraints)
+        key = (tuple(map(id, constraints)), float(getattr(model, "length_scale", 1.0) or 1.0),
+               tuple(model.coordinate_kinds), getattr(model, "dimension", None))
+        hit = _SCALES.get(key)
+        if hit is not None and all(a is b for a, b in zip(hit[0], constraints)):
+            return hit[1]
+        scales = cls(model)
+        if len(_SCALES) >= 8:
+            _SCALES.pop(next(iter(_SCALES)))
+        _SCALES[key] = (constraints, scales)  # (the elements kept alive: their ids stay theirs)
+        return scales
 
     def weights(self, n_total):
         """The metric 1/ℓ² of the coordinates (0 for the multipliers) of an augmented vector."""
@@ -138,8 +159,9 @@ class NewtonMatrix:
     """A factorized Newton matrix: ``solve(b)`` returns (x, e) with x the (minimum-norm)
     solution of A x = b and e = b − A x (zero for an LU factor: A is then nonsingular)."""
 
-    def __init__(self, A, *, what="Newton matrix", weights=None):
+    def __init__(self, A, *, what="Newton matrix", weights=None, lu_first=False):
         self.weights = weights  # metric of the unknowns in which solutions are made least
+        self.dense_lu = None
         N = A.shape[0]
         if N > SMALL or sp.issparse(A):  # (a small dense A stays dense: decomposed by the SVD)
             A = A if isinstance(A, sp.csr_matrix) else sp.csr_matrix(A)
@@ -159,6 +181,8 @@ class NewtonMatrix:
                 raise EquilibriumError(
                     f"singular {what} of size {N} (redundant constraints or a free motion in a "
                     f"model above the dense limit of {DENSE_LIMIT})", element="equilibrium")
+        if self.lu is None and lu_first and N <= SMALL and self._dense_lu(N):
+            return
         if self.lu is None:
             with np.errstate(all="ignore"):
                 As = self.d[:, None] * dense(self.A) * self.d[None, :]
@@ -172,6 +196,30 @@ class NewtonMatrix:
             self.rank = N
             self.cond = float("nan")
 
+    def _dense_lu(self, N) -> bool:
+        """A small matrix factorized by dense LU (``lu_first``) where it is well conditioned:
+        LAPACK's estimate of the 1-norm rcond of the equilibrated matrix above ``LU_RCOND``.
+        The SVD's rank rule (σ_min > ``RCOND``·σ_max) then holds with a margin of 10⁶/N, the
+        matrix is nonsingular, and both give its one solution to cond·ε (the SVD costs 5–8
+        times the LU on the small matrices of a model of a few dozen coordinates).  False
+        leaves the matrix to the SVD."""
+        with np.errstate(all="ignore"):
+            As = self.d[:, None] * dense(self.A) * self.d[None, :]
+            if not np.all(np.isfinite(As)):
+                return False
+            lu, piv, info = sla.lapack.dgetrf(As)
+            if info != 0:
+                return False
+            anorm = float(np.max(np.sum(np.abs(As), axis=0), initial=0.0))
+            rcond, info = sla.lapack.dgecon(lu, anorm, norm="1")
+        if info != 0 or not rcond > LU_RCOND:
+            return False
+        self.dense_lu = (lu, piv)
+        self.kind, self.rank = "lu", N
+        self.cond = float("nan")  # (no condition number: as for the sparse LU)
+        self.null = np.zeros((N, 0))
+        return True
+
     def motion(self, b):
         """The motion without restoring force along which the force b pushes: the projection
         of b onto null A (zero when A is nonsingular, or factorized by LU)."""
@@ -182,6 +230,13 @@ class NewtonMatrix:
 
     def solve(self, b):
         bs = self.d * b
+        if self.dense_lu is not None:
+            with np.errstate(all="ignore"):
+                y, info = sla.lapack.dgetrs(*self.dense_lu, bs)
+            if info != 0 or not np.all(np.isfinite(y)):
+                raise EquilibriumError("the Newton matrix is numerically singular (dense LU)",
+                                       element="equilibrium")
+            return self.d * y, np.zeros_like(b)
         if self.lu is not None:
             with np.errstate(all="ignore"):
                 y = self.lu.solve(bs)

@@ -43,9 +43,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..errors import EquilibriumError
 from .linalg import (
+    SMALL,
     NewtonMatrix,
     StepScales,
     augmented,
@@ -115,6 +117,9 @@ class Solution:
 
 def static_multipliers(model, q, s):
     """λ of the statics at q: the minimum-norm solution of Φ_qᵀλ = g (rank by ``s.rank_tol``)."""
+    kept = getattr(model, "least_squares", None)  # a Memo: once per q
+    if kept is not None:
+        return kept(q, s.rank_tol, False)[0]
     return multipliers(model.phi_q(q), model.generalized_force(q), s.rank_tol, check=False)[0]
 
 
@@ -222,6 +227,43 @@ def _homotopy_step(model, q, lam, NM, R, x, motion, h, s):
     return (qn, ln) if np.all(np.isfinite(ln)) else None
 
 
+LU_MARGIN = 0.5  # the LU's test of convergence at the start: within half the tolerances
+
+
+def _converged_by_lu(A, rhs, q, lam, n, s, cscale_model, pit):
+    """The Solution at the start q when it has converged already, judged on a dense LU of a
+    small (up to ``SMALL`` unknowns) well-conditioned Newton matrix (:class:`NewtonMatrix`
+    ``lu_first``, several times cheaper than its SVD), else None.  Its correction differs from
+    the SVD's by cond·ε of itself, so within ``LU_MARGIN`` of the tolerances the SVD's test
+    passes too: q is returned as the SVD would return it (only the recorded correction differs,
+    by rounding); everywhere else the iteration goes on as before, on the SVD.
+    A right-hand side of exact zeros needs no factorization (x = 0, e = 0 from any); the
+    condition number is then not computed (NaN, as for an LU).  (cscale_model: (model,
+    constraint scales) for the constraint residual.)"""
+    model, cscale = cscale_model
+    if A.shape[0] > SMALL:  # (a large matrix: the sparse LU as before)
+        return None
+    finite = bool(np.all(np.isfinite(A.data if sp.issparse(A) else A)))
+    if not finite:  # (left to the SVD, whose error the caller reports)
+        return None
+    if not np.any(rhs):  # balanced exactly: every factorization gives x = 0, e = 0
+        if constraint_residual(model, q, cscale)[1] <= s.tol:
+            return Solution(q, lam, 0, 0.0, 0.0, pit, cond=float("nan"))
+        return None
+    try:
+        NM = NewtonMatrix(A, weights=s.scales.weights(A.shape[0]), lu_first=True)
+    except EquilibriumError:
+        return None
+    if NM.kind != "lu" or NM.dense_lu is None:
+        return None
+    _, corr, free, _ = _measure(NM, rhs, n, s)
+    cr = constraint_residual(model, q, cscale)[1]
+    if (np.isfinite(corr) and cr <= s.tol and corr <= LU_MARGIN * s.xtol
+            and free <= LU_MARGIN * s.tol):
+        return Solution(q, lam, 0, corr, free, pit, cond=NM.cond)
+    return None
+
+
 def newton(model, q, s: Settings, *, max_iter=None, prove=True) -> Solution:
     """Newton from q (module docstring, step 2).  Raises :class:`Stall` or, from the position
     solve, :class:`~mbseig.statics.failures.ConstraintsUnsatisfiable` (when ``prove``).
@@ -247,11 +289,15 @@ def newton(model, q, s: Settings, *, max_iter=None, prove=True) -> Solution:
     free_streak, free_last = 0, np.inf
     while True:
         A, _ = augmented(model, q, lam)
+        rhs = _rhs(model, q, lam, s)
+        if it == 0:  # already converged? (the usual start: the case's positions, a neighbour's)
+            done = _converged_by_lu(A, rhs, q, lam, n, s, (model, cscale), pit)
+            if done is not None:
+                return done
         try:
             NM = NewtonMatrix(A, weights=s.scales.weights(A.shape[0]))
         except EquilibriumError as exc:
             raise Stall(exc.message, q=q, lam=lam, iterations=it) from None
-        rhs = _rhs(model, q, lam, s)
         x, corr, free, e_q = _measure(NM, rhs, n, s)
         cr = constraint_residual(model, q, cscale)[1]
         if not np.isfinite(corr):
@@ -302,13 +348,13 @@ def newton(model, q, s: Settings, *, max_iter=None, prove=True) -> Solution:
 # ---------------------------------------------------------------------------------------------
 def force_scale(model, q, rank_tol):
     """Typical generalized force at q: loads, or stiffness times the model's size."""
-    import scipy.sparse as sp
-
     with np.errstate(all="ignore"):
         g = model.generalized_force(q)
         K, _ = model.force_jacobians(q)
         Phi_q = model.phi_q(q)
-        lam = multipliers(Phi_q, g, rank_tol, check=False)[0]
+        kept = getattr(model, "least_squares", None)  # a Memo: once per q
+        lam = (kept(q, rank_tol, False)[0] if kept is not None else
+               multipliers(Phi_q, g, rank_tol, check=False)[0])
         if sp.issparse(K):
             K = K.tocsr()
             knorm = (float(np.max(np.add.reduceat(np.abs(K.data), K.indptr[:-1][np.diff(K.indptr) > 0])))
@@ -323,6 +369,6 @@ def force_scale(model, q, rank_tol):
 def settings_for(model, q, *, tol, xtol, floor_tol, max_iter, rank_tol):
     s = Settings(tol=tol, xtol=tol if xtol is None else xtol, floor_tol=floor_tol,
                  max_iter=max_iter, rank_tol=rank_tol)
-    s.scales = StepScales(model)
+    s.scales = StepScales.of(model)  # (the same scales for the models of one device)
     s.force_scale = force_scale(model, q, rank_tol)
     return s

@@ -3,6 +3,7 @@ multipliers, the residuals, the rank and redundancy of the constraints."""
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -50,8 +51,43 @@ class Equilibrium:
     contacts: tuple = ()  # single-sided contacts: ({"name", "force", "active"}, ...) (DESIGN §8)
 
 
+_FIELDS: dict = {}  # record class → {field name: whether it is optional}, in declaration order
+
+
+def _fields(cls) -> dict:
+    spec = _FIELDS.get(cls)
+    if spec is None:
+        spec = _FIELDS[cls] = {f.name: bool(f.metadata.get("optional"))
+                               for f in dataclasses.fields(cls)}
+    return spec
+
+
+class KeyedRecord(Record):
+    """:class:`~mbseig.records.Record`'s mapping view with the field list of each class read
+    once (a sweep reads its points and their static records by key many times per point): the
+    same keys, values and misses as the mixin's."""
+
+    __slots__ = ()
+
+    def keys(self):
+        return [k for k, opt in _fields(type(self)).items()
+                if not (opt and getattr(self, k) is None)]
+
+    def __contains__(self, key) -> bool:
+        opt = _fields(type(self)).get(key)
+        return opt is not None and not (opt and getattr(self, key) is None)
+
+    def __getitem__(self, key):
+        if key not in self:
+            raise KeyError(key)
+        return getattr(self, key)
+
+    def get(self, key, default=None):
+        return getattr(self, key) if key in self else default
+
+
 @dataclass(frozen=True, eq=False)
-class StaticStability(Record):
+class StaticStability(KeyedRecord):
     """The static stability of an equilibrium (:func:`mbseig.statics.stiffness.static_stability`):
     the verdict (stable, neutral, unstable, undetermined, not examined) from the reduced tangent
     stiffness K_r = Nᵀ(K + H(λ))N, its size ``dof``, whether it is symmetric (``asymmetry``
@@ -96,12 +132,14 @@ def reaction_records(model, lam) -> tuple:
 
 def finish(model, q, s, *, iterations, correction, method, path, lam=None, memo=None):
     """The Equilibrium record at a converged q: least-squares λ, rank, residuals, reactions.
-    memo: the :class:`Memo` of ``model`` the solve used (its evaluations at q are reused)."""
+    memo: the :class:`Memo` of ``model`` the solve used (its evaluations at q, and its
+    least-squares multipliers there, are reused)."""
     n, m = model.n, model.n_constraints
     ev = model if memo is None else memo
     Phi_q = ev.phi_q(q)
     g = ev.generalized_force(q)
-    lam_ls, rank, rank_method = multipliers(Phi_q, g, s.rank_tol, check=True)
+    lam_ls, rank, rank_method = (multipliers(Phi_q, g, s.rank_tol, check=True) if memo is None
+                                 else memo.least_squares(q, s.rank_tol, True))
     lam = lam_ls if lam is None else lam
     r1 = g - Phi_q.T @ lam
     fr = float(np.max(np.abs(r1), initial=0.0)) / s.force_scale

@@ -9,7 +9,8 @@ Static stability.  The equilibrium is statically unstable (a divergence) when K_
 (within ``SYMMETRY_TOL``) and has an eigenvalue below −``stiffness_tol``·‖K_r‖ (the potential is
 not a minimum: unstable with any dissipation), or when K_r is not symmetric and det K_r < 0 (an
 odd number of negative real eigenvalues: a real positive root s of det(M s² + P s + K_r) for any
-M > 0, P).  ``index`` counts the negative eigenvalues.  A non-symmetric K_r with det K_r > 0 is
+M > 0, P).  ``index`` counts the negative eigenvalues.  A non-symmetric K_r with det K_r > 0, or
+with an eigenvalue within the tolerance of zero (the sign of det K_r undecided, ``zero``), is
 left to the modes ("undetermined" here).  The common case, a symmetric K_r positive definite
 beyond the tolerance, is decided by norm bounds and one Cholesky factorization of the shifted
 K_r (Sylvester's law of inertia: :func:`_positive_definite`); only the others compute
@@ -88,7 +89,8 @@ def _stability(model, q, lam, rank_tol, stiffness_tol, symmetry_tol) -> dict:
     if fast is not None:
         return {**rec, **fast}
     norm = float(np.linalg.norm(Kr, 2)) or 1.0
-    asym = float(np.linalg.norm(Kr - Kr.T, 2)) / norm
+    S = Kr - Kr.T
+    asym = float(np.linalg.norm(S, 2)) / norm if np.any(S) else 0.0  # (‖0‖₂ = 0 exactly)
     symmetric = asym <= symmetry_tol
     rec["symmetric"] = bool(symmetric)
     rec["asymmetry"] = asym
@@ -104,10 +106,16 @@ def _stability(model, q, lam, rank_tol, stiffness_tol, symmetry_tol) -> dict:
     real = np.abs(mu.imag) <= stiffness_tol * norm
     neg = real & (mu.real < -stiffness_tol * norm)
     index = int(np.sum(neg))
+    # an eigenvalue within the tolerance of zero leaves the sign of det K_r undecided: an odd
+    # count of negative ones then proves nothing (at p = 1e99 on Ziegler's pendulum the springs'
+    # k is below the rounding of p k, K_r's small eigenvalue −k²/(p k) is rounding, and its
+    # exact index, 2, is even)
+    zero = int(np.sum(np.abs(mu) <= stiffness_tol * norm))
     k = int(np.argmin(np.where(real, mu.real, np.inf))) if real.any() else None
-    rec.update(min_eigenvalue=None if k is None else float(mu[k].real), index=index,
+    rec.update(min_eigenvalue=None if k is None else float(mu[k].real), index=index, zero=zero,
                direction=None if k is None else N @ V[:, k].real,
-               verdict="unstable" if index % 2 == 1 else ("undetermined" if index else "stable?"))
+               verdict="unstable" if index % 2 == 1 and not zero else
+               ("undetermined" if index or zero else "stable?"))
     if rec["verdict"] == "stable?":  # no negative real eigenvalue: statics sees no divergence
         rec["verdict"] = "stable" if np.all(mu.real > stiffness_tol * norm) else "undetermined"
     return rec

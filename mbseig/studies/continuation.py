@@ -30,8 +30,6 @@ held (:func:`mbseig.statics.inverse.held_tension`, checked at every value; ``rec
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from ..casefile.element_readers import ScalarUpdate
@@ -65,7 +63,8 @@ def family_maker(spec, config, params, axis, *, lean=True):
     (:class:`~mbseig.casefile.element_readers.ScalarUpdate`, equal to a build element by
     element), elsewhere every value is built (``state["model"]`` says which and why)."""
     state = {"first": None, "reuse": None, "checked": False, "last": None, "presolve": {},
-             "lean": None, "model": None, "held": 0, "resolved": 0, "made": {}}
+             "lean": None, "model": None, "held": 0, "resolved": 0, "made": {},
+             "held_cache": {}}
     lean_models = lean_commands = bool(lean)
 
     def build(p):
@@ -105,7 +104,7 @@ def family_maker(spec, config, params, axis, *, lean=True):
             if r is not None:
                 return r
         if state["checked"] and lean_commands:
-            r = held_tension(m, state["last"])
+            r = held_tension(m, state["last"], cache=state["held_cache"])
             if r is not None:
                 state["held"] += 1
                 return r
@@ -123,8 +122,10 @@ def family_maker(spec, config, params, axis, *, lean=True):
     return make, state
 
 
-def modal_point(model, eq, params, *, safety, stability_rtol):
-    """The sweep's record of one point: all eigenpairs, their tolerances, the verdict."""
+def modal_point(model, eq, params, *, safety, stability_rtol, postures=posture, **fields):
+    """The sweep's record of one point: all eigenpairs, their tolerances, the verdict.
+    postures(model, q): :func:`mbseig.statics.reactions.posture` (or a kept copy of its
+    result); fields: more fields of the :class:`SweepPoint` (how the statics reached it)."""
     lin = linearize(model, eq, signals=False)  # a sweep point uses the modes alone
     if lin.M.shape[0] == 0:  # no degree of freedom (a driven mechanism): no modes
         s, X, tol, verdict, solver = (np.zeros(0, complex), np.zeros((model.n, 0), complex),
@@ -136,16 +137,32 @@ def modal_point(model, eq, params, *, safety, stability_rtol):
         X = lin.N @ sol.vectors
         X = X / np.maximum(np.linalg.norm(X, axis=0), np.finfo(float).tiny)
         verdict = worst(stability(-s.real, tol, rigid))
-    out_of_range = ([p["name"] for p in posture(model, eq.q) if not p["in_range"]]
+    out_of_range = ([p["name"] for p in postures(model, eq.q) if not p["in_range"]]
                     if (getattr(model, "report", None) or {}).get("angles") else [])
     return SweepPoint(params=dict(params), error=None, eigenvalues=s, shapes=X, tol=tol,
                       verdict=verdict, out_of_range=out_of_range, solver=solver,
                       q=np.asarray(eq.q, float), iterations=int(eq.iterations),
-                      static=(eq.static or {}).get("verdict"))
+                      static=(eq.static or {}).get("verdict"), **fields)
 
 
-def _angles(model, q):
-    return {p["name"]: p["angle_deg"] for p in posture(model, q)} if model.report.get("angles") else {}
+def _angles(model, q, postures=posture):
+    return ({p["name"]: p["angle_deg"] for p in postures(model, q)} if model.report.get("angles")
+            else {})
+
+
+def _kept_postures():
+    """posture(model, q) computed once per model and q (a grid point's record and its point of
+    the bifurcation diagram ask for the same)."""
+    kept = {}
+
+    def postures(model, q):
+        key = (id(model), np.asarray(q, float).tobytes())
+        hit = kept.get(key)
+        if hit is None or hit[0] is not model:
+            hit = kept[key] = (model, posture(model, q))
+        return hit[1]
+
+    return postures
 
 
 def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rtol=1e-12,
@@ -160,6 +177,7 @@ def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rto
     values = np.asarray(values, dtype=float)
     make, state = family_maker(case, config, params, axis, lean=lean)
     opts = {"safety": safety, "stability_rtol": stability_rtol}
+    postures = _kept_postures()
 
     def point_params(p):
         return {**params, axis: float(p)}
@@ -192,7 +210,8 @@ def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rto
             model = fam.model(v)
             if bp is not None:  # converged by the continuation's corrector: the record only
                 q = bp.y[:fam.n]
-                memo = Memo(model)  # g, Φ_q at q evaluated once for the scale and the record
+                # g, Φ, Φ_q at q evaluated once (by the corrector) for the scale and the record
+                memo = Memo(model, q=q, known=fam.known(v, q))
                 st = settings_for(memo, q, tol=1e-12, xtol=None, floor_tol=1e-8, max_iter=50,
                                   rank_tol=1e-10)
                 eq = finish(model, q, st, iterations=bp.iterations, correction=CTOL,
@@ -203,10 +222,11 @@ def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rto
                 eq = equilibrium(model, offer_stable=False, self_stress="report")
                 how = "cold"
             eq = examine(eq, offer_stable=False, self_stress="report")
-            pt = replace(modal_point(eq.model, eq, point_params(v), **opts), statics=how)
-            if bp is not None:
-                pt = replace(pt, segment=bp.segment, branch_kind=bp.kind,
-                             corrector_iterations=bp.iterations)
+            where = ({} if bp is None else
+                     {"segment": bp.segment, "branch_kind": bp.kind,
+                      "corrector_iterations": bp.iterations})
+            pt = modal_point(eq.model, eq, point_params(v), **opts, postures=postures,
+                             statics=how, **where)
         except MbseigError as exc:
             pt = SweepPoint.failed(point_params(v), exc.one_line())
         points.append(pt)
@@ -240,7 +260,7 @@ def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rto
         lam = fam.lam_full(bp.y)
         rec = {"p": bp.p, "kind": bp.kind, "segment": bp.segment,
                "q": [float(x) for x in q] if fam.n <= 500 else None,
-               "angles": _angles(model, q), "pdot": bp.pdot}
+               "angles": _angles(model, q, postures), "pdot": bp.pdot}
         rec["static"] = grid_static.get(id(bp))
         if rec["static"] is None:
             try:

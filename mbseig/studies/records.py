@@ -13,13 +13,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..records import Record, internal, optional
+from ..records import internal, optional
+from ..statics.result import KeyedRecord as StudyRecord
 
 __all__ = ["SweepPoint", "CampbellPoint", "Boundary", "Fold", "BoundaryCurve"]
 
-
 @dataclass(frozen=True, eq=False)
-class PointRecord(Record):
+class PointRecord(StudyRecord):
     """What every study point has: its parameters, the one-line error of a failed point, and
     (when it did not fail) its eigenvalues, their unit shapes and stability tolerances."""
 
@@ -68,7 +68,7 @@ class CampbellPoint(PointRecord):
 
 
 @dataclass(frozen=True, eq=False)
-class Boundary(Record):
+class Boundary(StudyRecord):
     """A loss or recovery of stability along the first axis of line ``line``.
 
     value : the parameter there; kind : flutter (a complex pair crosses) or divergence (a real
@@ -123,7 +123,7 @@ class Boundary(Record):
 
 
 @dataclass(frozen=True, eq=False)
-class Fold(Record):
+class Fold(StudyRecord):
     """A fold or branch point located on the branch of line ``line``: what the branch does
     there, the stability before and after, the degrees of freedom and the named angles."""
 
@@ -140,7 +140,7 @@ class Fold(Record):
 
 
 @dataclass(frozen=True, eq=False)
-class BoundaryCurve(Record):
+class BoundaryCurve(StudyRecord):
     """A boundary of the first line followed across the second axis ``along``: ``points``
     (p2, value, band, test), with the bend and insertion rules that placed them."""
 
