@@ -203,3 +203,15 @@ def test_ziegler_stiffness_at_huge_load_is_undetermined():
         assert st["verdict"] == verdict, (p, st)
         if p > 1e90:
             assert st["symmetric"] is False and st["zero"] >= 1 and st["index"] == 1
+
+
+def test_report_says_why_statics_cannot_decide():
+    """The report's statics paragraph gives the reason the verdict was left undetermined: at
+    p = 1e99 (above) an eigenvalue within tolerance of zero, not the even count of negative
+    eigenvalues that a non-symmetric stiffness with det K_r > 0 has."""
+    import mbseig
+    from mbseig.report.sections import statics_text
+
+    text = statics_text(mbseig.equilibrium(mbseig.load_case(CASES / "ziegler_pendulum.toml",
+                                                            p=1e99)))
+    assert "within its tolerance of zero" in text and "even number" not in text

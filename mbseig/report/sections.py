@@ -225,8 +225,11 @@ def statics_text(eq):
     stab = {"stable": "statically stable (the reduced tangent stiffness is positive definite)",
             "unstable": f"statically UNSTABLE ({st.get('index')} direction(s) of negative stiffness)",
             "neutral": "statically neutral (a zero stiffness)",
-            "undetermined": ("statics cannot decide (non-symmetric stiffness with an even number "
-                             "of negative real eigenvalues): see the modes"),
+            "undetermined": (("statics cannot decide (an eigenvalue of the reduced stiffness "
+                              "within its tolerance of zero, so the sign of its determinant is "
+                              "undecided): see the modes") if st.get("zero") else
+                             ("statics cannot decide (non-symmetric stiffness with an even number "
+                              "of negative real eigenvalues): see the modes")),
             "not examined": "not examined (above the dense limit)"}.get(verdict, "–")
     text = (f"Statics: {how}, {eq.iterations} Newton iterations; converged when "
             f"{tol.get('criterion', '')} (tol = {tol.get('tol', 0):g}, xtol = "
