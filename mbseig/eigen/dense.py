@@ -131,10 +131,18 @@ def mass_condition(M, memo=None):
     return memo["mass_condition"]
 
 
+def diagonal(M, memo):
+    """Whether M is diagonal (:func:`diagonal_positive`, once per solve: kept in ``memo``)."""
+    if "diagonal" not in memo:
+        memo["diagonal"] = diagonal_positive(M)
+    return memo["diagonal"] is not None
+
+
 def _mass_condition(M, memo):
     if np.iscomplexobj(M):
         return False, np.inf
-    diag = diagonal_positive(M)
+    diagonal(M, memo)
+    diag = memo["diagonal"]
     if diag is not None:
         if not diag:
             return False, np.inf
@@ -160,23 +168,41 @@ def choose_solver(M, P, Q, *, sym_tol=1e-13, rayleigh_tol=1e-12, memo=None,
     structured paths accept up to 1/(1000 ε).
     """
     memo = {} if memo is None else memo
+    norms = memo.get("fro", {})  # ‖A‖_F of the caller's M, P, Q (the same arrays)
+    asym = {}  # ‖A − Aᵀ‖_F where a symmetry test computed it
 
     def sym(key, A):
         if key not in memo:
-            memo[key] = is_symmetric(A, sym_tol)
+            found = {}
+            memo[key] = is_symmetric(A, sym_tol, norm=norms.get(key), found=found)
+            if "asymmetry" in found:
+                asym[key] = found["asymmetry"]
         return memo[key]
 
     complex_problem = any(np.iscomplexobj(A) for A in (M, P, Q))
+    if ("M" not in memo and not complex_problem and not sp.issparse(M) and M.ndim == 2
+            and diagonal(M, memo)):
+        memo["M"] = True  # a diagonal matrix is symmetric: ‖M − Mᵀ‖ = 0
+        asym["M"] = 0.0
     pd, cond = (sym("M", M) and mass_condition(M, memo)) or (False, np.inf)
     memo["cond_M"] = cond
     if pd and not complex_problem and sym("Q", Q) and cond <= STRUCTURED_COND:
         if not np.any(P):
             return "eigh", "P = 0, M and Q symmetric, M positive definite", {}
-        if sym("P", P):
-            ab = rayleigh_fit(M, P, Q, rayleigh_tol, residual=True)
-            if ab is not None:
-                return ("proportional", f"P = {ab[0]:.6g} M + {ab[1]:.6g} Q (Rayleigh damping)",
-                        {"alpha": ab[0], "beta": ab[1], "fit_residual": ab[2]})
+        # the fit first: where P = αM + βQ + E, ‖P − Pᵀ‖ ≤ 2‖E‖ + |α|‖M − Mᵀ‖ + |β|‖Q − Qᵀ‖, a
+        # bound that decides P's symmetry without its own pass over P when it is far inside;
+        # a P whose first row is not its first column (gyroscopic) is tested first, as before
+        if "P" not in memo and not np.array_equal(P[0], P[:, 0]):
+            sym("P", P)
+        ab = rayleigh_fit(M, P, Q, rayleigh_tol, residual=True) if memo.get("P", True) else None
+        if ab is not None and "P" not in memo and "M" in asym and "Q" in asym:
+            bound = 2 * ab[2] + abs(ab[0]) * asym["M"] + abs(ab[1]) * asym["Q"]
+            nP = norms["P"] if "P" in norms else fro(P)
+            if 2 * bound <= sym_tol * nP:
+                memo["P"] = True
+        if ab is not None and sym("P", P):
+            return ("proportional", f"P = {ab[0]:.6g} M + {ab[1]:.6g} Q (Rayleigh damping)",
+                    {"alpha": ab[0], "beta": ab[1], "fit_residual": ab[2]})
     what = "complex M, P, Q: " if complex_problem else ""
     if pd and cond <= companion_cond:
         return "companion", f"{what}M symmetric positive definite: mass-normalized companion", {}
@@ -265,7 +291,7 @@ def solve_qep(M, P, Q, *, solver: str = "auto", sym_tol: float = 1e-13,
     if scaled:  # factors in logarithms: γ²δ, γδ, δ may each be out of range, the products not
         M, P, Q = _scaled(M, 2 * lg + ld), _scaled(P, lg + ld), _scaled(Q, ld)
     norms = (fro(M), fro(P), fro(Q)) if scaled else norms0
-    memo = {}
+    memo = {"fro": dict(zip("MPQ", norms))}
     name, reason, extras = choose_solver(M, P, Q, sym_tol=sym_tol, rayleigh_tol=rayleigh_tol,
                                          memo=memo, companion_cond=companion_cond)
     if scaled and name == "companion":  # no mass normalization of a problem scaled for range
@@ -278,9 +304,11 @@ def solve_qep(M, P, Q, *, solver: str = "auto", sym_tol: float = 1e-13,
     if name in ("eigh", "proportional") and complex_problem:
         raise SolverError(f"solver {name!r} needs real M, P, Q")
     if left == "auto":
-        left = not all(memo[k] if k in memo else is_symmetric(A, sym_tol)
+        left = not all(memo[k] if k in memo else is_symmetric(A, sym_tol, norm=memo["fro"][k])
                        for k, A in (("M", M), ("Q", Q), ("P", P)))
     opts = {**extras, "scale": scale, "left": bool(left), "L": memo.get("L")}
+    if "diagonal" in memo:
+        opts["diagonal"] = memo["diagonal"]
     if scaled:
         reason += (f"; scaled s = γμ (γ = 1e{lg / np.log(10):.1f}, δ = 1e{ld / np.log(10):.1f}): "
                    f"magnitudes out of range")

@@ -227,12 +227,20 @@ def backward_errors(ops, s, X, norms):
 def conditions(s, X, Yc, MX, PX, norms):
     """κ per pair, with ``Yc`` the conjugated left vectors (yᴴ = Ycᵀ) and MX, PX the products."""
     s = np.asarray(s)
-    num = weights(s, norms) * colnorm(X) * colnorm(Yc)
+    w = weights(s, norms)
+    num = w * colnorm(X) * colnorm(Yc)
     den = np.zeros(s.size, complex)
     for r in _row_blocks(X):
         den += np.einsum("ij,ij->j", Yc[r], _derivative(MX[r], PX[r], s))
     den = np.abs(den)
-    return _unreverse(_ratio(num, den), s, den)
+    return fixed_zero(_unreverse(_ratio(num, den), s, den), w)
+
+
+def fixed_zero(kappa, w):
+    """κ = 0 where w(s) = 0: s = 0 with Q = 0 (or M = P = Q = 0) stays an eigenvalue of every
+    perturbation of the normwise class (‖ΔQ‖ ≤ η‖Q‖ = 0), whatever yᴴ(2sM + P)x (0 at a
+    defective zero: the ratio 0/0), so its condition number is 0, not ∞."""
+    return np.where(w == 0, 0.0, kappa)
 
 
 def componentwise(ops, s, X, Yc, *, abs_ops=None):
@@ -255,8 +263,8 @@ def componentwise(ops, s, X, Yc, *, abs_ops=None):
     for r in _row_blocks(X):  # the products, residual and |·| bound one block of rows at a time
         MX, PX = M[r] @ X, P[r] @ X
         R = np.abs(_residual(MX, PX, Q[r] @ X, s))
-        D = np.where(big, aM[r] @ AX + (aP[r] @ AX) * a + (aQ[r] @ AX) * (a * a),
-                     (aM[r] @ AX) * (a * a) + (aP[r] @ AX) * a + aQ[r] @ AX)
+        AMX, APX, AQX = aM[r] @ AX, aP[r] @ AX, aQ[r] @ AX  # each product once, both forms
+        D = np.where(big, AMX + APX * a + AQX * (a * a), AMX * (a * a) + APX * a + AQX)
         eta_c = np.maximum(eta_c, np.max(_ratio(R, D), axis=0, initial=0.0))
         num += np.einsum("ij,ij->j", np.abs(Yc[r]), D)
         den += np.einsum("ij,ij->j", Yc[r], _derivative(MX, PX, s))

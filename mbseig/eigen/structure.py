@@ -58,9 +58,10 @@ def _antisymmetric_sumsq(A, block=64):
     return total
 
 
-def is_symmetric(A, tol) -> bool:
-    """‖A − Aᵀ‖_F ≤ tol ‖A‖_F (a zero matrix is symmetric)."""
-    nA = fro(A)
+def is_symmetric(A, tol, *, norm=None, found=None) -> bool:
+    """‖A − Aᵀ‖_F ≤ tol ‖A‖_F (a zero matrix is symmetric).  ``norm``: ‖A‖_F if known;
+    ``found``: a dict that receives ‖A − Aᵀ‖_F as "asymmetry" (where it was computed)."""
+    nA = fro(A) if norm is None else norm
     if nA == 0:
         return True
     # fast path when the threshold (tol‖A‖)² is far above what underflowed squares can add
@@ -68,8 +69,14 @@ def is_symmetric(A, tol) -> bool:
             nA * nA <= SUMSQ_HI and (tol * nA) ** 2 >= 1e-190:
         ss = _antisymmetric_sumsq(np.asarray(A))
         if ss is not None:
-            return float(np.sqrt(ss)) <= tol * nA
-    return fro(A - A.T) <= tol * nA
+            a = float(np.sqrt(ss))
+            if found is not None:
+                found["asymmetry"] = a
+            return a <= tol * nA
+    a = fro(A - A.T)
+    if found is not None:
+        found["asymmetry"] = a
+    return a <= tol * nA
 
 
 def rayleigh_fit(M, P, Q, tol, *, probes=None, seed=0, residual=False):

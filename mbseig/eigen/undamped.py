@@ -65,6 +65,7 @@ def undamped_pairs(w, mv_norm, r_norm, a, vr, alpha, beta, fit_residual, norms):
         # can be, so that κ is never understated by the fit
         den = np.abs((2 * S + c) * twice(a) + be * twice(vr)) - fit
         kappa = np.where(den > 0, weight / np.where(den > 0, den, 1), np.inf)
+        kappa = np.where(weight == 0, 0, kappa)  # s = 0 with Q = 0: fixed (measures.fixed_zero)
         return s, eta.astype(float), kappa.astype(float)
 
 

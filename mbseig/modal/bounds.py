@@ -45,12 +45,20 @@ def _pivoted_r(X):
     function's checks (≈ 40 µs, once per cluster); scipy's function for a non-finite X or a
     LAPACK complaint (its messages)."""
     if np.all(np.isfinite(X)):
-        geqp3 = sla.get_lapack_funcs("geqp3", (X,))
-        lwork = int(geqp3(X, lwork=-1)[-2][0].real)
+        key = (X.dtype.char, X.shape)
+        if key not in _GEQP3:  # the routine and its workspace query depend on these alone
+            if len(_GEQP3) > 256:
+                _GEQP3.clear()
+            geqp3 = sla.get_lapack_funcs("geqp3", (X,))
+            _GEQP3[key] = geqp3, int(geqp3(X.copy(), lwork=-1)[-2][0].real)
+        geqp3, lwork = _GEQP3[key]
         qr, _, _, _, info = geqp3(X, lwork=lwork, overwrite_a=1)
         if info == 0:
             return qr
     return sla.qr(X, mode="r", pivoting=True)[0]
+
+
+_GEQP3 = {}  # (dtype, shape) -> (geqp3, its optimal lwork): one query per cluster shape
 
 
 def nullity(sol, mean, spread, scale, max_order=2000):
@@ -119,16 +127,21 @@ class AllPairs:
 
     def query(self, points, k=2):
         z = points[:, 0] + 1j * points[:, 1]
-        d = np.sort(np.abs(z[:, None] - self.z[None, :]), axis=1)[:, :k]
-        return d, None
+        d = np.abs(z[:, None] - self.z[None, :])
+        if k < d.shape[1]:  # the k smallest of each row, sorted: a partition, not a full sort
+            d = np.partition(d, k - 1, axis=1)[:, :k]
+        return np.sort(d, axis=1), None
 
-    def query_ball_point(self, x, r):
+    def query_ball_point(self, x, r, return_length=False):
         x = np.asarray(x, float)
         single = x.ndim == 1
         x = np.atleast_2d(x)
         d = np.abs((x[:, 0] + 1j * x[:, 1])[:, None] - self.z[None, :])
         r = np.broadcast_to(np.asarray(r, float), (x.shape[0],))
         mask = d <= r[:, None]
+        if return_length:
+            counts = mask.sum(axis=1)
+            return counts[0] if single else counts
         cols, out, i = np.nonzero(mask)[1].tolist(), [], 0  # row by row, ascending columns
         for count in mask.sum(axis=1).tolist():
             out.append(cols[i:i + count])
@@ -157,7 +170,7 @@ def _holder_blocks(tree, points, S, eta, safety, first_reach):
     k = np.full(points.shape[0], 2)
     while True:
         reach = np.minimum(safety * S * eta ** (1.0 / k), first_reach)
-        counts = np.array([len(c) for c in tree.query_ball_point(points, reach)])
+        counts = np.asarray(tree.query_ball_point(points, reach, return_length=True))
         grown = counts > k
         if not grown.any():
             return counts
@@ -212,22 +225,22 @@ def error_bounds(sol, *, safety=10.0, stability_rtol=1e-12, stability_atol=0.0, 
         reach = np.minimum(2 * safety * radius / unit, 4.0)  # beyond 4 max|s|: everything
         # one query for all points (radius 0 still finds exact duplicates); the candidates are
         # tested in one vectorized comparison
-        hits = tree.query_ball_point(points, reach)
-        counts = np.fromiter((len(h) for h in hits), int, k)
-        if counts.sum() > k:
+        counts = np.asarray(tree.query_ball_point(points, reach, return_length=True))
+        if counts.sum() > k:  # some point has a neighbour besides itself: the lists
+            hits = tree.query_ball_point(points, reach)
             ii = np.repeat(np.arange(k), counts)
             jj = np.fromiter((j for h in hits for j in h), int, int(counts.sum()))
             ok = (jj != ii) & (np.abs(s[ii] - s[jj]) <= safety * (radius[ii] + radius[jj]))
             pairs = set(zip(np.minimum(ii, jj)[ok].tolist(), np.maximum(ii, jj)[ok].tolist()))
         cluster = components(k, pairs)
     err = err.copy()
-    labels, inverse, counts = np.unique(cluster, return_inverse=True, return_counts=True)
-    alone = (counts[inverse] == 1) & ~np.isfinite(err)  # κ = ∞ alone: a defective root, Hölder
+    sizes = np.bincount(cluster, minlength=k)  # members per label (labels are indices < k)
+    alone = (sizes[cluster] == 1) & ~np.isfinite(err)  # κ = ∞ alone: a defective root, Hölder
     err[alone], block[alone] = holder2[alone], 2
     geometric = np.ones(k, int)
-    for c in labels[counts > 1]:
+    for c in np.flatnonzero(sizes > 1):  # the clusters, in ascending label
         members = np.flatnonzero(cluster == c)
-        mean0 = np.mean(s[members])
+        mean0 = s[members].sum() / members.size  # np.mean's own sum and division
         spread0 = float(np.max(np.abs(s[members] - mean0)))
         g = numerical_rank(sol.vectors[:, members], rank_tol)
         if g < members.size:  # the vectors alone do not show a full set: T's singular values

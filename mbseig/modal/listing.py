@@ -96,8 +96,6 @@ def listing(sol, b, *, N, coordinate_names, n_dominant, eta_warn, tolerances_use
     accounting = account(sol, rigid, near_real, listed, rep, g_rigid)
     sel = np.flatnonzero(listed)
     s = s_all[sel].copy()
-    eta, kappa, X = sol.backward_error[sel], sol.condition[sel], sol.vectors[:, sel]
-    Y = None if sol.left_vectors is None else sol.left_vectors[:, sel]
     is_rigid, real_listed = rigid[sel], near_real[sel]
     mult = np.where(is_rigid, 0, np.where(real_listed | ~real_problem, 1, 2))
     if rep.size:  # the rigid-body eigenvalues, shared out over the listed rigid modes
@@ -107,21 +105,19 @@ def listing(sol, b, *, N, coordinate_names, n_dominant, eta_warn, tolerances_use
     flip = real_problem & (s.imag < 0)  # a rigid or near-real member below the axis
     if np.any(flip):
         s = np.where(flip, np.conj(s), s)
-        X = X.astype(complex)
-        X[:, flip] = np.conj(X[:, flip])
-        if Y is not None:
-            Y = Y.astype(complex)
-            Y[:, flip] = np.conj(Y[:, flip])
     if real_problem:  # a near-real pair: two real eigenvalues within tolerance, listed with ω = 0
         s = np.where(real_listed, s.real + 0j, s)
-    err, tol, tol_s = err_all[sel], tol_all[sel], tol_re_all[sel]
     delta, omega = 0.0 - s.real, s.imag  # 0.0 − x: no negative zeros in reports
     wn = np.abs(s)
     order = np.lexsort((omega, delta, wn))
-    s, eta, kappa, X, err, tol, tol_s, delta, omega, wn, is_rigid, mult = (
-        a[..., order] for a in (s, eta, kappa, X, err, tol, tol_s, delta, omega, wn, is_rigid, mult))
+    s, delta, omega, wn, is_rigid, mult, flip = (
+        a[order] for a in (s, delta, omega, wn, is_rigid, mult, flip))
     sel = sel[order]
-    Y = None if Y is None else Y[:, order]
+    eta, kappa = sol.backward_error[sel], sol.condition[sel]
+    err, tol, tol_s = err_all[sel], tol_all[sel], tol_re_all[sel]
+    X = _columns(sol.vectors, sel, flip)  # the vectors gathered once, in the listed order
+    Y = sol.left_vectors
+    Y = X if Y is sol.vectors else (None if Y is None else _columns(Y, sel, flip))
     stability_ = stability(delta, tol_s, is_rigid)
     kind = []
     for k in range(s.size):
@@ -158,6 +154,15 @@ def listing(sol, b, *, N, coordinate_names, n_dominant, eta_warn, tolerances_use
         all_eigenvalues=s_all, tolerances={**tolerances_used, **numeric_details},
         left_vectors=Y, multiplicity=mult, accounting=accounting, coverage=coverage,
         partial=sol.partial, complex_problem=sol.complex_problem, flags=flags)
+
+
+def _columns(V, sel, flip):
+    """V[:, sel], conjugated where ``flip`` (a member below the real axis listed above it)."""
+    out = V[:, sel]
+    if np.any(flip):
+        out = out.astype(complex)
+        out[:, flip] = np.conj(out[:, flip])
+    return out
 
 
 def account(sol, rigid, near_real, listed, rep, g_rigid=0):
