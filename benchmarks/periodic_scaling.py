@@ -13,13 +13,15 @@ Mathieu equations θ'' + (g/l + (kc/m) λ_j − (A w²/l) cos wt) θ = 0, λ_j =
 tongue (cases/pendulum_shaken_pivot.toml), so the dominant multiplier is that of the single
 pendulum, μ = −1.36824 (checked against the full method at every N).
 
-Measured for each N (wall time, one BLAS thread, median of --repeat runs): the linearization
-(timed model, reference motion, sampled linearization), the full monodromy (two estimates,
-every multiplier, ``periodic_analysis``), and the K largest multipliers by the partial method
-(``periodic_partial``, two estimates).  Growth exponents are fitted on log(time) against
-log(N).
+Measured for each N (wall time and the process's CPU time, one BLAS thread, median of --repeat
+cold runs): the linearization (timed model, reference motion, sampled linearization), the full
+monodromy on that linearization (two estimates, every multiplier, ``periodic_analysis``), and
+the K largest multipliers by the partial method (``periodic_partial``, two estimates).  On a
+shared machine the CPU time is the steadier figure.  Growth exponents are fitted on log(time)
+against log(N).
 
-    python benchmarks/periodic_scaling.py [--sizes 10 25 50 75] [--partial-max 10] [--k 2]
+    python benchmarks/periodic_scaling.py [--sizes 15 50 100 150] [--partial-max 10] [--k 2]
+        [--repeat 5]
 """
 
 from __future__ import annotations
@@ -103,36 +105,52 @@ def single_pendulum_multiplier(g=9.81, l=1.0, A=0.1, w=6.3):
     return mu[np.argmax(np.abs(mu))]
 
 
-def timed(fn, repeat):
-    times, out = [], None
-    for _ in range(repeat):
-        from mbseig.studies.periodic import forget_kept
+def cold_runs(spec, repeat, k=None):
+    """Median wall times of cold runs (nothing kept between runs): the linearization, then the
+    full monodromy on that linearization (two estimates, bounds, verdict), then, with ``k``,
+    the partial method on it; the last run's results."""
+    from mbseig.studies.periodic import (
+        forget_kept,
+        periodic_analysis,
+        periodic_linearization,
+    )
+    from mbseig.studies.periodic_partial import periodic_partial
 
-        forget_kept()  # a benchmark measures cold runs
-        t = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t)
-    return statistics.median(times), out
+    times = {key: [] for key in ("linearization", "full", "partial", "linearization_cpu",
+                                 "full_cpu")}
+    out = None
+    for _ in range(repeat):
+        forget_kept()
+        t0, c0 = time.perf_counter(), time.process_time()
+        lin = periodic_linearization(spec)
+        t1, c1 = time.perf_counter(), time.process_time()
+        a = periodic_analysis(spec)  # reuses the linearization just made
+        t2, c2 = time.perf_counter(), time.process_time()
+        times["linearization"].append(t1 - t0)
+        times["full"].append(t2 - t1)
+        times["linearization_cpu"].append(c1 - c0)
+        times["full_cpu"].append(c2 - c1)
+        p = None
+        if k:
+            p = periodic_partial(spec, k=k)
+            times["partial"].append(time.perf_counter() - t2)
+        out = (lin, a, p)
+    return {key: statistics.median(v) for key, v in times.items() if v}, out
 
 
 def run(n, directory, *, k, partial, repeat):
     from mbseig.casefile import read_case
-    from mbseig.studies.periodic import periodic_analysis, periodic_linearization
-    from mbseig.studies.periodic_partial import periodic_partial
 
     path = Path(directory) / f"chain{n}.toml"
     path.write_text(CASE.format(n=n))
     spec = read_case(path)
     row = {"n": n}
-    row["linearization"], lin = timed(lambda: periodic_linearization(spec), repeat)
+    medians, (lin, a, p) = cold_runs(spec, repeat, k if partial else None)
+    row.update(medians)
     row["coordinates"], row["dof"] = lin.timed.base.n, lin.system.dof
-    t_full, a = timed(lambda: periodic_analysis(spec), repeat)
-    row["full"] = t_full - row["linearization"]
     row["mu_full"] = complex(a.floquet.multipliers[0])
     row["bound_full"] = float(a.floquet.error_bounds[0])
-    if partial:
-        t_part, p = timed(lambda: periodic_partial(spec, k=k), repeat)
-        row["partial"] = t_part - row["linearization"]
+    if p is not None:
         row["mu_partial"] = complex(p.multipliers[0])
         row["products"] = p.products
     return row
@@ -148,7 +166,7 @@ def fit(rows, key):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--sizes", type=int, nargs="+", default=[10, 25, 50, 75])
+    ap.add_argument("--sizes", type=int, nargs="+", default=[15, 50, 100, 150])
     ap.add_argument("--partial-max", type=int, default=10,
                     help="run the partial method up to this N (it is slower here: see docs)")
     ap.add_argument("--k", type=int, default=2, help="multipliers of the partial method")
@@ -162,8 +180,10 @@ def main(argv=None):
             row = run(n, d, k=args.k, partial=n <= args.partial_max, repeat=args.repeat)
             rows.append(row)
             line = (f"N = {n:4d}: {row['coordinates']:4d} coordinates, {row['dof']:4d} DOF; "
-                    f"linearization {row['linearization']:7.2f} s, full monodromy "
-                    f"{row['full']:8.2f} s (|mu| = {abs(row['mu_full']):.10f} "
+                    f"linearization {row['linearization']:7.2f} s "
+                    f"({row['linearization_cpu']:.2f} s CPU), full monodromy "
+                    f"{row['full']:8.2f} s ({row['full_cpu']:.2f} s CPU) (|mu| = "
+                    f"{abs(row['mu_full']):.10f} "
                     f"± {row['bound_full']:.1e}, {abs(row['mu_full'] - ref):.1e} from the single "
                     "pendulum)")
             if "partial" in row:
@@ -171,7 +191,9 @@ def main(argv=None):
                          f"products, |mu| differs by {abs(row['mu_partial'] - row['mu_full']):.1e}")
             print(line, flush=True)
     print(f"growth with the DOF r (time ~ r^p): linearization p = {fit(rows, 'linearization'):.2f},"
-          f" full monodromy p = {fit(rows, 'full'):.2f}, partial p = {fit(rows, 'partial'):.2f}")
+          f" full monodromy p = {fit(rows, 'full'):.2f}, partial p = {fit(rows, 'partial'):.2f}; "
+          f"CPU: linearization p = {fit(rows, 'linearization_cpu'):.2f}, full monodromy "
+          f"p = {fit(rows, 'full_cpu'):.2f}")
     return 0
 
 

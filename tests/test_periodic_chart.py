@@ -29,8 +29,9 @@ def test_chart_puts_the_first_tongue_where_mathieu_says(tmp_path, capsys):
     """A coarse 6 × 2 grid (w from 5 to 8, A = 0.05 and 0.15, every point at least 0.06 rad/s
     from a tongue edge): each verdict is unstable exactly inside the principal tongue and
     critical outside; inside, max|μ| > 1 beyond its bound; each grid bracket where the verdict
-    changes along w holds the Mathieu edge and has the flip kind (μ = −1); chart.png is a PNG
-    and chart.json the grid that the command printed."""
+    changes along w holds the Mathieu edge, has the flip kind (μ = −1) and is located to the
+    Mathieu edge within 1e-8 relative; chart.png is a PNG and chart.json the grid that the
+    command printed."""
     out_dir = tmp_path / "chart"
     assert main(["sweep", str(CASE), "--param", "w=5:8:6", "--param", "A=0.05:0.15:2",
                  "--out", str(out_dir), "--json", "--no-progress"]) == 0
@@ -54,6 +55,9 @@ def test_chart_puts_the_first_tongue_where_mathieu_says(tmp_path, capsys):
         lo, hi = tongue(e["at"]["A"])
         edge = lo if e["stability"] == "loss" else hi
         assert e["bracket"][0] < edge < e["bracket"][1] and e["kind"] == "flip"
+        # located along w to 1e-8 relative (Brent on det(I + Φ)): scipy's Mathieu edge
+        assert abs(e["value"] - edge) <= 1e-8 * edge and e["method"].startswith("Brent"), e
+    assert out["tolerances"]["boundaries"] == "located along w to 1e-08 relative"
     assert (out_dir / "chart.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     saved = json.loads((out_dir / "chart.json").read_text())
     assert saved["verdicts"] == out["verdicts"]

@@ -4,8 +4,9 @@ recovery), located to 1e-8 relative; ``--out DIR`` also gets ``sweep.json``.
 
 With two ranges (``--param A=...:...:n --param B=...:...:m``) it writes the stability chart over
 the grid (the Ince–Strutt chart of a Mathieu-type system): ``chart.png`` and ``chart.json`` (the
-verdict, max|μ| and the deciding bound at every point, and the grid brackets where the verdict
-changes along the first parameter) in ``--out DIR`` (default ``sweep-CASE``)."""
+verdict, max|μ| and the deciding bound at every point, and where the verdict changes along
+the first parameter, each grid bracket located to 1e-8 relative) in ``--out DIR`` (default
+``sweep-CASE``)."""
 
 from __future__ import annotations
 
@@ -93,6 +94,7 @@ def _chart(args, spec, ranges, fixed, progress) -> int:
           + ", ".join(f"{n} {v}" for v, n in counts.items()))
     for e in out["boundaries"]:
         print(f"  {e['verdicts'][0]} -> {e['verdicts'][1]} ({e['kind']}) at {n2} = "
-              f"{e['at'][n2]:.8g}: {n1} in [{e['bracket'][0]:.8g}, {e['bracket'][1]:.8g}]")
+              f"{e['at'][n2]:.8g}: {n1} = {e['value']:.12g} (in [{e['bracket'][0]:.8g}, "
+              f"{e['bracket'][1]:.8g}]; {e['method']})")
     print(f"wrote {folder / 'chart.json'} and {folder / 'chart.png'}")
     return 0

@@ -26,6 +26,7 @@ constraint velocity and acceleration terms of a rheonomic constraint follow from
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -68,44 +69,27 @@ class TrigSeries:
             coeffs = coeffs * np.exp(-2j * math.pi * k * offset / period).reshape(shape)
         return cls(coeffs, N, float(period), drift)
 
-    def jet(self, t):
-        """(f, f', f'') at t."""
-        T = self.period
-        w = 2.0 * math.pi / T
-        k = np.arange(self.coeffs.shape[0])
+    @functools.cached_property
+    def _real(self):
+        """(Re c, Im c) as (K, size), k and the weights: two matrix-vector products a value."""
+        flat = self.coeffs.reshape(self.coeffs.shape[0], -1)
+        k = np.arange(flat.shape[0])
         weight = np.full(k.size, 2.0)
         weight[0] = 1.0
-        base = weight * np.exp(1j * w * k * t)
-        shape = (-1,) + (1,) * (self.coeffs.ndim - 1)
-        out = []
-        for order in (0, 1, 2):
-            fac = (1j * w * k) ** order
-            if self.samples % 2 == 0:
-                base[-1] = np.exp(1j * w * k[-1] * t)  # the Nyquist cosine, weight 1
-                if order:
-                    fac[-1] = 0.0
-            value = np.real(np.sum((base * fac).reshape(shape) * self.coeffs, axis=0))
-            out.append(value + np.asarray(self.drift) * (t / T if order == 0 else
-                                                          (1.0 / T if order == 1 else 0.0)))
-        return out
+        if self.samples % 2 == 0:
+            weight[-1] = 1.0  # the Nyquist cosine; its derivatives are left out (ambiguous)
+        return np.ascontiguousarray(flat.real), np.ascontiguousarray(flat.imag), k, weight
 
     def __call__(self, t, order=0):
         """The value (order 0) or its first / second time derivative at t."""
-        T = self.period
-        w = 2.0 * math.pi / T
-        k = np.arange(self.coeffs.shape[0])
-        weight = np.full(k.size, 2.0)
-        weight[0] = 1.0
-        fac = (1j * w * k) ** order
-        if self.samples % 2 == 0:
-            weight[-1] = 1.0  # the Nyquist cosine; its derivative is left out (ambiguous)
-            if order:
-                fac[-1] = 0.0
-        terms = (weight * fac * np.exp(1j * w * k * t)).reshape(
-            (-1,) + (1,) * (self.coeffs.ndim - 1))
-        periodic = np.real(np.sum(terms * self.coeffs, axis=0))
-        secular = np.asarray(self.drift) * (t / T if order == 0 else (1.0 / T if order == 1 else 0.0))
-        return periodic + secular
+        re, im, k, weight = self._real
+        w = 2.0 * math.pi / self.period
+        z = weight * (1j * w * k) ** order * np.exp(1j * w * k * t)
+        if order and self.samples % 2 == 0:
+            z[-1] = 0.0
+        value = z.real @ re - z.imag @ im
+        slope = (t, 1.0, 0.0)[order] / self.period  # of the secular part s t / T
+        return value.reshape(self.coeffs.shape[1:]) + np.asarray(self.drift) * slope
 
 
 @dataclass(frozen=True)
@@ -115,9 +99,6 @@ class _Leaf:
     where: tuple  # ("constraints" | "forces", index, field[, subfield]) or ("g_const",)
     element: str
     series: TrigSeries
-
-    def value(self, t, T=None, order=0):
-        return self.series(t, order)
 
 
 def _leaves_of(obj, prefix):
@@ -178,26 +159,46 @@ class TimedModel:
         """Names of the elements that change with time."""
         return tuple(dict.fromkeys(leaf.element for leaf in self.leaves))
 
-    def _element(self, kind, k, t):
-        """Element k of ``kind`` (constraints / forces) with its numbers at t."""
-        key = (kind, k, float(t))
-        kept = self._kept.setdefault("elements", {})
-        if key in kept:
-            return kept[key]
-        if len(kept) > 256:
-            kept.clear()
-        kept[key] = el = self._element_at(kind, k, t)
-        return el
-
     def _element_at(self, kind, k, t):
         el = getattr(self.base, kind)[k]
-        for leaf in self.leaves:
-            if leaf.where[:2] == (kind, k):
-                value = leaf.value(t)
-                if isinstance(_get(self.base, leaf.where), float):
-                    value = float(value)
-                el = _replace(el, leaf.where[2:], value)
+        values = self._leaf_values(t, 0)
+        for j in self._by_element().get((kind, k), ()):
+            leaf, value = self.leaves[j], values[j]
+            if isinstance(_get(self.base, leaf.where), float):
+                value = float(value)
+            el = _replace(el, leaf.where[2:], value)
         return el
+
+    def _by_element(self):
+        if "by_element" not in self._kept:
+            by = self._kept["by_element"] = {}
+            for j, leaf in enumerate(self.leaves):
+                by.setdefault(leaf.where[:2], []).append(j)
+        return self._kept["by_element"]
+
+    def _leaf_values(self, t, order):
+        """Every leaf's value (order 0) or time derivative at t, by one product over the
+        stacked coefficients of all leaves (the last few instants kept)."""
+        kept = self._kept.setdefault("values", {})
+        key = (float(t), order)
+        if key not in kept:
+            if len(kept) > 24:
+                kept.clear()
+            series = [leaf.series for leaf in self.leaves]  # one N and T (sample_time)
+            if "stacked" not in self._kept:
+                parts = [s._real for s in series]
+                cuts = np.cumsum([0] + [p[0].shape[1] for p in parts])
+                drift = np.concatenate([np.broadcast_to(np.asarray(s.drift, dtype=float),
+                                                        s.coeffs.shape[1:]).ravel()
+                                        for s in series])
+                self._kept["stacked"] = (TrigSeries(np.hstack([p[0] + 1j * p[1] for p in parts]),
+                                                    series[0].samples, series[0].period, drift),
+                                         cuts)
+            stacked, cuts = self._kept["stacked"]
+            flat = stacked(t, order)
+            kept[key] = [flat[a:b].reshape(s.coeffs.shape[1:]) for a, b, s
+                         in zip(cuts[:-1], cuts[1:], series)]
+        return kept[key]
 
     @property
     def _timed_constraints(self):
@@ -213,11 +214,11 @@ class TimedModel:
             return self.base
         groups = {"constraints": list(self.base.constraints), "forces": list(self.base.forces)}
         for kind, k in {leaf.where[:2] for leaf in self.leaves if leaf.where[0] != "g_const"}:
-            groups[kind][k] = self._element(kind, k, t)
+            groups[kind][k] = self._element_at(kind, k, t)
         g_const = self.base.g_const
         for leaf in self.leaves:
             if leaf.where == ("g_const",):
-                g_const = leaf.value(t)
+                g_const = leaf.series(t)
         model = dataclasses.replace(self.base, constraints=tuple(groups["constraints"]),
                                     forces=tuple(groups["forces"]), g_const=g_const)
         if len(models) > 16:
@@ -240,45 +241,54 @@ class TimedModel:
         off = np.cumsum([0] + [c.n_eq for c in self.base.constraints])
         return [(k, off[k], off[k + 1]) for k in self._timed_constraints]
 
-    def _taylor(self, k, t):
-        """The elements of constraint k on the quadratic Taylor curve of its numbers about t,
-        ℓ(ε) = ℓ + ε ℓ' + ε² ℓ''/2 at ε = −2h … 2h (h = TIME_STEP · T): the five-point
-        differences along it give Φ_t and Φ_tt exactly when Φ is at most quadratic in its
-        numbers (natural coordinates; a driver angle, a pivot's position enter linearly)."""
-        key = ("taylor", k, float(t))
+    def _taylor_all(self, t):
+        """{k: constraint k on the Taylor curve ℓ(ε) = ℓ + ε ℓ' + ε² ℓ''/2 of its numbers about t
+        at ε = −2h … 2h (h = TIME_STEP · T)} of every time-dependent k: five-point differences
+        along it give Φ_t, Φ_tt exactly when Φ is at most quadratic in its numbers (natural
+        coordinates; a driver angle, a pivot's position enter linearly)."""
+        key = float(t)
         kept = self._kept.setdefault("taylor", {})
         if key in kept:
             return kept[key]
-        if len(kept) > 64:
+        if len(kept) > 8:
             kept.clear()
         h = TIME_STEP * self.period
-        jets = [(leaf, leaf.series.jet(t)) for leaf in self.leaves
-                if leaf.where[:2] == ("constraints", k)]
-        out = []
-        for j in (-2, -1, 0, 1, 2):
-            el, e = self.base.constraints[k], j * h
-            for leaf, (v, v1, v2) in jets:
-                value = v + e * v1 + 0.5 * e * e * v2
-                if isinstance(_get(self.base, leaf.where), float):
-                    value = float(value)
-                el = _replace(el, leaf.where[2:], value)
-            out.append(el)
+        out = {}
+        values = [self._leaf_values(t, order) for order in (0, 1, 2)]
+        for (kind, k), idx in self._by_element().items():
+            if kind != "constraints":
+                continue
+            jets = [(self.leaves[i], [v[i] for v in values]) for i in idx]
+            els = []
+            for j in (-2, -1, 0, 1, 2):
+                el, e = (self.at(t) if j == 0 else self.base).constraints[k], j * h
+                for leaf, (v, v1, v2) in jets if j else ():  # j = 0: the element at t
+                    value = v + e * v1 + 0.5 * e * e * v2
+                    if isinstance(_get(self.base, leaf.where), float):
+                        value = float(value)
+                    el = _replace(el, leaf.where[2:], value)
+                els.append(el)
+            out[k] = els
         kept[key] = (h, out)
         return h, out
 
     @staticmethod
     def _differences(h, f):
-        d1 = (f[0] - 8 * f[1] + 8 * f[3] - f[4]) / (12 * h)
-        d2 = (-f[0] + 16 * f[1] - 30 * f[2] + 16 * f[3] - f[4]) / (12 * h * h)
-        return d1, d2
+        return ((f[0] - 8 * f[1] + 8 * f[3] - f[4]) / (12 * h),
+                (-f[0] + 16 * f[1] - 30 * f[2] + 16 * f[3] - f[4]) / (12 * h * h))
 
     def phi_time(self, q, t):
-        """(Φ, Φ_t, Φ_tt) at (q, t)."""
+        """(Φ, Φ_t, Φ_tt) at (q, t) (the five-point differences of every time-dependent
+        constraint at once)."""
         phi = self.at(t).phi(q)
         dt, dtt = np.zeros_like(phi), np.zeros_like(phi)
-        for k, a, b in self._rows():
-            h, els = self._taylor(k, t)
-            dt[a:b], dtt[a:b] = self._differences(h, [el.phi(q) for el in els])
+        rows = self._rows()
+        if rows:
+            h, els = self._taylor_all(t)
+            at = np.concatenate([np.arange(a, b) for _, a, b in rows])
+            f = [phi[at] if j == 2 else np.concatenate([els[k][j].phi(q) for k, _, _ in rows])
+                 for j in range(5)]
+            dt[at], dtt[at] = self._differences(h, f)
         return phi, dt, dtt
 
     @property
@@ -298,14 +308,20 @@ class TimedModel:
         return self._kept["jac_timed"]
 
     def phi_qt(self, q, t):
-        """∂Φ_q/∂t at (q, t) (dense)."""
+        """∂Φ_q/∂t at (q, t) (dense; the differences of every constraint at once)."""
         out = np.zeros((self.base.n_constraints, self.n))
-        for k, a, b in self._rows():
-            if k not in self._jac_timed:
-                continue
-            c = self.base.constraints[k]
-            h, els = self._taylor(k, t)
-            out[a:b, c.idx] += self._differences(h, [el.jac(q) for el in els])[0]
+        timed = set(self._jac_timed)
+        rows = [row for row in self._rows() if row[0] in timed]
+        if not rows:
+            return out
+        h, els = self._taylor_all(t)
+        blocks = [[els[k][j].jac(q) for k, _, _ in rows] for j in (0, 1, 3, 4)]
+        f = [np.concatenate([x.ravel() for x in blk]) for blk in blocks]
+        d1 = self._differences(h, [f[0], f[1], 0.0, f[2], f[3]])[0]  # Φ_qt: no middle term
+        start = 0
+        for (k, a, b), x in zip(rows, blocks[0]):
+            out[a:b, self.base.constraints[k].idx] += d1[start:start + x.size].reshape(x.shape)
+            start += x.size
         return out
 
 
@@ -372,7 +388,7 @@ def sample_time(build_at, period, *, samples=16, check=3):
             ref = build_at(t)
             for leaf in leaves:
                 want = np.asarray(_get(ref, leaf.where), float)
-                got = leaf.value(t, T)
+                got = leaf.series(t)
                 err = max(err, float(np.max(np.abs(got - want))) / max(1.0, float(np.max(np.abs(want)))))
         if err <= 1e-12 or N >= _MAX_SAMPLES:
             return TimedModel(base, T, tuple(leaves), err, N)

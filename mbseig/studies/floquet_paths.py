@@ -7,12 +7,15 @@ the state after one period (:func:`periodic_orbit`).  Numerics of :mod:`mbseig.s
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg as la
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 from scipy.integrate import quad, solve_ivp
 
 from ..errors import CaseError
@@ -21,8 +24,8 @@ from .floquet import (
     DEFAULT_RTOLS,
     FloquetError,
     LinearPeriodicSystem,
-    positive_period,
     analyze,
+    positive_period,
 )
 
 __all__ = ["first_order", "ConstrainedLinearization", "constrained_system", "null_space_path",
@@ -31,9 +34,18 @@ __all__ = ["first_order", "ConstrainedLinearization", "constrained_system", "nul
 
 # ---- constrained second-order linearization ----------------------------------------------------
 def _jacobian(J, n):
-    """Φ_q (or Φ̇_q) as an m×n array (m = 0 allowed)."""
+    """Φ_q (or Φ̇_q) as an m×n array or CSR matrix (m = 0 allowed; None: no rows)."""
+    if J is None:
+        return np.zeros((0, n))
+    if sp.issparse(J):
+        return sp.csr_matrix(J)
     J = np.asarray(J, dtype=float)
     return J.reshape(-1, n) if J.size else np.zeros((0, n))
+
+
+def _dense(J, n):
+    J = _jacobian(J, n)
+    return J.toarray() if sp.issparse(J) else J
 
 
 @dataclass(frozen=True)
@@ -61,15 +73,25 @@ class NullSpacePath:
 
     def _parts(self, t, k):
         J = _jacobian(self.phi_q(t), self.bases[0].shape[0])
-        n = J.shape[1]
-        try:
-            # Φ_q⁺ = Φ_qᵀ (Φ_q Φ_qᵀ)⁻¹ (no rows: no constraints, P = I)
-            Jp = np.linalg.solve(J @ J.T, J).T if J.shape[0] else np.zeros((n, 0))
-        except np.linalg.LinAlgError:
-            raise FloquetError(f"Φ_q loses rank at t = {t:g} (redundant or singular constraints "
-                               "along the motion)", element="null space") from None
+        if J.shape[0]:
+            # Φ_q⁺ = Φ_qᵀ (Φ_q Φ_qᵀ)⁻¹ applied through a factor of Φ_q Φ_qᵀ (m × m; Φ_q sparse
+            # or dense): Φ_q⁺ Y = Φ_qᵀ solve(Y)
+            JJ = J @ J.T
+            try:  # a sparse Φ_q Φ_qᵀ (chains: banded) by sparse LU, else Cholesky
+                if sp.issparse(JJ) and JJ.nnz <= 0.25 * JJ.shape[0] ** 2:
+                    solve = spla.splu(sp.csc_matrix(JJ)).solve
+                else:
+                    factor = la.cho_factor(JJ.toarray() if sp.issparse(JJ) else JJ)
+                    solve = functools.partial(la.cho_solve, factor)
+            except (la.LinAlgError, RuntimeError):
+                raise FloquetError(f"Φ_q loses rank at t = {t:g} (redundant or singular "
+                                   "constraints along the motion)",
+                                   element="null space") from None
+        else:  # no rows: no constraints, P = I
+            def solve(Y):
+                return Y
         B = self.bases[k]
-        PB = B - Jp @ (J @ B)  # P B without forming the n×n projector: O(n m r)
+        PB = B - J.T @ solve(J @ B)  # P B without forming the n×n projector: O(n m r)
         S = B.T @ PB
         s, V = np.linalg.eigh(S)
         if s[0] < self.min_overlap ** 2:
@@ -77,7 +99,7 @@ class NullSpacePath:
                                f"(overlap {math.sqrt(max(s[0], 0)):.2g}); use more segments",
                                element="null space")
         r = 1.0 / np.sqrt(s)
-        return J, Jp, PB, B, s, V, r
+        return J, solve, PB, B, s, V, r
 
     def basis(self, t, k=None):
         k = self.segment(t) if k is None else k
@@ -87,11 +109,11 @@ class NullSpacePath:
     def derivative(self, t, k=None):
         """(N, Ṅ) at t on segment k (products with the thin factors only: O(n m r + n r²))."""
         k = self.segment(t) if k is None else k
-        J, Jp, PB, B, s, V, r = self._parts(t, k)
+        J, solve, PB, B, s, V, r = self._parts(t, k)
         Jd = _jacobian(self.phi_q_dot(t), J.shape[1])
         # Ṗ B = −(E + Eᵀ) B with E = Φ_q⁺ Φ̇_q P:  E B = Φ_q⁺ (Φ̇_q P B),  Eᵀ B = P Φ̇_qᵀ Φ_q⁺ᵀ B
-        X = Jd.T @ (Jp.T @ B)
-        PdB = -(Jp @ (Jd @ PB) + X - Jp @ (J @ X))
+        X = Jd.T @ solve(J @ B)
+        PdB = -(J.T @ solve(Jd @ PB) + X - J.T @ solve(J @ X))
         Sd = V.T @ (B.T @ PdB) @ V
         sq = np.sqrt(s)
         dk = -1.0 / (sq[:, None] * sq[None, :] * (sq[:, None] + sq[None, :]))
@@ -110,9 +132,9 @@ def null_space_path(phi_q, phi_q_dot, period, *, segments=16, start=None, period
     the SVD).  Raises FloquetError if Φ_q(T) ≠ Φ_q(0) (the motion does not repeat with T).
     """
     T = positive_period(period)
-    J0 = np.asarray(phi_q(0.0), dtype=float)
+    J0 = phi_q(0.0)
     n = J0.shape[-1]
-    J0, JT = _jacobian(J0, n), _jacobian(phi_q(T), n)
+    J0, JT = _dense(J0, n), _dense(phi_q(T), n)
     if np.linalg.norm(JT - J0) > periodic_tol * max(1.0, np.linalg.norm(J0)):
         raise FloquetError(f"Φ_q(T) differs from Φ_q(0) by {np.linalg.norm(JT - J0):.3g}: the "
                            f"motion does not repeat with period {T:g}", element="motion.period")
@@ -126,6 +148,15 @@ def null_space_path(phi_q, phi_q_dot, period, *, segments=16, start=None, period
         bases.append(path.basis(nodes[k + 1], k))
     R = bases[0].T @ bases[-1]
     return NullSpacePath(phi_q, phi_q_dot, nodes, tuple(bases), R)
+
+
+def _operator(A):
+    """A coefficient matrix as given (CSR or dense); None or an all-zero sparse one as None."""
+    if A is None:
+        return None
+    if sp.issparse(A):
+        return A if A.nnz else None
+    return np.asarray(A, dtype=float)
 
 
 def first_order(M, C, K):
@@ -203,30 +234,39 @@ def constrained_system(M, C, K, phi_q, phi_q_dot, period, *, M_dot=None, segment
     def make(k):
         def A(t):
             N, Nd = path.derivative(t, k)
-            Mt = np.asarray(M(t), dtype=float)
+            Mt = _operator(M(t))
             MN = Mt @ N
             G = np.linalg.inv(N.T @ MN)
             H = MN.T @ Nd  # Nᵀ M Ṅ (M symmetric)
-            W = Nd.T @ Mt - N.T @ np.asarray(C(t), dtype=float)
+            Wt = Mt @ Nd  # Wᵀ = M Ṅ − Cᵀ N + Ṁ N
+            Ct = _operator(C(t))
+            if Ct is not None:
+                Wt = Wt - Ct.T @ N
             if M_dot is not None:
-                W = W + N.T @ np.asarray(M_dot(t), dtype=float)
-            Kr = N.T @ np.asarray(K(t), dtype=float) @ N
+                Md = _operator(M_dot(t))
+                if Md is not None:
+                    Wt = Wt + Md @ N
+            WN = Wt.T @ np.hstack([N, Nd])  # [W N, W Ṅ]: W V_y = W Ṅ − W N G H, W V_p = W N G
+            Kt = _operator(K(t))
+            Kr = N.T @ (Kt @ N) if Kt is not None else 0.0
             GH = G @ H
             out = np.empty((2 * r, 2 * r))
             out[:r, :r] = -GH
             out[:r, r:] = G
-            out[r:, :r] = W @ (Nd - N @ GH) - Kr
-            out[r:, r:] = W @ (N @ G)
+            out[r:, :r] = WN[:, r:] - WN[:, :r] @ GH - Kr
+            out[r:, r:] = WN[:, :r] @ G
             return out
         return A
 
     def trace(t):
+        Ct = _operator(C(t))
+        Md = _operator(M_dot(t)) if M_dot is not None else None
+        if Ct is None and Md is None:
+            return 0.0  # tr A = tr(M_r⁻¹ Nᵀ(Ṁ − C)N) vanishes
         N = path.basis(t)
-        Mt = np.asarray(M(t), dtype=float)
-        D = -N.T @ np.asarray(C(t), dtype=float) @ N
-        if M_dot is not None:
-            D = D + N.T @ np.asarray(M_dot(t), dtype=float) @ N
-        return float(np.trace(la.solve(N.T @ Mt @ N, D)))
+        Mt = _operator(M(t))
+        DN = (-(Ct @ N) if Ct is not None else 0.0) + (Md @ N if Md is not None else 0.0)
+        return float(np.trace(la.solve(N.T @ (Mt @ N), N.T @ DN)))
 
     segs = tuple((path.nodes[k], path.nodes[k + 1], make(k)) for k in range(len(path.nodes) - 1))
     R = path.holonomy

@@ -6,10 +6,13 @@
     ─► monodromy of the projected variational equations ─► multipliers, bounds, verdict
 
 The linearization along the reference (C = −∂g/∂q̇, K = −∂g/∂q + Σ λ*_k ∇²Φ_k, Φ_q) is
-sampled at N instants of the period and held as a trigonometric series; Φ̇_q is the series'
-derivative.  The two monodromy estimates of :mod:`mbseig.studies.floquet` differ in both
-tolerance (1e-12, 1e-10) and samples (the second on the grid shifted by half a step), so their
-difference also measures the sampling; N is doubled until the two series agree to 1e-10.
+sampled at N instants of the period and held as a trigonometric series on the entries that are
+nonzero at some sample (:mod:`mbseig.studies.floquet_sparse`); Φ̇_q is the series' derivative.
+The monodromy integrates the Chebyshev interpolants of the projected A(t) on each segment of
+the null-space path (:mod:`mbseig.studies.floquet_chebyshev`).  The two monodromy estimates of
+:mod:`mbseig.studies.floquet` differ in both tolerance (1e-12, 1e-10) and samples (the second
+on the grid shifted by half a step, with its own interpolants), so their difference also
+measures the sampling and the interpolation; N is doubled until the two series agree to 1e-10.
 """
 
 from __future__ import annotations
@@ -26,7 +29,9 @@ from ..casefile.fields import TIME, uses_time
 from ..errors import CaseError, MbseigError
 from ..model.timed import TrigSeries, sample_time
 from .floquet import FloquetError, FloquetResult, analyze, monodromy
+from .floquet_chebyshev import chebyshev_system
 from .floquet_paths import constrained_system
+from .floquet_sparse import as_operator, pattern_series
 from .periodic_motion import reference_motion
 
 __all__ = ["PeriodicAnalysis", "periodic_analysis", "PeriodicLinearization",
@@ -149,7 +154,7 @@ class PeriodicAnalysis:
     system: object = field(repr=False)
 
 
-def _sample_linearization(reference, N, offset):
+def _sample_linearization(reference, N, offset, *, sparse=False):
     T = reference.period
     model = reference.partition.timed
     Cs, Ks, Js = [], [], []
@@ -163,13 +168,22 @@ def _sample_linearization(reference, N, offset):
         Cs.append(np.asarray(C))
         Ks.append(K)
         Js.append(model.phi_q(q, t))
-    fit = [TrigSeries.fit(np.array(v), T, offset=offset) for v in (Cs, Ks, Js)]
-    return fit
+    if not sparse:
+        return [TrigSeries.fit(np.array(v), T, offset=offset) for v in (Cs, Ks, Js)]
+    return [pattern_series(v, T, offset=offset) for v in (Cs, Ks, Js)]
 
 
 def _system(M, fit, T, *, start=None):
-    C, K, J = fit
-    return constrained_system(lambda t: M, C, K, J, lambda t: J(t, 1), T, start=start)
+    (C, K, J), Ms = fit, as_operator(M)
+    return constrained_system(lambda t: Ms, C, K, J, lambda t: J(t, 1), T, start=start)
+
+
+def _relative_difference(a, b):
+    """max |a − b| / max(1, max |a|) of two samples (dense, CSR or None for zero)."""
+    a = 0.0 if a is None else (a.toarray() if hasattr(a, "toarray") else np.asarray(a))
+    b = 0.0 if b is None else (b.toarray() if hasattr(b, "toarray") else np.asarray(b))
+    return (float(np.max(np.abs(a - b), initial=0.0))
+            / max(1.0, float(np.max(np.abs(a), initial=0.0))))
 
 
 @dataclass(frozen=True)
@@ -222,12 +236,11 @@ def _periodic_linearization(spec, config, params, samples, max_samples):
         M = ref.partition.M
         N = samples
         while True:
-            fit = _sample_linearization(ref, N, 0.0)
-            fit2 = _sample_linearization(ref, N, 0.5 * T / N)
+            fit = _sample_linearization(ref, N, 0.0, sparse=True)
+            fit2 = _sample_linearization(ref, N, 0.5 * T / N, sparse=True)
             probe = np.linspace(0.0, T, 7)[1:-1] + 0.01 * T
-            diff = max(float(np.max(np.abs(a(t) - b(t)), initial=0.0))
-                       / max(1.0, float(np.max(np.abs(a(t)), initial=0.0)))
-                       for a, b in zip(fit, fit2) for t in probe)
+            diff = max(_relative_difference(a(t), b(t)) for a, b in zip(fit, fit2)
+                       for t in probe)
             if diff <= 1e-10 or 2 * N > max_samples:
                 break
             N *= 2
@@ -255,11 +268,15 @@ def _periodic_analysis(spec, config, params, rtols, samples, max_samples):
     sys1, sys2 = lin.system, lin.check
     try:
         lo, hi = sorted(rtols)
-        Phi = monodromy(sys1.system, rtol=lo)
-        Phi2 = monodromy(sys2.system, rtol=hi)
+        cheb1, rec = chebyshev_system(sys1.system)
+        cheb2, _ = chebyshev_system(sys2.system)
+        Phi = monodromy(cheb1, rtol=lo)
+        Phi2 = monodromy(cheb2, rtol=hi)
         res = analyze(Phi, Phi2, T, sys1.system.trace_integral(),
-                      method=f"variational equations projected on the constraints (DOP853, "
-                             f"{lin.samples} samples of the linearization per period)",
+                      method=f"variational equations projected on the constraints (DOP853 on "
+                             f"Chebyshev interpolants of A(t), degree ≤ {max(rec['degrees'])} "
+                             f"on each of {len(rec['degrees'])} segments; {lin.samples} samples "
+                             "of the linearization per period)",
                       tolerances=(lo, hi))
     except MbseigError as exc:
         raise exc.located(file=spec.source) from None

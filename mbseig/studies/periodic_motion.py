@@ -251,6 +251,8 @@ def _quasi_static(part):
         return part.rhs(np.concatenate([qi, np.zeros(d)]), 0.0)[d:]
 
     a = acc(qi)
+    if not np.any(a):  # already at rest: no Jacobian (its Newton step would be zero)
+        return np.concatenate([qi, np.zeros(d)])
     for _ in range(30):
         J = np.empty((d, d))
         for j in range(d):

@@ -18,9 +18,11 @@ spectral radius: unstable when some |μ_k| − b_k > 1, stable when the largest 
 critical otherwise.
 
 Cost: a product costs one integration of 2r numbers (r = n − m), the full monodromy one of
-(2r)² numbers; both evaluate the projected A(t) (null-space path, O(n² r)) at every stage.
-ARPACK needs a few times K products, so the partial method pays where evaluating A(t) is cheap
-beside the (2r)³ product of the full method (measured in benchmarks/periodic_scaling.py).
+(2r)² numbers.  Both integrate the Chebyshev interpolants of the projected A(t)
+(:mod:`mbseig.studies.floquet_chebyshev`: A itself is evaluated once per interpolation point,
+not at every stage), so a product costs O((2r)² d) per stage for an interpolant of degree d.
+ARPACK needs a few times K products, many more where the largest |μ| are clustered
+(measured in benchmarks/periodic_scaling.py).
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from scipy.optimize import linear_sum_assignment
 
 from ..errors import CaseError, MbseigError
 from .floquet import FloquetError, floquet_partial
+from .floquet_chebyshev import chebyshev_system
 from .periodic import periodic_linearization, reduced_exponents
 
 __all__ = ["PartialAnalysis", "periodic_partial", "PARTIAL_RTOLS"]
@@ -120,8 +123,9 @@ def periodic_partial(spec, *, k, config=None, params=None, rtols=PARTIAL_RTOLS,
                         file=spec.source)
     lo, hi = sorted(rtols)
     try:
-        first = floquet_partial(lin.system.system, k=k, rtol=lo, tol=tol)
-        second = floquet_partial(lin.check.system, k=k, rtol=hi, tol=tol)
+        # A(t) by its Chebyshev interpolants: every product integrates a cheap A
+        first = floquet_partial(chebyshev_system(lin.system.system)[0], k=k, rtol=lo, tol=tol)
+        second = floquet_partial(chebyshev_system(lin.check.system)[0], k=k, rtol=hi, tol=tol)
     except MbseigError as exc:
         raise exc.located(file=spec.source) from None
     except (np.linalg.LinAlgError, ArithmeticError, RuntimeError) as exc:

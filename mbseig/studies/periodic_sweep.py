@@ -4,9 +4,9 @@ complex pair on |μ| = 1), each located to a relative tolerance by Brent's metho
 characteristic function of its kind (:func:`mbseig.studies.floquet_sweep.verdict_changes`).
 
 Over two parameters, :func:`periodic_chart` gives the stability chart: the verdict and the
-spectral radius max|μ| on the grid (the Ince–Strutt chart of a Mathieu-type system), and the
-grid brackets where the verdict changes along the first parameter (not located: sweep one
-parameter across a bracket to locate its boundary)."""
+spectral radius max|μ| on the grid (the Ince–Strutt chart of a Mathieu-type system), and where
+the verdict changes along the first parameter: each grid bracket located as a sweep locates a
+boundary, at the bracket's value of the second parameter."""
 
 from __future__ import annotations
 
@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .floquet import floquet
+from .floquet_chebyshev import chebyshev_system
 from .floquet_sweep import StabilityChart, verdict_changes
 from .periodic import periodic_analysis, periodic_linearization
 
@@ -66,7 +67,8 @@ def periodic_sweep(spec, name, values, *, config=None, fixed=None, rel_tol=1e-8,
             progress(k + 1, len(values))
 
     def build(p):
-        return periodic_linearization(spec, config=config, params=params(p)).system.system, None
+        system = periodic_linearization(spec, config=config, params=params(p)).system.system
+        return chebyshev_system(system)[0], None
 
     found = verdict_changes(build, values, rel_tol=rel_tol, results=results)
     return PeriodicSweep(spec.name, name, values, tuple(results), found, rel_tol)
@@ -85,6 +87,7 @@ class PeriodicChart:
     edges: tuple
     rtols: tuple
     fixed: dict
+    rel_tol: float | None = None  # the edges located to this (None: grid brackets)
 
     def to_dict(self) -> dict:
         c = self.chart
@@ -102,8 +105,10 @@ class PeriodicChart:
             "error_bounds": self.error_bounds.tolist(),
             "boundaries": list(self.edges),
             "tolerances": {"rtols": list(self.rtols),
-                           "boundaries": "grid brackets, not located (value = bracket midpoint, "
-                                         "xtol = half the bracket)"},
+                           "boundaries": (f"located along {c.names[0]} to {self.rel_tol:g} "
+                                          "relative" if self.rel_tol is not None else
+                                          "grid brackets, not located (value = bracket "
+                                          "midpoint, xtol = half the bracket)")},
         }
 
 
@@ -124,9 +129,13 @@ def _edge(name, other, value, ra, rb, a, b):
 
 
 def periodic_chart(spec, first, second, *, config=None, fixed=None, rtols=CHART_RTOLS,
-                   progress=None) -> PeriodicChart:
+                   progress=None, rel_tol=1e-8) -> PeriodicChart:
     """The Floquet verdict of a periodic case over the grid ``first`` × ``second`` (each a
-    (name, values) pair), two monodromy estimates at ``rtols`` per point."""
+    (name, values) pair), two monodromy estimates at ``rtols`` per point.  Each grid bracket
+    along ``first`` where the verdict changes is located to ``rel_tol`` (relative) at its value
+    of ``second``, as :func:`periodic_sweep` locates one (Brent on the characteristic
+    function of the kind, each monodromy at rtol 1e-12; the kind and the verdicts at the ends
+    from the chart's points); ``rel_tol=None`` keeps the brackets."""
     (n1, v1), (n2, v2) = first, second
     fixed = dict(fixed or {})
     v1, v2 = np.asarray(v1, dtype=float), np.asarray(v2, dtype=float)
@@ -138,7 +147,7 @@ def periodic_chart(spec, first, second, *, config=None, fixed=None, rtols=CHART_
         for j, b in enumerate(v2):
             params = {**fixed, n1: repr(float(a)), n2: repr(float(b))}
             system = periodic_linearization(spec, config=config, params=params).system.system
-            res = floquet(system, rtols=rtols)
+            res = floquet(chebyshev_system(system)[0], rtols=rtols)
             results[i, j], verdicts[i, j] = res, res.verdict
             rho[i, j], bounds[i, j] = res.spectral_radius, res.decided_by[2]
             done += 1
@@ -147,5 +156,30 @@ def periodic_chart(spec, first, second, *, config=None, fixed=None, rtols=CHART_
     edges = tuple(_edge(n1, n2, v2[j], results[i, j], results[i + 1, j], v1[i], v1[i + 1])
                   for j in range(v2.size) for i in range(v1.size - 1)
                   if results[i, j].verdict != results[i + 1, j].verdict)
+    if rel_tol is not None:
+        ends = {(float(v1[i]), float(v2[j])): results[i, j] for i in range(v1.size)
+                for j in range(v2.size)}
+        edges = tuple(_located(spec, config, fixed, n1, n2, e, rel_tol, ends) for e in edges)
     chart = StabilityChart(v1, v2, verdicts, rho, (n1, n2))
-    return PeriodicChart(spec.name, chart, bounds, edges, tuple(rtols), fixed)
+    return PeriodicChart(spec.name, chart, bounds, edges, tuple(rtols), fixed, rel_tol)
+
+
+def _located(spec, config, fixed, n1, n2, edge, rel_tol, results):
+    """A chart's grid bracket located along ``n1`` at its value of ``n2``: Brent on the
+    characteristic function of its kind (monodromy at rtol 1e-12), the verdicts at its ends
+    from the chart."""
+    at = edge["at"][n2]
+
+    def params(p):
+        return {**fixed, n1: repr(float(p)), n2: repr(float(at))}
+
+    def build(p):
+        system = periodic_linearization(spec, config=config, params=params(p)).system.system
+        return chebyshev_system(system)[0], None
+
+    lo, hi = edge["bracket"]
+    found = verdict_changes(build, [lo, hi], rel_tol=rel_tol,
+                            results=[results[(lo, at)], results[(hi, at)]])
+    b = found[0]
+    return {**edge, "value": b.value, "kind": b.kind, "stability": b.stability, "xtol": b.xtol,
+            "verdicts": list(b.verdicts), "method": b.method}
