@@ -103,7 +103,9 @@ def test_column_modes_against_mathieu(modes_json):
 @pytest.mark.parametrize("side", [0, 1])
 def test_column_region_edges_against_mathieu(side):
     """The verdict changes at the closed-form edge: det(I + Φ) (Φ the case's projected
-    monodromy) changes sign between W_edge (1 − 1e-6) and W_edge (1 + 1e-6) (flip, μ = −1)."""
+    monodromy, integrated on the Chebyshev interpolants of A(t) as the analysis does) changes
+    sign between W_edge (1 − 1e-6) and W_edge (1 + 1e-6) (flip, μ = −1)."""
+    from mbseig.studies.floquet_chebyshev import chebyshev_system
     from mbseig.studies.periodic import periodic_linearization
 
     spec = read_case(CASE)
@@ -111,6 +113,6 @@ def test_column_region_edges_against_mathieu(side):
     signs = []
     for f in (1 - 1e-6, 1 + 1e-6):
         lin = periodic_linearization(spec, params={"W": repr(W * f)})
-        Phi = monodromy(lin.system.system, rtol=1e-10)
+        Phi = monodromy(chebyshev_system(lin.system.system)[0], rtol=1e-10)
         signs.append(np.sign(np.linalg.det(np.eye(Phi.shape[0]) + Phi)))
     assert signs[0] == -signs[1] != 0
