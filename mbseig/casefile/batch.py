@@ -25,7 +25,7 @@ from ..model.batched import SpringDamperSet
 from .expr import Dialect, parse, walk
 from .fields import in_range
 
-__all__ = ["Batcher", "vector_evaluate", "vector_template", "LazyPoints"]
+__all__ = ["Batcher", "vector_evaluate", "vector_template", "repeated_fields", "LazyPoints"]
 
 _TEMPLATE = re.compile(r"\{([^{}]*)\}")
 _FUNCS = {
@@ -88,6 +88,41 @@ def vector_template(text, names, var, ivals):
         return [pre + s + suf for s in cols[1]]
     cols = [c for c in cols if c is not None]
     return ["".join(t) for t in zip(*cols)] if len(cols) > 1 else cols[0]
+
+
+def repeated_fields(item, kinds, var, ivals, params, optional=()):
+    """The fields of a repeated element for every index value at once, or None (the element is
+    then read member by member, which reports any problem).  ``kinds`` maps each allowed key to
+    ``"name"`` (a name template), ``"names"`` (a list of templates), 0 (a number), a size
+    (a list of that many numbers) or None (left to the caller); keys in ``optional`` may be absent, any other key declines."""
+    if "enabled" in item or set(item) - {*kinds, "repeat"} or ivals.size == 0:
+        return None
+    out = {}
+    try:
+        for key, kind in kinds.items():
+            if key not in item:
+                if key in optional:
+                    continue
+                return None
+            value = item[key]
+            if kind is None:  # read by the caller (a type)
+                continue
+            if kind == "name":
+                out[key] = vector_template(value, params, var, ivals)
+            elif kind == "names":
+                if not isinstance(value, list):
+                    return None
+                out[key] = [vector_template(v, params, var, ivals) for v in value]
+            elif kind == 0:
+                out[key] = vector_evaluate(value, params, var, ivals)
+            elif isinstance(value, list) and len(value) == kind:
+                out[key] = np.column_stack([vector_evaluate(v, params, var, ivals)
+                                            for v in value])
+            else:
+                return None
+    except _Decline:
+        return None
+    return out
 
 
 class LazyPoints(Mapping):
@@ -209,6 +244,10 @@ class Batcher:
 
     def _forces(self, item, label, var, ivals, params):
         kind = item.get("type")
+        if kind == "bushing" and hasattr(self.b, "bushings"):  # spatial bushings (spatial_readers)
+            if not self.b.bushings(item, label, var, ivals, params, self.forces):
+                raise _Decline
+            return
         if kind not in ("spring", "damper", "spring_damper"):
             raise _Decline
         if set(item) - {"type", "points", "stiffness", "damping", "free_length", "repeat"}:

@@ -45,6 +45,10 @@ _AXES = "xyz"
 
 
 class Builder(ElementReaders):
+    #: a subclass that adds its own mass blocks to the model (SpatialBuilder) takes
+    #: ``mass = None`` where the model has no other mass, instead of an empty sparse matrix
+    adds_mass = False
+
     def __init__(self, data, name, source, params, description, expected, *, files=None,
                  mesh=None):
         self.data, self.name, self.source, self.params = data, name, source, params
@@ -197,12 +201,15 @@ class Builder(ElementReaders):
             self._force(Fields(item, label, names), forces, g_const)
             self._remember(item, "force", forces, before, label)
 
-        mass = sp.csr_matrix((self.n, self.n))
-        if mass_blocks:
-            mass = scatter(self.n, self.n, mass_blocks)
+        mass = scatter(self.n, self.n, mass_blocks) if mass_blocks else None
         rows, vals = batch.mass_coo()
         if rows.size:
-            mass = mass + sp.csr_matrix((vals, (rows, rows)), shape=(self.n, self.n))
+            extra = sp.csr_matrix((vals, (rows, rows)), shape=(self.n, self.n))
+            if mass is None:  # (as its sum with an empty matrix: no explicit zeros)
+                extra.eliminate_zeros()
+            mass = extra if mass is None else mass + extra
+        if mass is None and not self.adds_mass:
+            mass = sp.csr_matrix((self.n, self.n))
         points = LazyPoints(self.point_index, self.point_pos, self.markers)
         report = {}
         if "report" in self.data:

@@ -99,10 +99,35 @@ def parse(text: str):
         raise ExpressionError(f"cannot parse expression {text!r}") from None
 
 
+@functools.lru_cache(maxsize=4096)
+def _names_in(text: str) -> tuple:
+    """The names an expression reads (after :func:`parse` accepted it)."""
+    return tuple(sorted({n.id for n in ast.walk(parse(text)) if isinstance(n, ast.Name)}))
+
+
+_VALUES: dict = {}  # (text, values of the names it reads) → its value: a repeated field's
+_MAX_VALUES = 100_000  # members share it (an expression is a pure function of those names)
+_MISSING = object()
+
+
 def _evaluate_string(text: str, names: Mapping[str, float]) -> float:
     tree = parse(text)
+    key = (text, *(names.get(n, _MISSING) for n in _names_in(text)))
+    try:  # (a zero is not kept: -0.0 == 0.0 as keys, and atan2 tells them apart)
+        if 0 in key:
+            raise TypeError
+        value = _VALUES.get(key)
+    except (TypeError, ValueError):  # an array or a zero among the values: evaluated as it comes
+        key, value = None, None
+    if value is not None:
+        return value
     try:
-        return float(walk(tree, names, text, SCALAR))
+        value = float(walk(tree, names, text, SCALAR))
+        if key is not None:
+            if len(_VALUES) >= _MAX_VALUES:
+                _VALUES.clear()
+            _VALUES[key] = value
+        return value
     except ExpressionError:
         raise
     except (ArithmeticError, ValueError, TypeError) as exc:

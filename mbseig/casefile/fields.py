@@ -51,7 +51,10 @@ def in_range(x) -> bool:
     if type(x) is float or type(x) is int or isinstance(x, np.floating):  # a scalar (most fields)
         a = abs(float(x))
         return a == 0 or MIN_MAGNITUDE <= a <= MAX_MAGNITUDE  # (False for inf and NaN)
-    a = np.abs(np.asarray(x, dtype=float))
+    a = np.asarray(x, dtype=float)
+    if a.size <= 16:  # a vector of a few numbers (most fields): the scalar rule, each
+        return all(v == 0 or MIN_MAGNITUDE <= abs(v) <= MAX_MAGNITUDE for v in a.ravel().tolist())
+    a = np.abs(a)
     return bool(np.all((a == 0) | ((a >= MIN_MAGNITUDE) & (a <= MAX_MAGNITUDE))))
 
 

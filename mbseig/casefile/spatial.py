@@ -30,6 +30,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..model.affine import Affine
 from ..model.elements import LinearConstraint
@@ -48,7 +49,7 @@ from ..model.spatial_joints import (
     triad_constraint,
 )
 from ..numerics import scatter
-from .batch import LazyPoints
+from .batch import LazyPoints, repeated_fields
 from .builder import Builder
 from .fields import REQUIRED, Fields, expand, template, two_names
 from .spatial_readers import (
@@ -61,6 +62,8 @@ __all__ = ["UNIT_TOL", "SpatialBuilder"]
 
 class SpatialBuilder(SpatialElementReaders, Builder):
     """Reader of ``dimension = 3`` cases (module docstring)."""
+
+    adds_mass = True
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
@@ -75,7 +78,8 @@ class SpatialBuilder(SpatialElementReaders, Builder):
 
     # -- the build ---------------------------------------------------------------------------
     def build(self):
-        for item, label, names in expand("bodies", self.data.get("bodies", []), self.params):
+        for item, label, names in expand("bodies", self.data.get("bodies", []), self.params,
+                                         self._bodies):
             self._read_body(Fields(item, label, names))
         data = self.data
         self.data = {k: v for k, v in data.items() if k != "bodies"}
@@ -109,6 +113,33 @@ class SpatialBuilder(SpatialElementReaders, Builder):
         self.bodies[bname] = {"label": f.label, "mass": mass, "com": com, "inertia": inertia,
                               "carried": pts, "spatial": True}
         self.specs.append({"name": bname, "f": f, "origin": origin, "triad": triad})
+
+    def _bodies(self, section, item, label, var, ivals, params):
+        """Repeated bodies (a diagonal inertia, no carried points) read at once and registered
+        as :meth:`_read_body` registers them; False (declined: that reader then reads them and
+        reports any problem) for anything else or any doubt."""
+        got = repeated_fields(item, {"name": "name", "mass": 0, "com": 3, "inertia": 3}, var,
+                              ivals, params)
+        if got is None:
+            return False
+        names, mass, com, diag = got["name"], got["mass"], got["com"], got["inertia"]
+        p = np.sort(diag, axis=1)  # principal moments (inertia_problem, with a tighter margin)
+        if (len(set(names)) != len(names) or not np.all(mass > 0) or not np.all(p[:, 0] > 0)
+                or not np.all(p[:, 2] <= (p[:, 0] + p[:, 1]) * (1 + 1e-13))
+                or any(nm in self.bodies or nm == "ground" or "." in nm for nm in names)):
+            return False
+        nb, axes = len(names), [f"{v}.{a}" for v in "uvw" for a in "xyz"]
+        values = np.hstack([com, np.tile(np.eye(3).ravel(), (nb, 1))]).ravel().tolist()
+        idx = self.assembly.block([f"{nm}.{a}" for nm in names for a in (*"xyz", *axes)], values,
+                                  (["length"] * 3 + ["direction"] * 9) * nb).reshape(nb, 12)
+        inertia = np.zeros((nb, 3, 3))
+        inertia[:, [0, 1, 2], [0, 1, 2]] = diag
+        for k, nm in enumerate(names):
+            f = Fields(item, f"{label} ({var}={int(ivals[k])})", params)
+            self.bodies[nm] = {"label": f.label, "mass": float(mass[k]), "com": com[k],
+                               "inertia": inertia[k], "carried": [], "spatial": True}
+            self.specs.append({"name": nm, "f": f, "origin": idx[k, :3], "triad": idx[k, 3:]})
+        return True
 
     def _allocate(self, bname, values):
         """A body's basic point at its centre of mass (3 values, lengths) or its unit vectors
@@ -170,7 +201,12 @@ class SpatialBuilder(SpatialElementReaders, Builder):
             b["points"] = (b["markers"][0], b["markers"][min(1, len(b["markers"]) - 1)])
             b["frame"] = frame
         forces = tuple(self._with_stations(x) if isinstance(x, Rotor) else x for x in model.forces)
-        mass = model.mass + scatter(model.n, model.n, blocks) if blocks else model.mass
+        mass = model.mass if model.mass is not None else sp.csr_matrix((model.n, model.n))
+        if blocks and model.mass is None:
+            mass = scatter(model.n, model.n, blocks)
+            mass.eliminate_zeros()  # as its sum with an empty matrix
+        elif blocks:
+            mass = mass + scatter(model.n, model.n, blocks)
         return dataclasses.replace(
             model, mass=mass.tocsr(), g_const=g, constraints=tuple(constraints), forces=forces,
             mass_parts=tuple(mass_parts), element_ends={**model.element_ends, **self._ends()},

@@ -9,8 +9,10 @@ import numpy as np
 from ..model.affine import Affine, combine
 from ..model.spatial_body import (
     FRAME_SIZE,
+    GROUND,
     frame_point,
     frame_vector,
+    point_matrices,
 )
 from ..model.spatial_forces import (
     BodyMoment,
@@ -18,6 +20,7 @@ from ..model.spatial_forces import (
     QuadraticSpringDamper,
     Rotor,
     SpatialTorsional,
+    bushing_maps,
     bushing_rows,
 )
 from ..model.spatial_joints import (
@@ -27,6 +30,7 @@ from ..model.spatial_joints import (
     angle_rows,
     joint_rows,
 )
+from .batch import repeated_fields
 from .fields import REQUIRED, Fields
 
 UNIT_TOL = 1e-9  # |‖axis‖ − 1| allowed, and the tolerance of perpendicular / coincident axes
@@ -187,14 +191,49 @@ class SpatialElementReaders:
         f.done()
         if not (np.all(np.isfinite(K)) and np.all(np.isfinite(D))):
             raise f.error("stiffness and damping must be finite")
-        frames = (self.frame(f, b1), self.frame(f, b2))
-        locals_ = (self.local(b1, at), self.local(b2, at))
+        self._add_bushing(f.label, (self.frame(f, b1), self.frame(f, b2)), (b1, b2), at, K, D,
+                          forces)
+
+    def _add_bushing(self, label, frames, bodies, at, K, D, forces):
+        locals_ = (self.local(bodies[0], at), self.local(bodies[1], at))
         ends = []
-        for b, fr, loc in zip((b1, b2), frames, locals_):
+        for b, fr, loc in zip(bodies, frames, locals_):
             ends.append((b, frame_point(fr, loc), b in self.station_origin and not np.any(loc)))
-            self._station(b, f.label, ends[-1][1])
-        forces.append(QuadraticSpringDamper(f.label, bushing_rows(frames, locals_), K, D))
-        self.pending_ends[f.label] = ends  # drawn between its point on b1 and on b2
+            self._station(b, label, ends[-1][1])
+        forces.append(QuadraticSpringDamper(label, bushing_rows(frames, locals_), K, D))
+        self.pending_ends[label] = ends  # drawn between its point on b1 and on b2
+
+    def bushings(self, item, label, var, ivals, params, forces):
+        """Repeated bushings between bodies, ``at`` given, diagonal stiffness and damping: read
+        for all index values at once (:func:`~mbseig.casefile.batch.repeated_fields`) and added
+        as the member-by-member reader adds them; False (declined: that reader then reads them
+        and reports any problem) for anything else."""
+        got = repeated_fields(item, {"type": None, "bodies": "names", "at": 3, "stiffness": 6,
+                                     "damping": 6}, var, ivals, params, optional=("damping",))
+        if got is None or len(got["bodies"]) != 2:
+            return False
+        self.bind()
+        pairs, known = list(zip(*got["bodies"])), {*self.frames, "ground"}
+        if any(a == b or a not in known or b not in known for a, b in pairs):
+            return False  # an unknown body, the same twice: the member reader names it
+        at, K, D = got["at"], got["stiffness"], got.get("damping")
+        loc = [np.array([self.local(b, x) for b, x in zip(col, at)]) for col in got["bodies"]]
+        frames = [[GROUND if b == "ground" else self.frames[b] for b in col]
+                  for col in got["bodies"]]
+        P = [point_matrices(x) for x in loc]
+        stacks = [combine([(1.0, f0), (1.0, f1)], stack=True) for f0, f1 in zip(*frames)]
+        maps = bushing_maps(stacks, loc[0], loc[1])
+        for k, (b1, b2) in enumerate(pairs):
+            label_k, ends = f"{label} ({var}={int(ivals[k])})", []
+            for e, b in enumerate((b1, b2)):
+                fr = frames[e][k]
+                point = Affine(fr.idx, P[e][k] @ fr.C, P[e][k] @ fr.d)
+                ends.append((b, point, b in self.station_origin and not np.any(loc[e][k])))
+                self._station(b, label_k, point)
+            forces.append(QuadraticSpringDamper(label_k, maps[k], np.diag(K[k]),
+                                                np.zeros((6, 6)) if D is None else np.diag(D[k])))
+            self.pending_ends[label_k] = ends
+        return True
 
     def _coefficients(self, f, key, default=None):
         """A bushing's 6×6 stiffness or damping: 6 numbers, a 6×6 matrix, or a table over a

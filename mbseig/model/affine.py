@@ -67,10 +67,18 @@ def combine(terms, *, stack: bool = False) -> Affine:
     if not terms:
         idx = np.zeros(0, np.intp)
         return Affine(idx, np.zeros((0, 0)), np.zeros(0))
-    idx = np.unique(np.concatenate([t[1].idx for t in terms])).astype(np.intp, copy=False)
+    if stack:
+        fast = _stacked_in_order(terms)
+        if fast is not None:
+            return fast
+    flat = np.concatenate([t[1].idx for t in terms])
+    if flat.size <= 64:  # (a point, a direction, a pair of frames: the sorted set, cheaper)
+        idx = np.array(sorted(set(flat.tolist())), dtype=np.intp)
+    else:
+        idx = np.unique(flat).astype(np.intp, copy=False)
     parts = []
     for factor, aff in terms:
-        if isinstance(factor, (int, float)) or np.ndim(factor) == 0:
+        if type(factor) in (int, float) or np.ndim(factor) == 0:
             f = float(factor)
             parts.append((aff, f * aff.C, f * aff.d))
         else:
@@ -89,3 +97,23 @@ def combine(terms, *, stack: bool = False) -> Affine:
         C[:, np.searchsorted(idx, aff.idx)] += Cb
         d += db
     return Affine(idx, C, d)
+
+
+def _stacked_in_order(terms):
+    """The stack of maps with unit factors whose indices follow each other in increasing order
+    (a frame after another, a frame after the ground): the block diagonal of their matrices on
+    the concatenated indices, the very matrix the general path places (or None: not this case)."""
+    if not all(type(f) in (int, float) and f == 1 for f, _ in terms):
+        return None
+    idx = np.concatenate([a.idx for _, a in terms]).astype(np.intp, copy=False)
+    if idx.size > 1 and not np.all(idx[1:] > idx[:-1]):
+        return None
+    rows = sum(a.C.shape[0] for _, a in terms)
+    C, r, c = np.zeros((rows, idx.size)), 0, 0
+    for _, a in terms:
+        nr, nc = a.C.shape
+        if nc != a.idx.size:
+            return None
+        C[r:r + nr, c:c + nc] = a.C
+        r, c = r + nr, c + nc
+    return Affine(idx, C, np.concatenate([a.d for _, a in terms]))

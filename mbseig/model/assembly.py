@@ -60,6 +60,17 @@ class Assembly:
         self.kinds += [kind] * len(names)
         return np.arange(k, k + len(names), dtype=np.intp)
 
+    def block(self, names, values, kinds) -> np.ndarray:
+        """Append coordinates of several kinds at once (one per name, value and kind, already
+        floats and known kinds: a batch reader's bodies); their indices."""
+        k = len(self.names)
+        if not (len(names) == len(values) == len(kinds)) or set(kinds) - set(KINDS):
+            raise ValueError("one initial value and one known kind per coordinate name")
+        self.names += names
+        self.values += values
+        self.kinds += kinds
+        return np.arange(k, k + len(names), dtype=np.intp)
+
     def coordinate(self, name, value, kind) -> int:
         """Append one coordinate; its index."""
         return int(self.coordinates([name], [value], kind)[0])

@@ -25,7 +25,8 @@ import scipy.sparse as sp
 from ..errors import EquilibriumError
 from .base import BatchForce, Force
 
-__all__ = ["SpringDamperSet", "spring_forces", "spring_tangents"]
+__all__ = ["SpringDamperSet", "QuadraticGroup", "kernel_groups", "spring_forces",
+           "spring_tangents"]
 
 
 def _geometry(d, k, l0, label):
@@ -170,3 +171,118 @@ class SpringDamperSet(BatchForce, Force):
         C = sp.coo_matrix((vc, (rc, cc)), shape=(n, n)).toarray()
         ix = np.ix_(self.idx, self.idx)
         return K[ix], C[ix]
+
+
+# ---------------------------------------------------------------------------------------------
+# Many elements of one kind at once: spatial joints, rigid-body conditions and bushings
+# ---------------------------------------------------------------------------------------------
+GROUP_MIN = 256  # members from which a kind is evaluated at once (smaller models: one by one)
+
+
+def kernel_groups(elements) -> list:
+    """[(positions, QuadraticGroup)] of the elements whose own class names a batched kernel
+    (``kernel`` in the class body: QuadraticConstraint, QuadraticSpringDamper; a subclass
+    evaluates itself), grouped by class and shapes, at least GROUP_MIN each."""
+    keyed = {}
+    for k, e in enumerate(elements):
+        kind = type(e).__dict__.get("kernel")
+        if kind is not None:
+            rows = e.rows
+            keyed.setdefault((type(e), rows.B.shape, rows.aff.C.shape), []).append(k)
+    return [(np.array(pos), QuadraticGroup([elements[k] for k in pos]))
+            for pos in keyed.values() if len(pos) >= GROUP_MIN]
+
+
+def _stacked(arrays):
+    """One array of equal arrays (shared: the array itself, flagged by a leading None axis)
+    or of the members' arrays (views of one array are used as they lie)."""
+    first = arrays[0]
+    if all(a is first for a in arrays):
+        return first[None]
+    base = first.base
+    if (base is not None and base.shape == (len(arrays), *first.shape)
+            and all(a.base is base and a.ctypes.data == base[k].ctypes.data
+                    for k, a in enumerate(arrays))):
+        return base
+    return np.stack(arrays)
+
+
+class QuadraticGroup:
+    """Members (each with ``rows``, a QuadraticMap e = zᵀB z + b·z + c on z = C q[idx] + d) of
+    one class and shapes, with their arrays stacked once: the element kernels of
+    :class:`~mbseig.model.spatial_joints.QuadraticConstraint` and
+    :class:`~mbseig.model.spatial_forces.QuadraticSpringDamper` evaluated for all at once
+    (the same formulas; sums in another order, so equal to rounding)."""
+
+    def __init__(self, members):
+        maps = [m.rows for m in members]
+        self.idx = np.stack([r.aff.idx for r in maps])
+        self.C = np.stack([r.aff.C for r in maps])
+        self.d = np.stack([r.aff.d for r in maps])
+        self.B, self.b, self.c = (_stacked([getattr(r, k) for r in maps]) for k in "Bbc")
+        n_z, n_q = self.C.shape[1:]
+        # maps that select their coordinates (frames of free bodies): C = I, products skipped
+        self.unit = n_z == n_q and bool(np.all(self.C == np.eye(n_z)))
+        self.Ct = np.ascontiguousarray(self.C.transpose(0, 2, 1))
+        if hasattr(members[0], "stiffness"):
+            self.K = _stacked([m.stiffness for m in members])
+            self.D = _stacked([m.damping for m in members])
+
+    def _z(self, v, d=True):
+        z = np.einsum("npm,nm->np", self.C, v[self.idx])
+        return z + self.d if d else z
+
+    def _values(self, z):
+        Bz = np.einsum("nkij,nj->nki", np.broadcast_to(self.B, (z.shape[0], *self.B.shape[1:])), z)
+        return Bz, np.einsum("nki,ni->nk", Bz, z) + np.einsum("nkp,np->nk", np.broadcast_to(
+            self.b, (z.shape[0], *self.b.shape[1:])), z) + self.c
+
+    def _grad(self, Bz):
+        return 2.0 * Bz + self.b
+
+    # -- constraints ---------------------------------------------------------------------
+    def phi(self, q):
+        return list(self._values(self._z(q))[1])
+
+    def jac(self, q):
+        Bz, _ = self._values(self._z(q))
+        G = self._grad(Bz)
+        return list(G if self.unit else G @ self.C)
+
+    def hess(self, lam):
+        """lam (n, k): the members' multipliers."""
+        W = 2.0 * np.einsum("nk,nkij->nij", lam, np.broadcast_to(
+            self.B, (lam.shape[0], *self.B.shape[1:])))
+        return list(W if self.unit else self.Ct @ W @ self.C)
+
+    def gamma(self, q, qd):
+        zd = self._z(qd, d=False)
+        Bzd, _ = self._values(zd)
+        return list(-2.0 * np.einsum("nki,ni->nk", Bzd, zd))
+
+    # -- spring-dampers on quadratic strains (QuadraticSpringDamper) ------------------------
+    def _state(self, q, qd):
+        z, zd = self._z(q), self._z(qd, d=False)
+        Bz, e = self._values(z)
+        G = self._grad(Bz)
+        Gzd = np.einsum("nkp,np->nk", G, zd)
+        f = np.einsum("nij,nj->ni", np.broadcast_to(self.K, (z.shape[0], *self.K.shape[1:])), e) \
+            + np.einsum("nij,nj->ni", np.broadcast_to(self.D, (z.shape[0], *self.D.shape[1:])), Gzd)
+        return zd, G, f
+
+    def force(self, q, qd):
+        _, G, f = self._state(q, qd)
+        gz = np.einsum("nkp,nk->np", G, f)
+        return list(-gz if self.unit else -np.einsum("npm,np->nm", self.C, gz))
+
+    def jacobians(self, q, qd):
+        zd, G, f = self._state(q, qd)
+        nb = G.shape[0]
+        B = np.broadcast_to(self.B, (nb, *self.B.shape[1:]))
+        Gdot = 2.0 * np.einsum("nkij,nj->nki", B, zd)
+        Gt = G.transpose(0, 2, 1)
+        Kz = Gt @ (self.K @ G + self.D @ Gdot) + 2.0 * np.einsum("nk,nkij->nij", f, B)
+        Cz = Gt @ self.D @ G
+        if self.unit:
+            return list(zip(Kz, Cz))
+        return list(zip(self.Ct @ Kz @ self.C, self.Ct @ Cz @ self.C))

@@ -40,6 +40,7 @@ __all__ = [
     "frame_point",
     "frame_vector",
     "inertia_problem",
+    "point_matrices",
     "point_matrix",
     "second_moment",
     "spatial_mass_matrix",
@@ -54,7 +55,19 @@ GROUND = Affine.constant(np.concatenate([np.zeros(3), np.eye(3).ravel()]))
 def frame_of(origin: Affine, triad_idx) -> Affine:
     """The 12-row frame map [r₀; u; v; w] of a body whose origin is ``origin`` and whose unit
     vectors are the free coordinates ``triad_idx`` (9 indices, u then v then w)."""
+    triad_idx = np.asarray(triad_idx, dtype=np.intp)
+    o = origin.idx
+    if (o.size == 3 and triad_idx.size == 9 and origin.C.shape == (3, 3) and o[0] < o[1] < o[2]
+            and o[2] < triad_idx[0] and np.all(np.diff(triad_idx) > 0)
+            and np.array_equal(origin.C, _EYE3)):
+        # the common frame (free origin allocated before its sorted triad): what combine forms,
+        # the identity on the concatenated indices, without its general-purpose work
+        return Affine(np.concatenate([o, triad_idx]), np.eye(FRAME_SIZE),
+                      np.concatenate([origin.d, np.zeros(9)]))
     return combine([(1.0, origin), (1.0, Affine.select(triad_idx))], stack=True)
+
+
+_EYE3 = np.eye(3)
 
 
 _I3 = np.eye(3)[:, None, :]
@@ -71,6 +84,13 @@ def point_matrix(local) -> np.ndarray:
     """C(ξ) (3×12): r_P = C(ξ) [r₀; u; v; w] for a point with local coordinates ξ."""
     x, y, z = np.asarray(local, float)
     return _kron_i3((1.0, x, y, z))
+
+
+def point_matrices(locals_) -> np.ndarray:
+    """C(ξ) of many points (n, 3, 12): :func:`point_matrix` of each row of ``locals_``."""
+    xi = np.asarray(locals_, float).reshape(-1, 3)
+    c = np.hstack([np.ones((xi.shape[0], 1)), xi])
+    return (c[:, None, :, None] * _I3[None]).reshape(-1, 3, FRAME_SIZE)
 
 
 def vector_matrix(local) -> np.ndarray:
@@ -106,7 +126,7 @@ def spatial_mass_matrix(mass: float, com_local, inertia) -> np.ndarray:
     A[0, 0] = mass
     A[0, 1:] = A[1:, 0] = mass * xg
     A[1:, 1:] = second_moment(inertia) + mass * np.outer(xg, xg)
-    return np.kron(A, np.eye(3))
+    return (A[:, None, :, None] * _EYE3[None, :, None, :]).reshape(FRAME_SIZE, FRAME_SIZE)
 
 
 def frame_gravity(mass: float, com_local, gravity) -> np.ndarray:

@@ -35,7 +35,7 @@ import numpy as np
 from .affine import Affine, combine
 from .base import Force
 from .elements import TorsionalSpringDamper
-from .spatial_body import FRAME_SIZE, point_matrix, vector_matrix
+from .spatial_body import FRAME_SIZE, point_matrices, point_matrix, vector_matrix
 from .spatial_joints import QuadraticMap, Rows, axis_angle, selectors
 
 __all__ = [
@@ -44,6 +44,7 @@ __all__ = [
     "QuadraticSpringDamper",
     "Rotor",
     "SpatialTorsional",
+    "bushing_maps",
     "bushing_rows",
     "moment_force",
     "skew",
@@ -158,6 +159,7 @@ class QuadraticSpringDamper(Force):
     rows: QuadraticMap
     stiffness: np.ndarray
     damping: np.ndarray
+    kernel = "quadratic strains"  # many at once: mbseig.model.batched.QuadraticGroup (this class only)
     affine_field = "aff"
 
     @property
@@ -199,6 +201,23 @@ def bushing_rows(frames, locals_) -> QuadraticMap:
         rows.b.append(np.zeros(rows.p))
         rows.c.append(0.0)
     return rows.build()
+
+
+def bushing_maps(stacks, locals0, locals1) -> list:
+    """:func:`bushing_rows` of many bushings at once: ``stacks`` their stacked frame maps,
+    ``locals0``, ``locals1`` (nb, 3) the point in each frame.  The same rows (the strain forms
+    are sums of single products of selector entries, exact in any order: no value changes)."""
+    S1, S2, E1, rotation = _bushing_constants()
+    D = point_matrices(locals1) @ S2 - point_matrices(locals0) @ S1  # (nb, 3, 24)
+    B = np.empty((len(stacks), 6, 2 * FRAME_SIZE, 2 * FRAME_SIZE))
+    T = np.empty((len(stacks), 2 * FRAME_SIZE, 2 * FRAME_SIZE))
+    for k in range(3):  # Eₖᵀ D places D's rows at the components of b1's axis k (a selector)
+        T[:] = 0.0
+        T[:, np.argmax(E1[k], axis=1), :] = D
+        B[:, k] = 0.5 * (T + T.transpose(0, 2, 1))
+    B[:, 3:] = rotation
+    return [QuadraticMap(z, B[n], np.zeros((6, 2 * FRAME_SIZE)), np.zeros(6))
+            for n, z in enumerate(stacks)]
 
 
 @functools.lru_cache(maxsize=1)

@@ -35,6 +35,7 @@ the torsional spring use it (:func:`axis_angle`).
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -136,6 +137,7 @@ class QuadraticConstraint(Constraint):
     rows: QuadraticMap
     residual_scale: float = 1.0
     wrench: tuple | None = None
+    kernel = "quadratic rows"  # many at once: mbseig.model.batched.QuadraticGroup (this class only)
     affine_field = "aff"
 
     @property
@@ -177,12 +179,23 @@ class QuadraticConstraint(Constraint):
 
 def triad_constraint(name: str, frame: Affine) -> QuadraticConstraint:
     """The six rigid-body conditions of a frame: u·u = v·v = w·w = 1, u·v = v·w = w·u = 0."""
-    rows = Rows(frame)
+    B, b, c = _triad_constants()
+    return QuadraticConstraint(name, QuadraticMap(frame, B, b, c))
+
+
+@functools.lru_cache(maxsize=1)
+def _triad_constants():
+    """(B, b, c) of the six rigid-body conditions on a frame (the same for every body: made
+    once, read-only, shared by the bodies' constraints)."""
+    rows = Rows(Affine.constant(np.zeros(FRAME_SIZE)))
     E = [vector_matrix(e) for e in np.eye(3)]
     for a, b, const in ((0, 0, -1.0), (1, 1, -1.0), (2, 2, -1.0), (0, 1, 0.0), (1, 2, 0.0),
                         (2, 0, 0.0)):
         rows.dot(E[a], E[b], const)
-    return QuadraticConstraint(name, rows.build())
+    built = rows.build()
+    for A in (built.B, built.b, built.c):
+        A.setflags(write=False)
+    return built.B, built.b, built.c
 
 
 def normal_pair(a):
@@ -194,9 +207,14 @@ def normal_pair(a):
     return p, np.cross(a, p)
 
 
+@functools.lru_cache(maxsize=1)
 def selectors():
+    """(S1, S2): the first and the second frame of two stacked frames (made once, read-only)."""
     S1 = np.hstack([np.eye(FRAME_SIZE), np.zeros((FRAME_SIZE, FRAME_SIZE))])
-    return S1, np.roll(S1, FRAME_SIZE, axis=1)
+    S2 = np.roll(S1, FRAME_SIZE, axis=1)
+    for A in (S1, S2):
+        A.setflags(write=False)
+    return S1, S2
 
 
 def joint_rows(kind: str, frames, locals_, axes, length: float) -> QuadraticMap:

@@ -15,8 +15,9 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 
-from ..numerics import DENSE_ASSEMBLY, coo_sum, scatter
+from ..numerics import DENSE_ASSEMBLY, FAST_CSR, coo_sum, scatter
 from .base import BatchForce
+from .batched import kernel_groups
 from .cache import KeptValues
 
 __all__ = ["Model"]
@@ -108,24 +109,44 @@ class Model:
     @cached_property
     def _layout(self):
         """What the dense assembly of a small model repeats at every evaluation, made once per
-        model (the elements are fixed): the constraint row offsets, the flat keys
-        (row · n_cols + column, row-major as each block) of every single force's K and C
-        blocks, of Φ_q's and of H's blocks in element order.  The dense sums are
-        then one bincount of the blocks' values on these keys, as
+        model (the elements are fixed), each entry at its first use: [0] the constraint row
+        offsets, then the flat keys (row · n_cols + column, row-major as each block) of [1]
+        every single force's K and C blocks, [2] Φ_q's and [3] H's blocks in element order.
+        The dense sums are then one bincount of the blocks' values on these keys, as
         :func:`mbseig.numerics.scatter` forms them (the same sums in the same order)."""
-        off = np.cumsum([0] + [c.n_eq for c in self.constraints])
-        n = self.n
+        return _Layout(self)
 
-        def keys(blocks, n_cols):
-            parts = [(np.asarray(r).ravel()[:, None] * n_cols + np.asarray(c).ravel()[None, :]).ravel()
-                     for r, c in blocks]
-            return np.concatenate(parts) if parts else np.zeros(0, np.intp)
+    def _sparse(self, which, n_rows, blocks):
+        """The sparse sum of the blocks, as :func:`mbseig.numerics.scatter` forms it (the same
+        triplets in the same order), on the indices of ``self._layout.pairs(which)``."""
+        rows, cols = self._layout.pairs(which)
+        vals = [np.asarray(v, dtype=float).ravel() for _, _, v in blocks]
+        if sum(v.size for v in vals) != rows.size or not rows.size:
+            return scatter(n_rows, self.n, blocks)
+        v = np.concatenate(vals)
+        if v.size > FAST_CSR:  # (coo_sum's own path for so many, without copying the indices)
+            return sp.coo_matrix((v, (rows, cols)), shape=(n_rows, self.n)).tocsr()
+        return coo_sum(n_rows, self.n, [(rows, cols, v)])
 
+    @cached_property
+    def _groups(self):
+        """(constraint groups, single forces, their groups): the elements of one kind that
+        one kernel evaluates at once (:func:`mbseig.model.batched.kernel_groups`), made once."""
         singles = [f for f in self.forces if not isinstance(f, BatchForce)]
-        kf = keys([(f.idx, f.idx) for f in singles], n)
-        kp = keys([(np.arange(off[k], off[k + 1]), c.idx) for k, c in enumerate(self.constraints)], n)
-        kh = keys([(c.idx, c.idx) for c in self.constraints], n)
-        return off, kf, kp, kh
+        return kernel_groups(self.constraints), singles, kernel_groups(singles)
+
+    def _each(self, which, method, *args):
+        """[element.method(*args)] of the constraints (``which`` 0) or the single forces (1),
+        in element order, the grouped ones evaluated by their group."""
+        elements = self.constraints if which == 0 else self._groups[1]
+        groups = self._groups[2 * which]
+        if not groups:
+            return [getattr(e, method)(*args) for e in elements]
+        out = [None] * len(elements)
+        for pos, group in groups:
+            for k, v in zip(pos.tolist(), getattr(group, method)(*args)):
+                out[k] = v
+        return [getattr(e, method)(*args) if v is None else v for e, v in zip(elements, out)]
 
     def mass_matrix(self, q=None) -> sp.csr_matrix:
         """M(q): ``mass`` with the configuration-dependent element masses evaluated at q."""
@@ -153,11 +174,12 @@ class Model:
             known = {i.name: i for i in self.inputs}
             for nm, value in u.items():
                 g += value * known[nm].generalized_force(self, q)
+        single = iter(self._each(1, "force", q, qd))
         for f in self.forces:
             if isinstance(f, BatchForce):  # a batch of identical elements (model/batched.py)
                 f.add_force(g, q, qd)
             else:
-                np.add.at(g, f.idx, f.force(q, qd))
+                np.add.at(g, f.idx, next(single))
         return g
 
     def force_jacobians(self, q, qd=None, *, dense=False):
@@ -169,19 +191,20 @@ class Model:
     def _force_jacobians(self, q, qd, dense):
         qd = np.zeros(self.n) if qd is None else qd
         kb, cb, kt, ct = [], [], [], []
+        single = iter(self._each(1, "jacobians", q, qd))
         for f in self.forces:
             if isinstance(f, BatchForce):  # batches give COO triplets
                 Kt, Ct = f.jacobian_coo(q, qd)
                 kt.append(Kt)
                 ct.append(Ct)
                 continue
-            K, C = f.jacobians(q, qd)
+            K, C = next(single)
             kb.append((f.idx, f.idx, K))
             cb.append((f.idx, f.idx, C))
         if dense:
             K, C = (_summed(self.n, self.n, self._layout[1], b) for b in (kb, cb))
         else:
-            K, C = scatter(self.n, self.n, kb), scatter(self.n, self.n, cb)
+            K, C = (self._sparse(1, self.n, b) for b in (kb, cb))
         if kt:
             K = K + coo_sum(self.n, self.n, kt, dense=dense)
             C = C + coo_sum(self.n, self.n, ct, dense=dense)
@@ -191,7 +214,7 @@ class Model:
     def phi(self, q) -> np.ndarray:
         if not self.constraints:
             return np.zeros(0)
-        return np.concatenate([c.phi(q) for c in self.constraints])
+        return np.concatenate(self._each(0, "phi", q))
 
     def phi_q(self, q, *, dense=False) -> sp.csr_matrix:
         """Φ_q(q) (CSR; a dense array when ``dense``)."""
@@ -202,13 +225,14 @@ class Model:
     def _phi_q(self, q, dense):
         off = self._row_offsets()
         if dense:
-            jacs = [c.jac(q) for c in self.constraints]
+            jacs = self._each(0, "jac", q)
             return _summed(self.n_constraints, self.n, self._layout[2],
                            [(None, None, J) for J in jacs],
                            lambda: [(np.arange(off[k], off[k + 1]), c.idx, jacs[k])
                                     for k, c in enumerate(self.constraints)])
-        blocks = [(np.arange(off[k], off[k + 1]), c.idx, c.jac(q)) for k, c in enumerate(self.constraints)]
-        return scatter(self.n_constraints, self.n, blocks)
+        jacs = self._each(0, "jac", q)
+        blocks = [(np.arange(off[k], off[k + 1]), c.idx, jacs[k]) for k, c in enumerate(self.constraints)]
+        return self._sparse(2, self.n_constraints, blocks)
 
     def constraint_hessian(self, q, lam, *, dense=False) -> sp.csr_matrix:
         """H(λ) = Σ_k λ_k ∇²Φ_k(q), the stiffness of the constraint forces (CSR; a dense array
@@ -221,10 +245,16 @@ class Model:
 
     def _constraint_hessian(self, q, lam, dense):
         off = self._row_offsets()
-        blocks = [(c.idx, c.idx, c.hess(q, lam[off[k]:off[k + 1]])) for k, c in enumerate(self.constraints)]
+        hs = [None] * len(self.constraints)
+        for pos, group in self._groups[0]:  # the members' multipliers, one row each
+            rows = off[pos][:, None] + np.arange(group.B.shape[1])
+            for k, H in zip(pos.tolist(), group.hess(lam[rows])):
+                hs[k] = H
+        blocks = [(c.idx, c.idx, c.hess(q, lam[off[k]:off[k + 1]]) if hs[k] is None else hs[k])
+                  for k, c in enumerate(self.constraints)]
         if dense:
             return _summed(self.n, self.n, self._layout[3], blocks)
-        return scatter(self.n, self.n, blocks)
+        return self._sparse(3, self.n, blocks)
 
     @property
     def dense_assembly(self) -> bool:
@@ -236,7 +266,7 @@ class Model:
         """γ = −(Φ_q q̇)_q q̇, so that Φ_q q̈ = γ on the constraint manifold."""
         if not self.constraints:
             return np.zeros(0)
-        return np.concatenate([c.gamma(q, qd) for c in self.constraints])
+        return np.concatenate(self._each(0, "gamma", q, qd))
 
     # ---- input safety (README, "Input rules") -------------------------------------------------
     def nonfinite_element(self, q):
@@ -270,6 +300,73 @@ class Model:
         if not self.constraints:
             return np.zeros(0)
         return np.concatenate([np.full(c.n_eq, c.scale()) for c in self.constraints])
+
+
+class _Layout:
+    """Model._layout: its entries made at their first use (a model's statics may need Φ_q and
+    never the force blocks' keys)."""
+
+    def __init__(self, model):
+        self.model, self.kept = model, {}
+
+    def __getitem__(self, which):
+        if which not in self.kept:
+            self.kept[which] = (np.cumsum([0] + [c.n_eq for c in self.model.constraints])
+                                if which == 0 else _block_keys(self._blocks(which), self.model.n))
+        return self.kept[which]
+
+    def pairs(self, which):
+        """(rows, columns) of entry ``which``'s triplets, as scatter forms them from the blocks
+        (the sparse sums; int32 where scipy takes them so)."""
+        if ("pairs", which) not in self.kept:
+            m = self.model
+            kind = np.int32 if max(m.n, m.n_constraints) < 2**31 - 1 else np.int64
+            self.kept[("pairs", which)] = _block_pairs(self._blocks(which), kind)
+        return self.kept[("pairs", which)]
+
+    def _blocks(self, which):
+        m = self.model
+        if which == 1:
+            blocks = [(f.idx, f.idx) for f in m.forces if not isinstance(f, BatchForce)]
+        elif which == 2:
+            off = self[0]
+            blocks = [(np.arange(off[k], off[k + 1]), c.idx) for k, c in enumerate(m.constraints)]
+        else:
+            blocks = [(c.idx, c.idx) for c in m.constraints]
+        return blocks
+
+
+def _runs(blocks):
+    """(R, C) stacked row and column indices of the runs of blocks of one shape, in order."""
+    run = []
+    for r, c in blocks:
+        r, c = np.asarray(r).ravel(), np.asarray(c).ravel()
+        if run and (r.size != run[0][0].size or c.size != run[0][1].size):
+            yield np.array([x for x, _ in run]), np.array([y for _, y in run])
+            run = []
+        run.append((r, c))
+    if run:
+        yield np.array([x for x, _ in run]), np.array([y for _, y in run])
+
+
+def _block_keys(blocks, n_cols):
+    """The flat keys row · n_cols + column of the blocks (row-major each, in block order)."""
+    parts = [(R[:, :, None] * n_cols + C[:, None, :]).ravel() for R, C in _runs(blocks)]
+    if not parts:
+        return np.zeros(0, np.intp)
+    return (parts[0] if len(parts) == 1 else np.concatenate(parts)).astype(np.intp, copy=False)
+
+
+def _block_pairs(blocks, kind):
+    """(rows, columns) of the blocks' entries, row-major each, in block order."""
+    rows, cols = [], []
+    for R, C in _runs(blocks):
+        shape = (R.shape[0], R.shape[1], C.shape[1])
+        rows.append(np.broadcast_to(R[:, :, None], shape).astype(kind).ravel())
+        cols.append(np.broadcast_to(C[:, None, :], shape).astype(kind).ravel())
+    if not rows:
+        return np.zeros(0, kind), np.zeros(0, kind)
+    return tuple(x[0] if len(x) == 1 else np.concatenate(x) for x in (rows, cols))
 
 
 def _summed(n_rows, n_cols, keys, blocks, full=None):
