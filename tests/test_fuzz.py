@@ -207,8 +207,11 @@ MODE_NUMBERS = ("eigenvalue", "delta", "omega_n", "omega_d", "freq_hz", "zeta", 
 
 def _listing_problems(out, partial):
     probs = []
+    # a periodic case's partial (Arnoldi) multipliers carry bounds but no condition number
+    keys = [k for k in MODE_NUMBERS if not (k == "condition" and "partial" in (
+        out.get("floquet") or {}))]
     for m in out.get("modes", []):
-        bad = _finite_numbers({k: m.get(k) for k in MODE_NUMBERS})
+        bad = _finite_numbers({k: m.get(k) for k in keys})
         if bad:
             probs.append(f"mode {m.get('index')}: non-finite {', '.join(bad)}")
     if partial or probs:

@@ -15,13 +15,20 @@ from ..studies.periodic import floquet_json, frozen_summary, periodic_analysis
 from .common import analyzed, case_kwargs, print_json
 
 
-def exponent_modes(fl) -> list:
+def exponent_modes(fl, condition=None) -> list:
     """The Floquet exponents s = ln(μ)/T listed as modes (imaginary part reduced modulo 2π/T,
     a conjugate pair once with im > 0), each with the stability of its multiplier: stable when
     |μ| + b < 1, unstable when |μ| − b > 1, critical otherwise (b its error bound); the
-    ``backward_error`` field holds b/|μ|.  Sorted by omega_n, then delta."""
+    ``backward_error`` field holds b/|μ|, ``tolerance`` the band of δ = −ln|μ|/T that b
+    decides, b/(|μ| T) to first order, and ``condition`` the condition number κ of μ where the
+    method computes it (the full monodromy; ``condition`` aligned with the multipliers).
+    ``kind`` "flip" marks a real negative μ (one multiplier, exponent ln|μ|/T + iπ/T, a
+    response of twice the period), not half of a conjugate pair.  Sorted by omega_n, then
+    delta."""
     rows = []
-    for mu, ex, b in zip(fl["multipliers"], fl["exponents"], fl["error_bounds"]):
+    T = float(fl["period"])
+    kappa = [None] * len(fl["multipliers"]) if condition is None else list(condition)
+    for mu, ex, b, kap in zip(fl["multipliers"], fl["exponents"], fl["error_bounds"], kappa):
         re, im = ex
         if im < 0 or (im == 0 and mu[1] < 0):
             continue  # the conjugate of a listed pair
@@ -30,12 +37,15 @@ def exponent_modes(fl) -> list:
         wn = math.hypot(re, im)
         if im == 0:
             kind = "divergence" if stability == "unstable" else "overdamped" if re < 0 else "rigid-body"
+        elif mu[1] == 0:  # a real negative μ, one multiplier: a response at half the frequency
+            kind = "flip"
         else:
             kind = "flutter" if stability == "unstable" else "oscillatory"
         rows.append({"eigenvalue": [re, im], "delta": -re, "omega_n": wn, "omega_d": abs(im),
                      "freq_hz": abs(im) / (2 * math.pi), "zeta": -re / wn if wn else 0.0,
                      "stability": stability, "kind": kind, "multiplier": mu,
-                     "backward_error": b / m if m else b})
+                     "backward_error": b / m if m else b, "tolerance": b / (m * T) if m else b,
+                     **({} if kap is None else {"condition": float(kap)})})
     rows.sort(key=lambda r: (r["omega_n"], r["delta"]))
     for k, r in enumerate(rows, 1):
         r["index"] = k
@@ -58,7 +68,7 @@ def result_json(a) -> dict:
         "solver": f"floquet: {a.floquet.method}",
         "equilibrium": {"residual": ref.residual, "iterations": ref.iterations},
         "verdict": a.floquet.verdict,
-        "modes": exponent_modes(fl),
+        "modes": exponent_modes(fl, a.floquet.condition),
         "floquet": fl,
         "frozen_time": frozen_summary(a),
     }
