@@ -129,7 +129,10 @@ def coo_sum(n_rows, n_cols, triplets, *, dense=False):
                           [np.asarray(v, dtype=float) for _, _, v in triplets])
     if not triplets:
         return sp.csr_matrix((n_rows, n_cols))
-    r, c, v = (np.concatenate(x) for x in zip(*triplets))
+    if len(triplets) == 1:  # (one triplet: its arrays as they are, no copies)
+        r, c, v = (np.asarray(x).ravel() for x in triplets[0])
+    else:
+        r, c, v = (np.concatenate(x) for x in zip(*triplets))
     if r.size > FAST_CSR:
         return sp.coo_matrix((v, (r, c)), shape=(n_rows, n_cols)).tocsr()
     return csr_from_triplets(n_rows, n_cols, r, c, v)
@@ -323,7 +326,14 @@ def blas_limit(n):
         else:
             _BLAS_CONTROLLER.append(ThreadpoolController())
     controller = _BLAS_CONTROLLER[0]
-    return contextlib.nullcontext() if controller is None else controller.limit(limits=n)
+    if controller is None:
+        return contextlib.nullcontext()
+    try:  # already capped (OPENBLAS_NUM_THREADS=1, an enclosing limit): nothing to do (≈ 1 µs)
+        if all(lc.get_num_threads() <= n for lc in controller.lib_controllers):
+            return contextlib.nullcontext()
+    except Exception:  # noqa: BLE001 (a library that cannot say: limit it as before)
+        pass
+    return controller.limit(limits=n)
 
 
 def min_norm_projection(residual, jacobian, x, scales, *, tol, max_iter):
