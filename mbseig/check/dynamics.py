@@ -21,9 +21,10 @@ max(|q_j|, length scale): truncation error ~1e-12 of h, which is itself of secon
 perturbation).  The augmented system is then solved sparse (SuperLU: one thread, no BLAS
 contention).  Such models carry axial modes orders of magnitude stiffer than the bending modes
 that are checked, so :func:`simulate` integrates them with Radau IIA (order 5, implicit) when
-DOP853 is asked: an explicit method would need steps below the axial period
-(``Simulation.method`` records the one used).  Its Newton matrix is the exact Jacobian of the
-right-hand side at the equilibrium (:meth:`ForwardDynamics.state_jacobian`).
+DOP853 is asked (an explicit method would need steps below the axial period;
+``Simulation.method`` records the one used), in the tangent coordinates of their constraints
+(:mod:`mbseig.check.tangent`: why the full state fails there is measured in its docstring), with
+the exact Jacobian at the equilibrium as Newton matrix.
 """
 
 from __future__ import annotations
@@ -46,10 +47,13 @@ INTEGRATORS = ("DOP853", "Radau", "BDF")
 #: relative central-difference step of the mass derivatives (module docstring)
 MASS_STEP = 1e-6
 #: stiff models: absolute tolerances at least this many noise levels per sample interval,
-#: relative tolerance at least STIFF_RTOL (simulate)
+#: relative tolerance at least STIFF_RTOL, absolute ones at least STIFF_RTOL × the
+#: perturbation (simulate): the rounding noise of the unresolved stiff modes reaches the
+#: resolved ones through the geometric coupling inside Radau's Newton iteration
+#: (mbseig.check.tangent), which does not converge to tighter tolerances
 NOISE_FACTOR = 10.0
-STIFF_RTOL = 1e-8
-#: stiff models: modes above FAST_FACTOR × the checked |s| are left unresolved (modal_basis)
+STIFF_RTOL = 1e-6
+#: stiff models: modes above FAST_FACTOR × the checked |s| are left unresolved (simulate)
 FAST_FACTOR = 10.0
 #: their absolute tolerance, relative to the perturbation (they carry ~ε² of it)
 FAST_ATOL = 1e-2
@@ -170,12 +174,9 @@ class ForwardDynamics:
         g = self.force(q, qd)
         if self.stiff:
             g = g - self.velocity_terms(q, qd)
-            M = self.mass(q)
-        else:
-            M = self.M
         if self.m == 0:
             if self.stiff:
-                return np.linalg.solve(M, g), np.zeros(0)
+                return spla.spsolve(sp.csc_matrix(self.model.mass_matrix(q)), g), np.zeros(0)
             return sla.lu_solve(self._lu, g), np.zeros(0)
         gam = self.model.gamma(q, qd)
         n = self.n
@@ -184,6 +185,7 @@ class ForwardDynamics:
             A = sp.bmat([[self.model.mass_matrix(q), Js.T], [Js, None]], format="csc")
             sol = spla.splu(A).solve(np.concatenate([g, gam]))
             return sol[:n], sol[n:]
+        M = self.mass(q) if self.stiff else self.M
         J = self.phi_q(q)
         A = np.zeros((n + self.m, n + self.m))
         A[:n, :n] = M
@@ -235,21 +237,6 @@ class ForwardDynamics:
         X = spla.splu(A).solve(rhs)[:n]
         return np.block([[np.zeros((n, n)), np.eye(n)], [X]])
 
-    def modal_basis(self, Mr, Qr, N):
-        """(V, ω): a basis of the coordinates for a stiff model's integration, V = [N X, R]
-        (n × n), X the undamped modes of the reduced model (eigh of the symmetric parts of Q_r,
-        M_r), ω = √|λ| their frequencies, R the directions normal to the constraints (ω = 0);
-        columns scaled to a largest entry of 1, so a component is a length like u."""
-        Ms, Qs = 0.5 * (Mr + Mr.T), 0.5 * (Qr + Qr.T)
-        lam, X = sla.eigh(Qs, Ms)
-        cols = [N @ X]
-        if N.shape[1] < self.n:
-            cols.append(sla.null_space(N.T))
-        V = np.hstack(cols)
-        V = V / np.abs(V).max(axis=0)
-        omega = np.concatenate([np.sqrt(np.abs(lam)), np.zeros(V.shape[1] - lam.size)])
-        return V, omega
-
     # -- projections ------------------------------------------------------------------------
     def constraint_violation(self, u, v):
         """(max |Φ_k|/scale_k, max |Φ_q q̇|) at q = q₀ + u."""
@@ -297,23 +284,25 @@ class Simulation:
     velocity_drift: float
     max_projection: float
     max_velocity_projection: float
-    fast_modes: int = 0  # modes integrated unresolved (stiff models: simulate's ``modal``)
+    fast_modes: int = 0  # modes integrated unresolved (stiff models: simulate's ``cut``)
 
 
 def simulate(dynamics: ForwardDynamics, u0, v0, t_eval, *, segment_samples: int,
              method: str = "DOP853", rtol: float = 1e-10, atol_position: float,
-             atol_velocity: float, modal=None) -> Simulation:
+             atol_velocity: float, cut: float | None = None, tangent=None) -> Simulation:
     """Integrate from (u0, v0) through the sample times ``t_eval`` (t_eval[0] = 0), projecting
-    onto the constraints every ``segment_samples`` samples.  A model with a configuration-
-    dependent mass runs Radau where DOP853 is asked (module docstring).
+    onto the constraints every ``segment_samples`` samples.
 
-    ``modal`` = (V, ω, ω_cut) of :meth:`ForwardDynamics.modal_basis` (stiff models): the state
-    is integrated in the components w of u = V w, v = V ẇ, and the modes above ω_cut get the
-    absolute tolerance ``FAST_ATOL`` × the perturbation (× ω for velocities).  The nonlinear
-    terms excite the stiff axial modes at second order (~ε² of the perturbation); resolving
-    them would cost thousands of steps per period of the checked mode, while Radau (L-stable)
-    damps them unresolved and the modal coordinate of the checked mode is blind to them to
-    first order.  The error of the resolved modes is controlled as without ``modal``."""
+    A model with a configuration-dependent mass (``dynamics.stiff``) runs Radau where DOP853 is
+    asked, at a relative tolerance of at least ``STIFF_RTOL`` that also bounds the absolute
+    ones relative to the perturbation, in the tangent coordinates of its constraints
+    (:class:`~mbseig.check.tangent.TangentCoordinates`, ``tangent`` if given, built otherwise;
+    redundant constraints: the full state with projections, as other models).  There the modes
+    of the model's own linearization above ``cut`` (rad/s) are left unresolved with the
+    absolute tolerance ``FAST_ATOL`` × the perturbation (× ω for velocities): the nonlinear
+    terms excite the stiff axial modes at second order; resolving them would cost thousands
+    of steps per period of the checked mode, while Radau (L-stable) damps them unresolved and
+    the modal coordinate of the checked mode is blind to them to first order."""
     from scipy.integrate import (
         solve_ivp,  # imported here: it costs ~0.2 s at import mbseig
     )
@@ -326,38 +315,33 @@ def simulate(dynamics: ForwardDynamics, u0, v0, t_eval, *, segment_samples: int,
     if getattr(dynamics, "stiff", False):
         if method == "DOP853":
             method = "Radau"  # stiff axial modes (module docstring)
-        su = max(float(np.max(np.abs(u0), initial=0.0)), atol_position / rtol)
+        rtol = max(rtol, STIFF_RTOL)
+        amp = max(float(np.max(np.abs(u0), initial=0.0)), atol_position / rtol)
+        speed = atol_velocity / atol_position if atol_position > 0 else 1.0
+        atol_position = max(atol_position, rtol * amp)
+        atol_velocity = max(atol_velocity, rtol * amp * speed)
+        if not dynamics.redundant:
+            from .tangent import TangentCoordinates
+
+            tc = TangentCoordinates(dynamics) if tangent is None else tangent
+            out = tc.simulate(np.asarray(u0, float), np.asarray(v0, float), t_eval,
+                              method=method, rtol=rtol, atol_position=atol_position,
+                              atol_velocity=atol_velocity,
+                              cut=np.inf if cut is None else float(cut), fast_atol=FAST_ATOL,
+                              noise_factor=NOISE_FACTOR)
+            return Simulation(t=np.asarray(t_eval, float), **out)
         if method in ("Radau", "BDF"):
             extra["jac"] = dynamics.state_jacobian()
         # the stiff forces are computed from absolute coordinates: their rounding noise σ (in q̈)
         # bounds what any step can resolve; tolerances below it would shrink the steps to
         # nothing, so the absolute tolerances are floored at NOISE_FACTOR σ per sample interval
         dt = float(t_eval[1] - t_eval[0]) if len(t_eval) > 1 else 1.0
-        sigma = dynamics.acceleration_noise(np.concatenate([u0, v0]), su)
+        sigma = dynamics.acceleration_noise(np.concatenate([u0, v0]), amp)
         atol_velocity = max(atol_velocity, NOISE_FACTOR * sigma * dt)
         atol_position = max(atol_position, atol_velocity * dt)
-        rtol = max(rtol, STIFF_RTOL)
     atol = np.concatenate([np.full(n, atol_position), np.full(n, atol_velocity)])
     u, v, _, _ = dynamics.project(np.asarray(u0, float), np.asarray(v0, float))
-    fun, to_w, n_fast = dynamics.rhs, None, 0
-    if modal is not None:
-        Vb, omega, cut = modal
-        Vi = np.linalg.inv(Vb)
-        fast = omega > cut
-        n_fast = int(fast.sum())
-        a_fast = FAST_ATOL * max(float(np.max(np.abs(u0), initial=0.0)), atol_position)
-        atol[:n][fast] = a_fast
-        atol[n:][fast] = a_fast * omega[fast]
-
-        def to_w(x):
-            return np.concatenate([Vi @ x[:n], Vi @ x[n:]])
-
-        def fun(t, w):
-            return to_w(dynamics.rhs(t, np.concatenate([Vb @ w[:n], Vb @ w[n:]])))
-
-        if "jac" in extra:
-            W, Wi = sla.block_diag(Vb, Vb), sla.block_diag(Vi, Vi)
-            extra["jac"] = Wi @ extra["jac"] @ W
+    fun = dynamics.rhs
     U, V = [u], [v]
     drift = vdrift = proj = vproj = 0.0
     n_seg = 0
@@ -367,10 +351,8 @@ def simulate(dynamics: ForwardDynamics, u0, v0, t_eval, *, segment_samples: int,
         k1 = min(k + segment_samples, len(t_eval) - 1)
         ts = t_eval[k:k1 + 1]
         y0 = np.concatenate([u, v])
-        sol = solve_ivp(fun, (ts[0], ts[-1]), y0 if to_w is None else to_w(y0), method=method,
-                        t_eval=ts[1:], rtol=rtol, atol=atol, **extra)
-        if to_w is not None:
-            sol.y = np.vstack([Vb @ sol.y[:n], Vb @ sol.y[n:]])
+        sol = solve_ivp(fun, (ts[0], ts[-1]), y0, method=method, t_eval=ts[1:], rtol=rtol,
+                        atol=atol, **extra)
         if sol.status != 0:
             t_fail = sol.t[-1] if sol.t.size else ts[0]
             raise SimulationError(f"integration failed at t = {t_fail:.6g}: {sol.message}",
@@ -390,4 +372,4 @@ def simulate(dynamics: ForwardDynamics, u0, v0, t_eval, *, segment_samples: int,
                       rtol=rtol, atol_position=atol_position, atol_velocity=atol_velocity,
                       n_segments=n_seg, nfev=dynamics.nfev - nfev0, constraint_drift=drift,
                       velocity_drift=vdrift, max_projection=proj, max_velocity_projection=vproj,
-                      fast_modes=n_fast)
+                      fast_modes=0)

@@ -106,7 +106,7 @@ from ..errors import CaseError, SimulationError
 from ..model.linear_case import LinearCase
 from ..statics import solved
 from ..statics.reactions import reaction_forces
-from .dynamics import FAST_FACTOR, ForwardDynamics, simulate
+from .dynamics import FAST_FACTOR, STIFF_RTOL, ForwardDynamics, simulate
 from .fit import (
     amplification,
     fit_exponential,
@@ -206,7 +206,7 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
     opts = dict(amplitude=amplitude, periods=periods, efolds=efolds,
                 samples_per_period=samples_per_period, min_samples=min_samples, method=method,
                 ode_rtol=ode_rtol, length=length, t_cap=t_cap,
-                basis=dyn.modal_basis(Mr, Qr, N) if dyn.stiff else None)
+                tangent=_tangent(dyn, redundant, model))
     results = []
     for k in idx:
         j = k - 1
@@ -249,7 +249,10 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
                     "zero_delta_tol": zero_delta_tol, "rigid_tol": rigid_tol,
                     "amplitude": amplitude, "periods": periods,
                     "efolds": efolds, "samples_per_period": samples_per_period,
-                    "min_samples": min_samples, "ode_rtol": ode_rtol, "mass_tol": mass_tol,
+                    "min_samples": min_samples, "mass_tol": mass_tol,
+                    # the rtol the runs kept (a stiff model's floor) and the one asked for
+                    "ode_rtol": max(ode_rtol, STIFF_RTOL) if dyn.stiff else ode_rtol,
+                    "ode_rtol_asked": ode_rtol,
                     "resolution_k": resolution_k, "max_fast_periods": max_fast_periods,
                     "recheck_amplification": recheck_amplification,
                     "defective_amplification": defective_amplification,
@@ -258,6 +261,18 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
         elapsed=time.perf_counter() - t_start, reactions=reactions,
         constraint_stiffness=bool(getattr(lin, "constraint_stiffness", True)),
         actuators=tuple(dict(r) for r in getattr(model, "drivers", ()) or ()))
+
+
+def _tangent(dyn, redundant, model):
+    """The tangent coordinates a stiff model is integrated in (built once for all its modes)."""
+    if not dyn.stiff or redundant:
+        return None
+    from .tangent import TangentCoordinates
+
+    try:
+        return TangentCoordinates(dyn)
+    except SimulationError as exc:
+        raise exc.located(file=getattr(model, "source", None)) from None
 
 
 def _check_one(dyn, Mr, Pr, N, s, x, yh, names, base, o):
@@ -299,7 +314,7 @@ def _check_one(dyn, Mr, Pr, N, s, x, yh, names, base, o):
     sim = simulate(dyn, u0, v0, t_eval, segment_samples=seg, method=o["method"], rtol=o["ode_rtol"],
                    atol_position=o["ode_rtol"] * smallest,
                    atol_velocity=o["ode_rtol"] * smallest * abs(s),
-                   modal=None if o["basis"] is None else (*o["basis"], FAST_FACTOR * abs(s)))
+                   cut=FAST_FACTOR * abs(s), tangent=o["tangent"])
     # modal coordinate from the reduced state x = Nᵀ u, ẋ = Nᵀ v
     X, Xd = N.T @ sim.u, N.T @ sim.v
     den = yh @ ((2 * s * Mr + Pr) @ x)

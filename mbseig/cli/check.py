@@ -109,7 +109,10 @@ def run(args, spec) -> int:
         return 0 if res.passed else 1
     tol = res.tolerances
     print(f"case {res.name}: {len(res.modes)} mode(s) checked against the nonlinear model "
-          f"({res.integrator}, rtol {tol['ode_rtol']:g}, amplitude {tol['amplitude']:g} x "
+          f"({res.integrator}, rtol {tol['ode_rtol']:g}"
+          + (f" (asked {tol['ode_rtol_asked']:g}: the floor of a stiff model)"
+             if tol.get("ode_rtol_asked", tol["ode_rtol"]) != tol["ode_rtol"] else "")
+          + f", amplitude {tol['amplitude']:g} x "
           f"{tol['length_scale']:g})")
     print(f"tolerances: delta {tol['delta_rtol']:g} relative (undamped: |delta| <= "
           f"{tol['zero_delta_tol']:g} |s|), omega {tol['omega_rtol']:g} relative")
