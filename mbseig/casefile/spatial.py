@@ -187,11 +187,12 @@ class SpatialBuilder(SpatialElementReaders, Builder):
                 gz = frame.C.T @ frame_gravity(b["mass"], com, gravity)
                 np.add.at(g, frame.idx, gz)
                 np.add.at(g_gravity, frame.idx, gz)
-            constraints.append(triad_constraint(f"{f.label} (rigid body)", frame))
+            constraints.append(triad_constraint(f"{f.label} (rigid body)", frame, name))
             for p in b["carried"][1:]:
                 diff = self.affine_of(p) - frame_point(frame, self.local(name, self.point_pos[p]))
                 self.add_constraint(constraints, LinearConstraint(
-                    f"{f.label} (carries {p})", diff, np.eye(3), np.zeros(3), self.length_scale), f)
+                    f"{f.label} (carries {p})", diff, np.eye(3), np.zeros(3), self.length_scale,
+                    role=("carries", name, p)), f)
             marks = {"com": frame_point(frame, com),
                      **{lab: aff for lab, aff in self.stations.get(name, [])}}
             b["markers"] = []

@@ -113,6 +113,7 @@ class LinearConstraint(Constraint):
     G: np.ndarray
     b: np.ndarray
     length_scale: float = 1.0
+    role: tuple = ()  # ("carries", BODY, POINT): a point carried by a spatial body (reactions)
 
     @property
     def n_eq(self):

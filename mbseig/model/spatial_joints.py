@@ -137,6 +137,7 @@ class QuadraticConstraint(Constraint):
     rows: QuadraticMap
     residual_scale: float = 1.0
     wrench: tuple | None = None
+    role: tuple = ()  # ("triad", BODY or None): a frame's rigid-body conditions (reactions)
     kernel = "quadratic rows"  # many at once: mbseig.model.batched.QuadraticGroup (this class only)
     affine_field = "aff"
 
@@ -177,10 +178,11 @@ class QuadraticConstraint(Constraint):
                 "value": [float(x) + 0.0 for x in np.concatenate([F, M])], "unit": "N, N m"}
 
 
-def triad_constraint(name: str, frame: Affine) -> QuadraticConstraint:
-    """The six rigid-body conditions of a frame: u·u = v·v = w·w = 1, u·v = v·w = w·u = 0."""
+def triad_constraint(name: str, frame: Affine, body: str | None = None) -> QuadraticConstraint:
+    """The six rigid-body conditions of a frame: u·u = v·v = w·w = 1, u·v = v·w = w·u = 0
+    (``body``: the spatial body whose frame it is; None for a beam node's triad)."""
     B, b, c = _triad_constants()
-    return QuadraticConstraint(name, QuadraticMap(frame, B, b, c))
+    return QuadraticConstraint(name, QuadraticMap(frame, B, b, c), role=("triad", body))
 
 
 @functools.lru_cache(maxsize=1)

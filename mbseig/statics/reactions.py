@@ -140,30 +140,19 @@ def _reaction_value(c, q, lam, dlam):
 def _where(model, c, q, lam, unc, forces, errors) -> dict:
     """Where a constraint acts and its force and moment there (:func:`reaction_forces`)."""
     bodies = getattr(model, "bodies", {}) or {}
-    if _is_triad(c):
-        return {"kind": "internal", "on": next(
-            (b for b, r in bodies.items() if c.name.startswith(f"{r.get('label')} (")), None)}
+    role = getattr(c, "role", ()) or ()
+    if role[:1] == ("triad",):  # a frame's rigid-body conditions: internal to its body
+        return {"kind": "internal", "on": role[1] if role[1] in bodies else None}
     if getattr(c, "wrench", None) is not None:  # a spatial joint (model.spatial_joints)
         off, local, body = c.wrench
         z = c.aff(q)
         return _wrench(z[off:off + FRAME_SIZE], c.rows.grad(z)[:, off:off + FRAME_SIZE], lam,
                        unc, local, body)
-    for b, rec in bodies.items():
-        label = rec.get("label")
-        if rec.get("spatial") and c.name.startswith(f"{label} (carries "):
-            return _carried(model, b, c.name[len(label) + 10:-1], c, q, lam, unc)
+    if role[:1] == ("carries",) and role[1] in bodies:  # a point a spatial body carries
+        return _carried(model, role[1], role[2], c, q, lam, unc)
     if model.dimension == 2:
         return _planar(model, c, bodies, q, forces, errors, unc[2])
     return _on_frame(model, c, q, lam, unc)
-
-
-def _is_triad(c) -> bool:
-    """A frame's rows u·u = v·v = w·w = 1, u·v = v·w = w·u = 0 (spatial_joints.triad_constraint)."""
-    rows = getattr(c, "rows", None)
-    if rows is None or getattr(c, "wrench", None) is not None or rows.c.size != 6:
-        return False
-    return (rows.B.shape[1] == FRAME_SIZE and not np.any(rows.b)
-            and sorted(rows.c.tolist()) == [-1.0, -1.0, -1.0, 0.0, 0.0, 0.0])
 
 
 def _axes(frame_z):
