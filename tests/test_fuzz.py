@@ -222,8 +222,10 @@ def _listing_problems(out, partial):
     dof, modes_ = out["dof"], out["modes"]
     if dof > 0 and not modes_:
         return [f"empty listing for {dof} DOF (n_infinite {out.get('n_infinite')})"]
-    # a complex pair counts 2 eigenvalues, a real one 1, a rigid-body mode 1 or 2 (double s = 0)
-    count = sum(2 if m["kind"] in ("oscillatory", "flutter") else 1 for m in modes_)
+    # a complex pair counts 2 eigenvalues, a real one 1, a rigid-body mode 1 or 2 (double s = 0);
+    # a periodic case lists multipliers: a real one (negative: exponent ln|μ|/T + iπ/T) is 1
+    count = sum(1 if "multiplier" in m and m["multiplier"][1] == 0 else
+                2 if m["kind"] in ("oscillatory", "flutter") else 1 for m in modes_)
     rigid = sum(1 for m in modes_ if m["kind"] == "rigid-body")
     target = 2 * dof - int(out.get("n_infinite", 0))
     if not count <= target <= count + rigid:

@@ -22,9 +22,9 @@ def exponent_modes(fl, condition=None) -> list:
     ``backward_error`` field holds b/|μ|, ``tolerance`` the band of δ = −ln|μ|/T that b
     decides, b/(|μ| T) to first order, and ``condition`` the condition number κ of μ where the
     method computes it (the full monodromy; ``condition`` aligned with the multipliers).
-    ``kind`` "flip" marks a real negative μ (one multiplier, exponent ln|μ|/T + iπ/T, a
-    response of twice the period), not half of a conjugate pair.  Sorted by omega_n, then
-    delta."""
+    A real negative μ (a response of twice the period) is one multiplier, not half of a
+    conjugate pair: its exponent ln|μ|/T + iπ/T is listed once, and its ``multiplier`` has
+    imaginary part 0.  Sorted by omega_n, then delta."""
     rows = []
     T = float(fl["period"])
     kappa = [None] * len(fl["multipliers"]) if condition is None else list(condition)
@@ -37,8 +37,6 @@ def exponent_modes(fl, condition=None) -> list:
         wn = math.hypot(re, im)
         if im == 0:
             kind = "divergence" if stability == "unstable" else "overdamped" if re < 0 else "rigid-body"
-        elif mu[1] == 0:  # a real negative μ, one multiplier: a response at half the frequency
-            kind = "flip"
         else:
             kind = "flutter" if stability == "unstable" else "oscillatory"
         rows.append({"eigenvalue": [re, im], "delta": -re, "omega_n": wn, "omega_d": abs(im),

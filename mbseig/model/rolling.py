@@ -166,7 +166,8 @@ class RollingWheel(VelocityConstraint):
         rows = Rows(self.frame)
         rows.linear(n @ Pc / self.length, -(n @ self.plane_point) / self.length)
         rows.linear(n @ vector_matrix(self.e_f))
-        return WheelRows(f"{self.name} (contact, gauge)", rows.build(), self.length, None, self)
+        return WheelRows(f"{self.name} (contact, gauge)", rows.build(), self.length, None,
+                         wheel=self)
 
     # ---- the velocity rows ---------------------------------------------------------------------
     @cached_property
