@@ -13,7 +13,7 @@ and complex-step differences in tests/test_jacobians.py.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -113,7 +113,8 @@ class LinearConstraint(Constraint):
     G: np.ndarray
     b: np.ndarray
     length_scale: float = 1.0
-    role: tuple = ()  # ("carries", BODY, POINT): a point carried by a spatial body (reactions)
+    # ("carries", BODY, POINT): a point carried by a spatial body (reactions); keyword-only
+    role: tuple = field(default=(), kw_only=True)
 
     @property
     def n_eq(self):

@@ -36,7 +36,7 @@ the torsional spring use it (:func:`axis_angle`).
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -137,7 +137,9 @@ class QuadraticConstraint(Constraint):
     rows: QuadraticMap
     residual_scale: float = 1.0
     wrench: tuple | None = None
-    role: tuple = ()  # ("triad", BODY or None): a frame's rigid-body conditions (reactions)
+    # ("triad", BODY or None): a frame's rigid-body conditions (reactions); keyword-only, so the
+    # positional fields of the subclasses (contacts, wheels) follow ``wrench`` as before
+    role: tuple = field(default=(), kw_only=True)
     kernel = "quadratic rows"  # many at once: mbseig.model.batched.QuadraticGroup (this class only)
     affine_field = "aff"
 
