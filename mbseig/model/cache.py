@@ -33,5 +33,9 @@ class KeptValues:
             self._values[key] = hit
         return hit
 
+    def peek(self, key):
+        """The kept value of ``key``, or None (nothing computed)."""
+        return self._values.get(key)
+
     def __len__(self):
         return len(self._values)

@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 
+from ..model.cache import KeptValues
 from ..numerics import constraint_rank, saddle
 from .linalg import (
     DENSE_LIMIT,
@@ -45,7 +46,7 @@ class Family:
         self.dense = bool(getattr(model0, "dense_assembly", False))
         self.evaluations = 0
         self._memo_store: dict = {}
-        self._evals: dict = {}  # g, Φ and Φ_q by q (the comment above _kept())
+        self._evals = KeptValues(self.EVALS)  # g, Φ and Φ_q by q (the comment above _kept())
         self._pinned: dict = {}  # those at the grid points, for the records (pin())
 
     def model(self, p):
@@ -85,29 +86,25 @@ class Family:
     # g(q) belongs to one model (one p); Φ(q) and Φ_q(q) to its constraint elements, which the
     # models of a lean family share (only force scalars change with p), so the model at the
     # previous grid value (the difference ∂R/∂p) reuses them.  Kept values are the arrays the
-    # model returned, never changed in place.
+    # model returned, never changed in place, each with its owner (the model, or the tuple of
+    # constraint elements), whose ids are in the key: kept alive, no other object takes them.
     EVALS = 12
 
-    def _kept(self, what, owner, q, compute, same):
-        key = (what, id(owner) if what == "g" else None, q.tobytes())
-        hit = self._evals.get(key)
-        if hit is not None and same(hit[0], owner):
-            return hit[1]
-        value = compute()
-        if len(self._evals) >= self.EVALS:
-            self._evals.pop(next(iter(self._evals)))
-        self._evals[key] = (owner, value)
-        return value
+    @staticmethod
+    def _key(what, owner, q):
+        return (what, id(owner) if what == "g" else tuple(map(id, owner)), q.tobytes())
+
+    def _kept(self, what, owner, q, compute):
+        return self._evals.get(self._key(what, owner, q), lambda: (owner, compute()))[1]
 
     def _g(self, model, q):
-        return self._kept("g", model, q, lambda: model.generalized_force(q), _same_model)
+        return self._kept("g", model, q, lambda: model.generalized_force(q))
 
     def _phi(self, model, q):
-        return self._kept("phi", model.constraints, q, lambda: model.phi(q), _same_elements)
+        return self._kept("phi", model.constraints, q, lambda: model.phi(q))
 
     def _phi_q(self, model, q):
-        return self._kept("phi_q", model.constraints, q,
-                          lambda: model.phi_q(q, dense=self.dense), _same_elements)
+        return self._kept("phi_q", model.constraints, q, lambda: model.phi_q(q, dense=self.dense))
 
     def pin(self, p, y):
         """Keep the evaluations made at the grid point (p, y) for :meth:`known` (a small model's:
@@ -118,8 +115,8 @@ class Family:
         model, q = self.model(p), y[:self.n]
         for what, owner in (("g", model), ("phi", model.constraints),
                             ("phi_q", model.constraints)):
-            key = (what, id(owner) if what == "g" else None, q.tobytes())
-            hit = self._evals.get(key)
+            key = self._key(what, owner, q)
+            hit = self._evals.peek(key)
             if hit is not None:
                 self._pinned[(float(p),) + key] = hit
 
@@ -129,12 +126,11 @@ class Family:
         of the model starts from them instead of evaluating them again."""
         model = self.model(p)
         out = {}
-        for what, owner, same in (("g", model, _same_model),
-                                  ("phi", model.constraints, _same_elements),
-                                  ("phi_q", model.constraints, _same_elements)):
-            key = (what, id(owner) if what == "g" else None, q.tobytes())
-            hit = self._evals.get(key) or self._pinned.get((float(p),) + key)
-            if hit is not None and same(hit[0], owner):
+        for what, owner in (("g", model), ("phi", model.constraints),
+                            ("phi_q", model.constraints)):
+            key = self._key(what, owner, q)
+            hit = self._evals.peek(key) or self._pinned.get((float(p),) + key)
+            if hit is not None:
                 out[what] = hit[1]
         if bool(getattr(model, "dense_assembly", False)) != self.dense:
             out.pop("phi_q", None)
@@ -189,11 +185,3 @@ class Family:
         w[-1] = 1.0 / self.p_scale**2
         return w
 
-
-def _same_model(a, b) -> bool:
-    return a is b
-
-
-def _same_elements(a, b) -> bool:
-    """Whether two tuples of constraint elements hold the same element objects."""
-    return a is b or (len(a) == len(b) and all(x is y for x, y in zip(a, b)))

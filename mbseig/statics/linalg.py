@@ -26,6 +26,7 @@ import scipy.sparse as sp
 
 from ..errors import EquilibriumError
 from ..model.elements import DistanceConstraint
+from ..model.cache import KeptValues
 from ..numerics import (
     LazyModule,
     blas_limit,
@@ -56,7 +57,9 @@ def blas_threads(n):
     return blas_limit(n)
 
 
-_SCALES: dict = {}  # StepScales.of: the last few scales by their model's elements
+# StepScales.of: the last few scales by their model's elements (each kept with the elements it
+# was made from, so that their ids, in the key, cannot be taken by other objects meanwhile)
+_SCALES = KeptValues(8)
 
 
 class StepScales:
@@ -95,14 +98,7 @@ class StepScales:
         constraints = tuple(model.constraints)
         key = (tuple(map(id, constraints)), float(getattr(model, "length_scale", 1.0) or 1.0),
                tuple(model.coordinate_kinds), getattr(model, "dimension", None))
-        hit = _SCALES.get(key)
-        if hit is not None and all(a is b for a, b in zip(hit[0], constraints)):
-            return hit[1]
-        scales = cls(model)
-        if len(_SCALES) >= 8:
-            _SCALES.pop(next(iter(_SCALES)))
-        _SCALES[key] = (constraints, scales)  # (the elements kept alive: their ids stay theirs)
-        return scales
+        return _SCALES.get(key, lambda: (constraints, cls(model)))[1]
 
     def weights(self, n_total):
         """The metric 1/ℓ² of the coordinates (0 for the multipliers) of an augmented vector."""
