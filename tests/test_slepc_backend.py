@@ -70,11 +70,20 @@ def test_slepc_refuses_a_band():
         solve_partial(M, C, K, G=G, band=(1.0, 2.0), solver="partial-slepc")
 
 
-def test_slepc_missing_is_one_clear_error(monkeypatch):
-    """Without slepc4py the path is refused with the install hint, never a traceback."""
-    monkeypatch.setattr(slepc_mod, "slepc_python", lambda: None)
+def test_slepc_missing_is_one_clear_error(monkeypatch, tmp_path):
+    """Without slepc4py the path is refused with the install hint, never a traceback: a named
+    worker Python that does not exist, and one that exists but cannot import petsc4py (a
+    script standing in for it that fails as such a Python fails)."""
     M, C, K, G = _chain(60)
+    monkeypatch.setenv("MBSEIG_SLEPC_PYTHON", str(tmp_path / "no-such-python"))
     with pytest.raises(SolverError, match="python3-slepc4py"):
+        solve_partial(M, C, K, G=G, n_modes=3, solver="partial-slepc")
+    fake = tmp_path / "python"
+    fake.write_text("#!/bin/sh\necho \"ModuleNotFoundError: No module named 'petsc4py'\" >&2\n"
+                    "exit 2\n")
+    fake.chmod(0o755)
+    monkeypatch.setenv("MBSEIG_SLEPC_PYTHON", str(fake))
+    with pytest.raises(SolverError, match="python3-slepc4py.*No module named 'petsc4py'"):
         solve_partial(M, C, K, G=G, n_modes=3, solver="partial-slepc")
 
 

@@ -7,8 +7,9 @@ as ``partial-companion``; mbseig then checks every returned pair exactly as it c
 distribution's Python (Debian: ``python3-slepc4py python3-petsc4py``), compiled against another
 numpy than the one mbseig runs on, so the solve runs in a separate process: the Python named by
 ``MBSEIG_SLEPC_PYTHON``, else this Python if it imports slepc4py, else ``/usr/bin/python3``.  The
-matrices go to it through a temporary ``.npz`` file and the eigenpairs come back the same way
-(:mod:`mbseig.eigen.slepc_worker`).  ``PETSC_DIR`` and ``SLEPC_DIR`` default to the
+matrices go to it as ``.npy`` files in a temporary folder (in ``/dev/shm`` where it has room)
+and the eigenpairs come back the same way (:mod:`mbseig.eigen.slepc_worker`); a worker on one
+process is started before the files are written and imports PETSc meanwhile.  ``PETSC_DIR`` and ``SLEPC_DIR`` default to the
 distribution's real-scalar builds when unset.
 
 LU package: ``umfpack`` by default (with pivoting: the bordered matrix has a zero block, on which
@@ -37,7 +38,7 @@ import numpy as np
 
 from ..errors import SolverError
 
-__all__ = ["slepc_available", "slepc_python", "slepc_ranks", "slepc_solve"]
+__all__ = ["slepc_available", "slepc_python", "slepc_ranks", "slepc_solve", "worker_python"]
 
 _WORKER = Path(__file__).with_name("slepc_worker.py")
 
@@ -77,6 +78,25 @@ def slepc_available() -> bool:
     return slepc_python() is not None
 
 
+def worker_python():
+    """The Python that is to run the worker, chosen without starting it (a probe costs a
+    petsc4py import, ≈ 0.4 s, at every solve in a fresh process): ``MBSEIG_SLEPC_PYTHON``, else
+    this Python if it has slepc4py and petsc4py, else ``/usr/bin/python3``.  A candidate that
+    cannot import them is found out by the worker itself, which says so in one line."""
+    import importlib.util
+
+    named = os.environ.get("MBSEIG_SLEPC_PYTHON")
+    if named:
+        return named if Path(named).exists() else None
+    if all(importlib.util.find_spec(m) is not None for m in ("petsc4py", "slepc4py")):
+        return sys.executable
+    return "/usr/bin/python3" if Path("/usr/bin/python3").exists() else None
+
+
+_MISSING = ("solver 'partial-slepc' needs slepc4py (Debian: apt install python3-slepc4py "
+            "python3-petsc4py; or set MBSEIG_SLEPC_PYTHON to a Python that imports slepc4py)")
+
+
 def slepc_ranks(ranks=None) -> int:
     """The MPI processes of the SLEPc worker: ``ranks``, else ``MBSEIG_SLEPC_RANKS``, else 1."""
     raw = os.environ.get("MBSEIG_SLEPC_RANKS", "1") if ranks is None else ranks
@@ -103,6 +123,34 @@ def _launch(exe, ranks, env):
     return [mpiexec, "-n", str(ranks), exe]
 
 
+def _scratch(*mats):
+    """Where the worker's files go: ``/dev/shm`` (memory) when it has room for twice the
+    matrices and 32 vectors, else the default temporary folder."""
+    shm = "/dev/shm"
+    try:
+        n = mats[0].shape[0]
+        need = 2 * sum(12 * A.nnz + 4 * n for A in mats) + 32 * 16 * n
+        if os.access(shm, os.W_OK) and shutil.disk_usage(shm).free > need:
+            return shm
+    except OSError:
+        pass
+    return None
+
+
+def _write_input(folder, mats, opts):
+    """The worker's IN folder: each CSR array as a ``.npy`` file, the options as JSON."""
+    np.save(os.path.join(folder, "shape.npy"), np.array(mats[0].shape))
+    for key, A in zip("MPQ", mats):
+        A = A.tocsr(copy=True)
+        A.sum_duplicates()
+        A.sort_indices()
+        for part in ("data", "indices", "indptr"):
+            np.save(os.path.join(folder, f"{key}_{part}.npy"), getattr(A, part))
+        del A
+    with open(os.path.join(folder, "options.json"), "w") as f:
+        json.dump(opts, f)
+
+
 def slepc_solve(Mb, Pb, Qb, nev, target=0.0, *, tol=1e-14, maxit=1000, ncv=None,
                 factor=None, ranks=None, upper_tol=None):
     """(s, X, info): ``nev`` or more eigenpairs of (Mb s² + Pb s + Qb) x = 0 nearest ``target``
@@ -111,11 +159,9 @@ def slepc_solve(Mb, Pb, Qb, nev, target=0.0, *, tol=1e-14, maxit=1000, ncv=None,
     ``mumps`` on several by default.  X's columns are the vectors of ``info["columns"]`` of s:
     every eigenvalue, or with ``upper_tol`` those with Im s ≥ −upper_tol·|s| (the conjugate
     partners of the others; half the vectors to gather and to pass back)."""
-    exe = slepc_python()
+    exe = worker_python()
     if exe is None:
-        raise SolverError("solver 'partial-slepc' needs slepc4py (Debian: apt install "
-                          "python3-slepc4py python3-petsc4py; or set MBSEIG_SLEPC_PYTHON to a "
-                          "Python that imports slepc4py)")
+        raise SolverError(_MISSING)
     ranks = slepc_ranks(ranks)
     factor = factor or ("umfpack" if ranks == 1 else "mumps")
     env = _env()
@@ -123,34 +169,47 @@ def slepc_solve(Mb, Pb, Qb, nev, target=0.0, *, tol=1e-14, maxit=1000, ncv=None,
     opts = {"nev": int(nev), "target": float(target), "tol": float(tol), "maxit": int(maxit),
             "ncv": int(ncv or 0), "factor": factor,
             "upper_tol": None if upper_tol is None else float(upper_tol)}
-    arrays = {"shape": np.array(Mb.shape), "options": json.dumps(opts)}
-    for key, A in (("M", Mb), ("P", Pb), ("Q", Qb)):
-        A = A.tocsr(copy=True)
-        A.sum_duplicates()
-        A.sort_indices()
-        arrays.update({f"{key}_data": A.data, f"{key}_indices": A.indices, f"{key}_indptr": A.indptr})
-    with tempfile.TemporaryDirectory(prefix="mbseig-slepc-") as tmp:
-        path_in, path_out = os.path.join(tmp, "in.npz"), os.path.join(tmp, "out.npz")
-        np.savez(path_in, **arrays)
-        del arrays
-        p = subprocess.run(launch + [str(_WORKER), path_in, path_out], env=env,
-                           capture_output=True, text=True)
-        if p.returncode != 0 or not os.path.exists(path_out):
+    with tempfile.TemporaryDirectory(prefix="mbseig-slepc-", dir=_scratch(Mb, Pb, Qb)) as tmp:
+        path_in, path_out = os.path.join(tmp, "in"), os.path.join(tmp, "out")
+        os.mkdir(path_in)
+        os.mkdir(path_out)
+        wait = ranks == 1  # one process starts while IN is written (module docstring)
+        cmd = launch + [str(_WORKER), path_in, path_out] + (["--wait"] if wait else [])
+        proc = None
+        try:
+            if wait:
+                proc = subprocess.Popen(cmd, env=env, stdin=subprocess.PIPE,
+                                        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+            _write_input(path_in, (Mb, Pb, Qb), opts)
+            if proc is None:
+                proc = subprocess.Popen(cmd, env=env, stdin=subprocess.DEVNULL,
+                                        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+            _, err = proc.communicate("go\n" if wait else None)
+        except BaseException:
+            if proc is not None and proc.poll() is None:
+                proc.kill()
+                proc.wait()
+            raise
+        result = os.path.join(path_out, "result.npz")
+        if proc.returncode != 0 or not os.path.exists(result):
             # the worker's own one-line message comes first (mpiexec appends banners after it)
-            last = next((line for line in p.stderr.splitlines()
+            last = next((line for line in err.splitlines()
                          if line.strip() and set(line.strip()) != {"-"}), "no message")
-            raise SolverError(f"partial-slepc: the SLEPc worker failed (exit {p.returncode}: "
+            if last.startswith("ModuleNotFoundError") and ("petsc4py" in last
+                                                           or "slepc4py" in last):
+                raise SolverError(f"{_MISSING}: {exe} says {last}")
+            raise SolverError(f"partial-slepc: the SLEPc worker failed (exit {proc.returncode}: "
                               f"{last})")
         try:
-            with np.load(path_out) as out:
-                s, X = out["s"], out["X"]
-                columns = out["columns"]
-                info = {k: out[k].item()
-                        for k in ("its", "nconv", "setup", "solve", "reason", "factor", "ranks")}
+            with np.load(result) as out:
+                s, columns = out["s"], out["columns"]
+                info = {k: out[k].item() for k in ("its", "nconv", "setup", "solve", "extract",
+                                                   "reason", "factor", "ranks")}
+            X = np.load(os.path.join(path_out, "X.npy"))
             info["columns"] = columns
             info["peak_rss_mb"] = []
             for r in range(ranks):
-                with open(f"{path_out}.rank{r}") as f:
+                with open(os.path.join(path_out, f"rank{r}.json")) as f:
                     info["peak_rss_mb"].append(round(json.load(f)["peak_rss_kb"] / 1024.0, 1))
         except (OSError, ValueError, KeyError) as exc:
             raise SolverError(f"partial-slepc: the worker's result is unreadable ({exc})") from None
