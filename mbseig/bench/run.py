@@ -80,7 +80,7 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
     out_dir.mkdir(parents=True, exist_ok=True)
     repeats = repeats or (1 if quick else 3)
     all_sections = ("dense", "structured", "partial", "large", "startup", "peer", "sweeps",
-                    "jacobians", "constraint", "timedomain", "failures", "nlevp", "rotor")
+                    "jacobians", "constraint", "timedomain", "failures", "nlevp", "rotor", "beams")
     sections = sections or all_sections
     cfg = {
         "quick": quick, "repeats": repeats, "threads": threads,
@@ -130,6 +130,11 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
             from .rotor_rows import bench_rotor
 
             res["rows"] += bench_rotor(log, repeats=repeats, n_speeds=9 if quick else 41)
+        if "beams" in sections:
+            from .beam_rows import bench_beams
+
+            res["rows"] += bench_beams(log, repeats=repeats, beams=5 if quick else 50,
+                                       elements=40 if quick else 334)
         if "failures" in sections:
             res["failures"] = [{k: getattr(c, k) for k in ("name", "naive_method", "naive", "mbseig",
                                                            "reference", "naive_wrong", "mbseig_right")}
