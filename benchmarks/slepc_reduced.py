@@ -1,7 +1,9 @@
 """Benchmark: mbseig's lowest 20 modes of a large damped constrained model against SLEPc's PEP
 solve of the same model's reduced problem, time and peak memory, each in a fresh process.
 
-Model: the bench's large chain (:func:`mbseig.bench.sparse_rows.large_chain`: n masses
+The kinds and the model are those of ``mbseig bench``'s slepc section
+(:mod:`mbseig.bench.slepc_rows`, which also runs the chain without its links); this script runs
+any of them at any size.  Model: the bench's large chain (:func:`mbseig.bench.sparse_rows.large_chain`: n masses
 m_i = 1 + 0.5 sin i, springs k = 1000, every 10th spring a rigid link, grounded dashpots on every
 7th mass plus βK: non-proportional damping).  Its constraints x_{a+1} = x_a have a sparse null
 basis N (one coordinate of each link eliminated), so the reduced problem
@@ -35,73 +37,15 @@ import os
 import statistics
 import subprocess
 import sys
-import time
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-import numpy as np  # noqa: E402
-import scipy.sparse as sp  # noqa: E402
-
-
-def reduced(M, C, K, G):
-    """(Mr, Pr, Qr) = Nᵀ(M, C, K)N with N the sparse null basis of the chain's links."""
-    n = M.shape[0]
-    G = G.tocsr()
-    dep = G.indices[G.data > 0]  # x_{a+1}: eliminated
-    partner = G.indices[G.data < 0]  # x_a: kept
-    keep = np.ones(n, bool)
-    keep[dep] = False
-    col = np.cumsum(keep) - 1
-    col[dep] = col[partner]
-    N = sp.csr_matrix((np.ones(n), (np.arange(n), col)), shape=(n, int(keep.sum())))
-    assert abs(G @ N).max() == 0  # N spans null G exactly
-    return tuple((N.T @ A @ N).tocsr() for A in (M, C, K))
-
-
-def _peak_rss_mb():
-    with open("/proc/self/status") as f:
-        for line in f:
-            if line.startswith("VmHWM:"):
-                return int(line.split()[1]) / 1024.0
-    return float("nan")
+from mbseig.bench.slepc_rows import slepc_worker  # noqa: E402
 
 
 def worker(kind, n):
-    from mbseig.bench.sparse_rows import large_chain
-
-    M, C, K, G = large_chain(n)
-    t0 = time.perf_counter()
-    if kind in ("mbseig", "pslepc"):
-        from mbseig.eigen import Problem, Request, solve
-
-        path = "auto" if kind == "mbseig" else "partial-slepc"
-        sol = solve(Problem(M, C, K, G=G), Request(path, n_modes=20))
-        out = {"seconds": time.perf_counter() - t0, "rss_mb": _peak_rss_mb(),
-               "solver": sol.solver, "eta": float(np.max(sol.backward_error)),
-               "lowest": float(np.min(np.abs(sol.eigenvalues)))}
-    else:
-        from mbseig.eigen.slepc import slepc_solve
-
-        if kind == "bslepc":  # the bordered pencil partial-slepc hands to SLEPc, its options
-            from mbseig.eigen.shift_invert import bordered
-
-            Mr, Pr, Qr, _ = bordered(M, C, K, G)
-            factor = "umfpack"
-        else:
-            Mr, Pr, Qr = reduced(M, C, K, G)
-            factor = "petsc"
-        del M, C, K, G
-        nev, tol = (20, 1e-8) if kind == "slepc20" else (41, 1e-14)
-        t0 = time.perf_counter()
-        s, X, info = slepc_solve(Mr, Pr, Qr, nev, tol=tol, factor=factor, upper_tol=1e-9)
-        # SLEPc's own time: matrix assembly and PEPSolve inside the worker (its process start
-        # and the file transfer, part of ``wall``, are not counted against it)
-        out = {"seconds": info["setup"] + info["solve"], "wall": time.perf_counter() - t0,
-               "rss_mb": info["peak_rss_mb"][0], "solve": info["solve"], "nconv": info["nconv"],
-               "lowest": float(np.min(np.abs(s)))}
-    out.update(kind=kind, n=n)
-    print(json.dumps(out))
+    slepc_worker(kind, n, constrained=True)
 
 
 def main(argv=None):

@@ -80,7 +80,8 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
     out_dir.mkdir(parents=True, exist_ok=True)
     repeats = repeats or (1 if quick else 3)
     all_sections = ("dense", "structured", "partial", "large", "startup", "peer", "sweeps",
-                    "jacobians", "constraint", "timedomain", "failures", "nlevp", "rotor", "beams")
+                    "jacobians", "constraint", "timedomain", "failures", "nlevp", "rotor", "beams",
+                    "slepc")
     sections = sections or all_sections
     cfg = {
         "quick": quick, "repeats": repeats, "threads": threads,
@@ -94,6 +95,7 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
         "jacobian_sizes": [10] if quick else [10, 100],
         "left_n": 100 if quick else 1000,
         "large_sizes": [2000] if quick else [10_000, 100_000, 1_000_000],
+        "slepc_sizes": [2000] if quick else [10_000, 100_000, 1_000_000],
         "startup_repeats": 1 if quick else 15,
         "peer_sizes": [20] if quick else [50, 200, 500],
         "sweep_grid": (2, 5) if quick else (6, 20),
@@ -141,9 +143,13 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
                                for c in run_all()]
     if "partial" in sections:  # fresh processes: BLAS threads set through the environment
         res["rows"] += bench_partial(cfg["partial_sizes"], repeats, cfg["partial_general_max"], threads, log)
-    if "large" in sections:
+    if "large" in sections:  # SLEPc has its own section, against SLEPc itself
         res["rows"] += bench_large(cfg["large_sizes"], 1 if quick else repeats, threads, log,
-                                   slepc=not quick)
+                                   slepc=False)
+    if "slepc" in sections:
+        from .slepc_rows import bench_slepc
+
+        res["rows"] += bench_slepc(cfg["slepc_sizes"], repeats, log, threads=threads)
     if "startup" in sections:
         res["rows"] += bench_startup(cfg["startup_repeats"], log)
     res["elapsed"] = time.perf_counter() - t_start
