@@ -12,6 +12,9 @@ LU of the bordered pencil).  Accuracy: at a small N the partial path is compared
 path on the same model (relative difference of the 20 lowest |s|).
 
     python benchmarks/spatial_chain.py [--n 10000] [--check-n 200]
+
+The case and its reading are those of ``mbseig bench``'s spatial section
+(:mod:`mbseig.bench.spatial_rows`).
 """
 
 from __future__ import annotations
@@ -21,91 +24,19 @@ import os
 import sys
 import tempfile
 import time
-import tomllib
 import warnings
-from pathlib import Path
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import numpy as np
-import scipy.sparse as sp
 
 import mbseig
-
-CASE = """
-schema_version = 1
-title = "chain of {n} spatial rigid bodies on bushings"
-dimension = 3
-
-[parameters]
-n = {n}
-Lt = 2.0            # length of the chain [m]: a 2 m shaft cut into n rigid segments
-h = "Lt / n"
-rhoA = 8.0          # mass per length [kg/m]
-m = "rhoA * h"
-Jp = "m * 1e-3"     # polar and transverse inertia of a segment (radius ~ 0.045 m)
-Jt = "m * (5e-4 + h**2 / 12)"
-EA = 2e8            # axial and shear stiffness [N]
-EI = 2e4            # bending stiffness [N m^2] (1.5 EI about z: no repeated pairs)
-GJ = 1.5e4          # torsional stiffness [N m^2]
-k = "EA / h"
-kr = "EI / h"
-kt = "GJ / h"
-
-[[bodies]]
-repeat = {{ i = [1, "n"] }}
-name = "b{{i}}"
-mass = "m"
-com = ["(i - 0.5) * h", 0.0, 0.0]
-inertia = ["Jp", "Jt", "Jt"]
-
-[[forces]]
-repeat = {{ i = [1, "n - 1"] }}
-type = "bushing"
-bodies = ["b{{i}}", "b{{i + 1}}"]
-at = ["i * h", 0.0, 0.0]
-stiffness = ["k", "k", "k", "kt", "kr", "1.5 * kr"]
-
-[[forces]]
-type = "bushing"
-bodies = ["ground", "b1"]
-at = [0.0, 0.0, 0.0]
-stiffness = ["k", "k", "k", "kt", "kr", "1.5 * kr"]
-
-[[forces]]
-type = "bushing"
-bodies = ["ground", "b{n}"]
-at = ["n * h", 0.0, 0.0]
-stiffness = ["k", "k", "k", "kt", "kr", "1.5 * kr"]
-"""
-
-
-def _floor(path, mass, Jq):
-    """The floor of reading and assembling: the TOML parsed by tomllib alone, and M and Φ_q
-    formed as CSR from their own triplets (what any reader of this case must at least do)."""
-    t = time.perf_counter()
-    tomllib.loads(Path(path).read_text())
-    for A in (mass.tocoo(), Jq.tocoo()):
-        sp.csr_matrix((A.data, (A.row, A.col)), shape=A.shape)
-    return time.perf_counter() - t
+from mbseig.bench.spatial_rows import build_chain
 
 
 def run(n, directory, n_modes=20, dense=False):
-    path = Path(directory) / f"chain{n}.toml"
-    path.write_text(CASE.format(n=n))
-    times = {}
-    t = time.perf_counter()
-    model = mbseig.load_case(path)
-    times["read + assemble"] = time.perf_counter() - t
-    q = model.q_init
-    t = time.perf_counter()
-    model.phi(q)
-    Jq = model.phi_q(q)
-    model.generalized_force(q)
-    model.force_jacobians(q)
-    times["first Φ, Φ_q, g, K, C"] = time.perf_counter() - t
-    times["floor"] = _floor(path, model.mass, Jq)
+    model, times = build_chain(n, directory)
     t = time.perf_counter()
     eq = mbseig.equilibrium(model)
     times["equilibrium"] = time.perf_counter() - t

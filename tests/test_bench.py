@@ -60,3 +60,17 @@ def test_bench_beams_rows_against_the_closed_forms(tmp_path):
                               "platform": "x"}, "elapsed": 1.0}, tmp_path)
     md = (tmp_path / "benchmarks.md").read_text()
     assert "## 3-D beams" in md and "| 2 × 16 elements | 192 | partial" in md
+
+
+def test_bench_spatial_chain_reads_its_bodies(tmp_path):
+    """The spatial section's model: 12 natural coordinates and 6 rigid-body conditions per body
+    (DESIGN §2), N + 1 bushings; its first evaluation at the initial configuration satisfies
+    Φ = 0 (the bodies are placed exactly: tolerance 1e-12 on unit-vector conditions)."""
+    import numpy as np
+
+    from mbseig.bench.spatial_rows import build_chain
+
+    model, times = build_chain(20, tmp_path)
+    assert model.n == 12 * 20 and model.n_constraints == 6 * 20 and len(model.forces) == 21
+    assert np.max(np.abs(model.phi(model.q_init))) <= 1e-12
+    assert set(times) == {"read + assemble", "first Φ, Φ_q, g, K, C", "floor"}

@@ -81,7 +81,7 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
     repeats = repeats or (1 if quick else 3)
     all_sections = ("dense", "structured", "partial", "large", "startup", "peer", "sweeps",
                     "jacobians", "constraint", "timedomain", "failures", "nlevp", "rotor", "beams",
-                    "slepc")
+                    "slepc", "spatial")
     sections = sections or all_sections
     cfg = {
         "quick": quick, "repeats": repeats, "threads": threads,
@@ -137,6 +137,10 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
 
             res["rows"] += bench_beams(log, repeats=repeats, beams=5 if quick else 50,
                                        elements=40 if quick else 334)
+        if "spatial" in sections:
+            from .spatial_rows import bench_spatial
+
+            res["rows"] += bench_spatial(log, n=500 if quick else 10_000, repeats=repeats)
         if "failures" in sections:
             res["failures"] = [{k: getattr(c, k) for k in ("name", "naive_method", "naive", "mbseig",
                                                            "reference", "naive_wrong", "mbseig_right")}
