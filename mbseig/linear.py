@@ -151,7 +151,7 @@ class LinearModel:
 
 def linearize(model, eq: Equilibrium, *, rank_tol: float | None = None,
               constraint_stiffness: bool = True, sparse: bool | None = None,
-              reference=None, signals: bool = True) -> LinearModel:
+              reference=None, signals: bool = True, basis=None) -> LinearModel:
     """Linear model about ``eq`` (see module docstring).
 
     rank_tol : relative singular-value threshold for null Φ_q (default: the one the equilibrium
@@ -166,6 +166,9 @@ def linearize(model, eq: Equilibrium, *, rank_tol: float | None = None,
         holds Φ_q(q₀) for the bordered pencil of :mod:`mbseig.eigen.partial` (N is None).
     signals : form B, C, D and the named angles (False: M, P, Q and N only, B, C, D left None —
         for the points of a sweep, which use the modes alone).
+    basis : (N, rank, independent, cosine) as :func:`continuous_null_basis` gives it for this
+        equilibrium's Φ_q(q₀), ``rank_tol`` and no ``reference`` (a sweep line that shares another
+        line's equilibria: the same q₀ and constraints), instead of computing it again.
 
     The model linearized is the one ``eq`` belongs to (:func:`mbseig.statics.solved`): with
     inverse-statics commands resolved, the actuator settings found by the equilibrium.
@@ -175,12 +178,14 @@ def linearize(model, eq: Equilibrium, *, rank_tol: float | None = None,
     require_finite("linearization", "the equilibrium is not finite", q0=eq.q, lam0=eq.lam)
     cause = LINEAR_CASE_CAUSE if isinstance(model, LinearCase) else CAUSE
     with watched("linearization", cause):
-        lin = _linearize(model, eq, rank_tol, constraint_stiffness, sparse, reference, signals)
+        lin = _linearize(model, eq, rank_tol, constraint_stiffness, sparse, reference, signals,
+                         basis)
     require_finite("linearization", cause, M=lin.M, P=lin.P, Q=lin.Q, N=lin.N)
     return lin
 
 
-def _linearize(model, eq, rank_tol, constraint_stiffness, sparse, reference=None, signals=True):
+def _linearize(model, eq, rank_tol, constraint_stiffness, sparse, reference=None, signals=True,
+               basis=None):
     model = solved(model, eq)
     if rank_tol is None:
         rank_tol = float(eq.tolerances.get("rank_tol", 1e-10))
@@ -205,8 +210,9 @@ def _linearize(model, eq, rank_tol, constraint_stiffness, sparse, reference=None
             constraint_stiffness=constraint_stiffness,
             tolerances={"rank_tol": rank_tol, "sparse": True}, constraint_jacobian=G)
     G = model.phi_q(q0, dense=True)
-    N, rank, independent, sigma = continuous_null_basis(G, model.n, rank_tol, model.coordinate_names,
-                                                        reference)
+    N, rank, independent, sigma = (continuous_null_basis(G, model.n, rank_tol, model.coordinate_names,
+                                                         reference)
+                                   if basis is None or reference is not None else basis)
     Md, Cd, Kd = model.mass_matrix(q0).toarray(), C, K
     if model.n_constraints == 0:
         Mr, Pr, Qr = Md, Cd, Kd

@@ -25,10 +25,13 @@ bitwise-equal settings (the swept parameter does not enter them, as a follower l
 enter a held position command): then the settings are reused; or the swept parameter enters
 only the commanded spring's stiffness: then the spring's tension at the commanded posture is
 held (:func:`mbseig.statics.inverse.held_tension`, checked at every value; ``record["commands"]``).
-``lean=False`` builds and resolves every value (the general path, for comparison).
+``lean=False`` builds and resolves every value (the general path, for comparison).  The lines of
+one sweep that differ only in damping values share one line's statics (:func:`_shared_statics`).
 """
 
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 
@@ -50,9 +53,11 @@ from ..statics.solve import solve_statics
 from ..statics.stiffness import static_stability
 from .records import SweepPoint
 
-__all__ = ["sweep_line", "family_maker", "modal_point", "DIAGRAM_MODES_MAX"]
+__all__ = ["sweep_line", "family_maker", "modal_point", "release", "DIAGRAM_MODES_MAX"]
 
 DIAGRAM_MODES_MAX = 60  # DOF up to which every branch point of the diagram gets its modal verdict
+
+_SHARED: dict = {}  # the last lines whose statics later lines of their sweep may share
 
 
 def family_maker(spec, config, params, axis, *, lean=True):
@@ -64,7 +69,7 @@ def family_maker(spec, config, params, axis, *, lean=True):
     element), elsewhere every value is built (``state["model"]`` says which and why)."""
     state = {"first": None, "reuse": None, "checked": False, "last": None, "presolve": {},
              "lean": None, "model": None, "held": 0, "resolved": 0, "made": {},
-             "held_cache": {}}
+             "held_cache": {}, "kept": None, "donor": None}
     lean_models = lean_commands = bool(lean)
 
     def build(p):
@@ -90,6 +95,8 @@ def family_maker(spec, config, params, axis, *, lean=True):
         if key in state["made"]:  # the same value again (the first point, asked by the family)
             return state["made"][key]
         m = made(p)
+        if state["kept"] is not None:  # every model of the line, for the lines that share it
+            state["kept"][key] = m
         if len(state["made"]) >= 4:
             state["made"].pop(next(iter(state["made"])))
         state["made"][key] = m
@@ -99,6 +106,11 @@ def family_maker(spec, config, params, axis, *, lean=True):
         m = build(p)
         if not getattr(m, "commands", ()):
             return m
+        donor = (state["donor"] or {}).get(float(p))
+        if donor is not None:  # the line whose statics this one shares (_shared_statics)
+            r = reuse_commands(m, donor)
+            if r is not None:
+                return r
         if state["reuse"] is not None:
             r = reuse_commands(m, state["reuse"])
             if r is not None:
@@ -119,14 +131,20 @@ def family_maker(spec, config, params, axis, *, lean=True):
                 state["reuse"] = r
         return r
 
+    state["build"] = build
     return make, state
 
 
-def modal_point(model, eq, params, *, safety, stability_rtol, postures=posture, **fields):
+def modal_point(model, eq, params, *, safety, stability_rtol, postures=posture, basis=None,
+                kept=None, **fields):
     """The sweep's record of one point: all eigenpairs, their tolerances, the verdict.
     postures(model, q): :func:`mbseig.statics.reactions.posture` (or a kept copy of its
-    result); fields: more fields of the :class:`SweepPoint` (how the statics reached it)."""
-    lin = linearize(model, eq, signals=False)  # a sweep point uses the modes alone
+    result); basis: the null-space basis of this equilibrium when known (:func:`linearize`),
+    kept: a list the linearization's basis is appended to; fields: more fields of the
+    :class:`SweepPoint` (how the statics reached it)."""
+    lin = linearize(model, eq, signals=False, basis=basis)  # a sweep point uses the modes alone
+    if kept is not None and isinstance(lin.N, np.ndarray):
+        kept.append((lin.N, lin.rank, lin.independent, lin.tolerances.get("basis_min_cosine")))
     if lin.M.shape[0] == 0:  # no degree of freedom (a driven mechanism): no modes
         s, X, tol, verdict, solver = (np.zeros(0, complex), np.zeros((model.n, 0), complex),
                                       np.zeros(0), "stable", "none (no degree of freedom)")
@@ -166,67 +184,67 @@ def _kept_postures():
 
 
 def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rtol=1e-12,
-               switch=True, lean=True):
+               switch=True, lean=True, share=None):
     """One line of a sweep by continuation (module docstring); a pure, picklable function.
 
     Returns {"points": [point dicts as :func:`mbseig.studies.sweep.evaluate_point`, with
     ``statics`` = "continuation" | "cold"], "branch": [diagram points], "events": [folds,
     branch points, switches, jumps], "record": {...}} or, when the first point fails,
     {"error": message}.
+
+    share : a token of one sweep (:func:`mbseig.studies.sweep.run_sweep`): a line of it whose
+        parameters differ from an earlier line's of the same process only in ones that enter
+        damping values alone takes that line's statics (:func:`_shared_statics`); not with
+        ``lean=False`` (every value built and resolved).
     """
     values = np.asarray(values, dtype=float)
     make, state = family_maker(case, config, params, axis, lean=lean)
     opts = {"safety": safety, "stability_rtol": stability_rtol}
     postures = _kept_postures()
+    key = None if share is None or not lean else (share, id(case), config, axis, values.tobytes(),
+                                      bool(lean), bool(switch), tuple(sorted(params)))
+    shared = _shared_statics(key, case, config, params, axis, values, state)
 
     def point_params(p):
         return {**params, axis: float(p)}
 
-    try:
-        model0 = make(values[0])
-        if isinstance(model0, LinearCase):  # matrices only: no equilibrium to follow
-            return {"error": "a linear case has no equilibrium branch", "points": None}
-        eq0 = equilibrium(model0, offer_stable=False, self_stress="report")
-    except MbseigError as exc:
-        return {"error": exc.one_line(), "points": None}
-    fam = Family(make, abs(float(values[-1] - values[0])) or 1.0, eq0.model, eq0.q)
+    if shared is None:
+        if key is not None:
+            state["kept"] = {}
+        try:
+            model0 = make(values[0])
+            if isinstance(model0, LinearCase):  # matrices only: no equilibrium to follow
+                return {"error": "a linear case has no equilibrium branch", "points": None}
+            eq0 = equilibrium(model0, offer_stable=False, self_stress="report")
+        except MbseigError as exc:
+            return {"error": exc.one_line(), "points": None}
+        fam = Family(make, abs(float(values[-1] - values[0])) or 1.0, eq0.model, eq0.q)
 
-    def static_verdict(model, q, lam):
-        return static_stability(model, q, lam)["verdict"]
+        def restart(p, q_start):
+            return solve_statics(make(p), q_init=q_start).q
 
-    def restart(p, q_start):
-        return solve_statics(make(p), q_init=q_start).q
-
-    try:
-        branch = follow(fam, values, fam.start(eq0.q, values[0]), stability=static_verdict,
-                        restart=restart, switch=switch)
-    except MbseigError as exc:
-        branch = None
-        failure = exc.one_line()
+        try:
+            branch = follow(fam, values, fam.start(eq0.q, values[0]), stability=_static_verdict,
+                            restart=restart, switch=switch)
+        except MbseigError as exc:
+            branch = None
+            failure = exc.one_line()
+        model_at, grid = fam.model, []
+    else:
+        fam, branch, model_at = shared["fam"], shared["branch"], make
     points = []
     for k, v in enumerate(values):
-        bp = branch.grid[k] if branch is not None else None
+        kept = []
         try:
-            model = fam.model(v)
-            if bp is not None:  # converged by the continuation's corrector: the record only
-                q = bp.y[:fam.n]
-                # g, Φ, Φ_q at q evaluated once (by the corrector) for the scale and the record
-                memo = Memo(model, q=q, known=fam.known(v, q))
-                st = settings_for(memo, q, tol=1e-12, xtol=None, floor_tol=1e-8, max_iter=50,
-                                  rank_tol=1e-10)
-                eq = finish(model, q, st, iterations=bp.iterations, correction=CTOL,
-                            method="continuation", path={"start": "branch", "kind": bp.kind,
-                                                         "segment": bp.segment}, memo=memo)
-                how = "continuation"
-            else:
-                eq = equilibrium(model, offer_stable=False, self_stress="report")
-                how = "cold"
-            eq = examine(eq, offer_stable=False, self_stress="report")
-            where = ({} if bp is None else
-                     {"segment": bp.segment, "branch_kind": bp.kind,
-                      "corrector_iterations": bp.iterations})
+            if shared is None:
+                eq, how, where = _grid_statics(fam, branch, k, v)
+                grid.append((eq, how, where, kept))
+            else:  # the same equilibrium record (and null-space basis), of this line's model
+                eq, how, where, kept = shared["grid"][k]
+                eq = dataclasses.replace(eq, model=make(v), q=eq.q.copy(), lam=eq.lam.copy())
             pt = modal_point(eq.model, eq, point_params(v), **opts, postures=postures,
-                             statics=how, **where)
+                             statics=how, basis=kept[0] if shared and kept else None,
+                             kept=None if shared else kept, **where)
         except MbseigError as exc:
             pt = SweepPoint.failed(point_params(v), exc.one_line())
         points.append(pt)
@@ -234,6 +252,93 @@ def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rto
     if branch is None:
         out["record"] = {"continuation": f"failed: {failure}"}
         return out
+    commands = shared["commands"] if shared is not None else (
+        "reused (the swept parameter does not enter them)" if state["reuse"] is not None
+        else f"resolved at {state['resolved']} values, the spring's tension held at "
+             f"{state['held']}" if state["held"] else "resolved at every value")
+    if shared is None and key is not None and len(grid) == len(values) and all(
+            how == "continuation" and eq.static.get("verdict") != "unstable"
+            and pt.get("error") is None for (eq, how, _, _), pt in zip(grid, points)):
+        for old in list(_SHARED)[:-1]:  # (the lines of one sweep follow each other)
+            _SHARED.pop(old, None)
+        _SHARED[key] = {"case": case, "params": dict(params), "fam": fam, "branch": branch,
+                        "grid": grid, "commands": commands, "models": state["kept"]}
+    diagram, events = _diagram(fam, branch, points, model_at, point_params, opts, postures)
+    out.update(branch=diagram, events=events,
+               record={**branch.record, "model": state["model"], "commands": commands})
+    return out
+
+
+def _static_verdict(model, q, lam):
+    return static_stability(model, q, lam)["verdict"]
+
+
+def _grid_statics(fam, branch, k, v):
+    """(equilibrium record, how, where) of grid point k: the corrector's equilibrium, or a
+    solve of its own where the branch did not reach it."""
+    bp = branch.grid[k] if branch is not None else None
+    model = fam.model(v)
+    if bp is not None:  # converged by the continuation's corrector: the record only
+        q = bp.y[:fam.n]
+        # g, Φ, Φ_q at q evaluated once (by the corrector) for the scale and the record
+        memo = Memo(model, q=q, known=fam.known(v, q))
+        st = settings_for(memo, q, tol=1e-12, xtol=None, floor_tol=1e-8, max_iter=50,
+                          rank_tol=1e-10)
+        eq = finish(model, q, st, iterations=bp.iterations, correction=CTOL,
+                    method="continuation", path={"start": "branch", "kind": bp.kind,
+                                                 "segment": bp.segment}, memo=memo)
+        how = "continuation"
+    else:
+        eq = equilibrium(model, offer_stable=False, self_stress="report")
+        how = "cold"
+    eq = examine(eq, offer_stable=False, self_stress="report")
+    where = ({} if bp is None else
+             {"segment": bp.segment, "branch_kind": bp.kind, "corrector_iterations": bp.iterations})
+    return eq, how, where
+
+
+def _shared_statics(key, case, config, params, axis, values, state):
+    """The statics of an earlier line of the same sweep (``key``) when this line's parameters
+    differ from its only in ones that enter nothing but damping values of force elements
+    (:class:`~mbseig.casefile.element_readers.ScalarUpdate` of each, with ``damping`` its only
+    field): at rest (q̇ = 0) a damping value multiplies a zero rate, so the forces, their
+    stiffness, the commands, the branch and every equilibrium record are those of that line.
+    This line's models take that line's command settings (:func:`reuse_commands`); its modes
+    are its own.  None (follow the line) otherwise."""
+    donor = None if key is None else _SHARED.get(key)
+    if donor is None or donor["case"] is not case:
+        return None
+    names = [k for k in params if not _same(params[k], donor["params"][k])]
+    if not names:
+        return None  # (the same line again: followed again)
+    try:
+        model0 = state["build"](values[0])
+        for name in names:
+            su = ScalarUpdate(case.data, config, {**params, axis: float(values[0])}, name, model0)
+            if su.reason is not None or any(f != "damping" for *_, keys in su.updates for f in keys):
+                return None
+    except (MbseigError, KeyError, TypeError, ValueError):
+        return None
+    state["donor"] = donor["models"]
+    return donor
+
+
+def release(share):
+    """Drop the statics the lines of the sweep ``share`` kept for each other (its end)."""
+    for key in [k for k in list(_SHARED) if k[0] == share]:
+        _SHARED.pop(key, None)
+
+
+def _same(a, b) -> bool:
+    try:
+        return type(a) is type(b) and bool(a == b)
+    except (TypeError, ValueError):
+        return False
+
+
+def _diagram(fam, branch, points, model_at, point_params, opts, postures):
+    """The bifurcation diagram's points (every branch point with its angles, static and modal
+    verdicts) and the branch's events with the verdicts on either side."""
     diagram = []
     grid_verdict = {id(bp): points[k].get("verdict") for k, bp in enumerate(branch.grid)
                     if bp is not None}
@@ -255,7 +360,7 @@ def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rto
                     if bp is not None and points[k].get("static") in ("stable", "unstable", "neutral")}
                    if fam.rows.size == fam.m else {})
     for bp in branch.points:
-        model = fam.model(bp.p)
+        model = model_at(bp.p)
         q = bp.y[:fam.n]
         lam = fam.lam_full(bp.y)
         rec = {"p": bp.p, "kind": bp.kind, "segment": bp.segment,
@@ -264,7 +369,7 @@ def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rto
         rec["static"] = grid_static.get(id(bp))
         if rec["static"] is None:
             try:
-                rec["static"] = static_verdict(model, q, lam)
+                rec["static"] = _static_verdict(model, q, lam)
             except (MbseigError, ValueError, np.linalg.LinAlgError):
                 rec["static"] = None
         rec["verdict"] = grid_verdict.get(id(bp))
@@ -291,9 +396,4 @@ def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rto
             e["dof"] = int(fam.n - fam.rows.size)
             e["angles"] = diagram[i]["angles"]
         events.append(e)
-    commands = ("reused (the swept parameter does not enter them)" if state["reuse"] is not None
-                else f"resolved at {state['resolved']} values, the spring's tension held at "
-                     f"{state['held']}" if state["held"] else "resolved at every value")
-    out.update(branch=diagram, events=events,
-               record={**branch.record, "model": state["model"], "commands": commands})
-    return out
+    return diagram, events

@@ -41,6 +41,7 @@ the stability chart is drawn.
 from __future__ import annotations
 
 import itertools
+import uuid
 
 import numpy as np
 
@@ -54,7 +55,7 @@ from .boundaries import (
     MAX_INSERT,
     mac_matrix,
 )
-from .continuation import sweep_line
+from .continuation import release, sweep_line
 from .point import as_spec
 from .records import Boundary, BoundaryCurve, Fold
 from .runners import Runner, progress_bar
@@ -131,8 +132,13 @@ def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None,
     with Runner(jobs=jobs, scheduler=scheduler, progress=progress,
                 checkpoint=checkpoint) as runner:
         if continuation:
-            points, branches, events, records = _followed_lines(
-                runner, case, config, fixed, lines, axis0, values0, {**opts, "lean": bool(lean)})
+            share = uuid.uuid4().hex  # lines that differ only in damping share their statics
+            try:
+                points, branches, events, records = _followed_lines(
+                    runner, case, config, fixed, lines, axis0, values0,
+                    {**opts, "lean": bool(lean), "share": share})
+            finally:
+                release(share)
         else:
             calls = [((case, config, {**fixed, **line, axis0: float(v)}), opts)
                      for line in lines for v in values0]
@@ -174,7 +180,7 @@ def _followed_lines(runner, case, config, fixed, lines, axis0, values0, opts):
     records) per line; a line whose first point fails is solved point by point instead."""
     results = runner.map(sweep_line, [((case, config, {**fixed, **line}, axis0, values0), opts)
                                       for line in lines], "lines")
-    opts = {k: v for k, v in opts.items() if k != "lean"}
+    opts = {k: v for k, v in opts.items() if k not in ("lean", "share")}
     points, branches, events, records = [], [], [], []
     for line, r in zip(lines, results):
         if r.get("points") is None:  # the first point failed: every point on its own
