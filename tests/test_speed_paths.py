@@ -250,7 +250,7 @@ def test_blas_held_skips_the_small_solve_cap():
     blas_limit(1) does (a null context too where threadpoolctl is missing)."""
     import contextlib
 
-    from mbseig.eigen.dense import _small_blas, blas_held
+    from mbseig.eigen.dense import small_blas, blas_held
 
     def null(c):
         with c:  # entered and left, as the solves use it: a cap made here is undone here
@@ -259,11 +259,11 @@ def test_blas_held_skips_the_small_solve_cap():
 
     # blas_limit(1) caps only where threadpoolctl is installed and BLAS runs on more threads
     capping = not null(blas_limit(1))
-    assert null(_small_blas(3)) is not capping
+    assert null(small_blas(3)) is not capping
     with blas_held(1):
-        assert null(_small_blas(3))
+        assert null(small_blas(3))
         with blas_held(2):  # a cap of two threads: the small solve still caps at one
-            assert null(_small_blas(3)) is not capping
-        assert null(_small_blas(3))
-    assert null(_small_blas(3)) is not capping
-    assert null(_small_blas(500))  # large: never capped here
+            assert null(small_blas(3)) is not capping
+        assert null(small_blas(3))
+    assert null(small_blas(3)) is not capping
+    assert null(small_blas(500))  # large: never capped here

@@ -7,6 +7,9 @@
   computed in one place for every path;
 - :mod:`~mbseig.eigen.dense` (driver) and :mod:`~mbseig.eigen.dense_paths` (kernels): eigh,
   proportional, companion, qz (all eigenvalues);
+- :mod:`~mbseig.eigen.small` and :mod:`~mbseig.eigen.small_measures`: the fused implementation
+  of eigh and companion for small real dense problems (the same numbers; used by
+  :func:`mbseig.modal.modes` through :mod:`mbseig.modal.small`);
 - :mod:`~mbseig.eigen.partial` (driver), :mod:`~mbseig.eigen.searches`,
   :mod:`~mbseig.eigen.selection`, :mod:`~mbseig.eigen.shift_invert`,
   :mod:`~mbseig.eigen.projected`: shift-invert Lanczos/Arnoldi for a few modes of large sparse

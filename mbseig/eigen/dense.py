@@ -69,7 +69,7 @@ from .measures import (
 )
 from .pencil import check_regular
 
-__all__ = ["choose_solver", "problem_scaling", "solve_qep", "blas_held"]
+__all__ = ["choose_solver", "problem_scaling", "solve_qep", "blas_held", "small_blas"]
 
 #: cond(M) above which a positive definite M is not mass-normalized (companion, eigh paths)
 COMPANION_COND = 1e5
@@ -91,12 +91,13 @@ def blas_held(n):
         _HELD.n = before
 
 
-def _small_blas(n):
+def small_blas(n):
     """The BLAS cap of a dense solve of order n: one thread up to SMALL_BLAS, unless the caller
     holds it at one already."""
     if n > SMALL_BLAS or getattr(_HELD, "n", None) == 1:
         return contextlib.nullcontext()
     return blas_limit(1)
+
 
 
 def _dense(A, what):
@@ -318,7 +319,7 @@ def solve_qep(M, P, Q, *, solver: str = "auto", sym_tol: float = 1e-13,
                            norms0, n_dof=0, complex_problem=complex_problem)
     # small problems on one BLAS thread: a second one only adds synchronization there (and on a
     # loaded machine milliseconds per call, more than the whole solve of a few coordinates)
-    with _small_blas(n):
+    with small_blas(n):
         if name == "qz":
             check_regular(M, P, Q, norms)
         sol = SOLVERS[name].kernel(M, P, Q, opts, name, reason, norms)

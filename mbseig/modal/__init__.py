@@ -51,14 +51,20 @@ from __future__ import annotations
 import scipy.sparse as sp
 
 from ..eigen import Problem, Request, SingularPencilError, solve
+from ..eigen.small import small_problem
 from ..errors import SolverError
 from ..linear import LinearModel
 from .bounds import error_bounds, stability, tolerance_rule, tolerances, worst, zero_pair_floor
 from .listing import band_of, coordinate_text, listing
+from .small import small_modes
 from .result import BAND_DENSE_MAX, DENSE_MAX, STABILITY_ORDER, Modes, Verdict
 
 __all__ = ["Modes", "Verdict", "modes", "STABILITY_ORDER", "tolerances", "tolerance_rule",
            "stability", "worst"]
+
+#: path options the fused small-dense implementation takes (others: the general stage)
+FUSED_OPTIONS = frozenset({"sym_tol", "rayleigh_tol", "left", "companion_cond", "verify_tol",
+                           "scale"})
 
 
 
@@ -66,7 +72,7 @@ def modes(M, P=None, Q=None, *, solver: str = "auto", N=None, coordinate_names=N
           stability_rtol: float = 1e-12, stability_atol: float = 0.0, safety: float = 10.0,
           n_dominant: int = 3, rigid_rank_tol: float = 1e-6, n_modes: int | None = None,
           target: float | None = None, band=None, constraints=None, eta_warn: float = 1e-12,
-          **solver_options) -> Modes:
+          fused: bool = True, **solver_options) -> Modes:
     """Solve and classify the modes of (M s² + P s + Q) x = 0.
 
     M may be a :class:`~mbseig.linear.LinearModel` instead of a matrix: its M, P, Q, N,
@@ -81,6 +87,10 @@ def modes(M, P=None, Q=None, *, solver: str = "auto", N=None, coordinate_names=N
         ``band = (ω_lo, ω_hi)``; ``constraints`` is Φ_q when M, P, Q are in full coordinates.
     eta_warn : a listed mode whose backward errors (normwise and componentwise) both exceed it is
         flagged in :attr:`Modes.flags` and named in a RuntimeWarning.
+    fused : a small real dense problem (order ≤ :data:`mbseig.eigen.small.SMALL_MAX`, ``auto``,
+        the full spectrum) takes the fused implementation of its path
+        (:func:`mbseig.modal.small.small_modes`: the same numbers, a fraction of the time);
+        ``False`` runs the general stage (for comparisons).
     Other keywords are the path options of the request (:class:`mbseig.eigen.Request`): those of
     :func:`mbseig.eigen.solve_qep` (``sym_tol``, ``rayleigh_tol``, ``scale``, ``left``,
     ``companion_cond``) or of :func:`mbseig.eigen.solve_partial`.
@@ -92,6 +102,15 @@ def modes(M, P=None, Q=None, *, solver: str = "auto", N=None, coordinate_names=N
             constraints = lin.constraint_jacobian
     if Q is None:
         raise SolverError("modes(M, P, Q) needs Q (or a LinearModel alone)")
+    if (fused and solver == "auto" and n_modes is None and target is None and band is None
+            and constraints is None and FUSED_OPTIONS.issuperset(solver_options)
+            and small_problem(M, P, Q)):
+        md = small_modes(M, P, Q, N=N, coordinate_names=coordinate_names,
+                         stability_rtol=stability_rtol, stability_atol=stability_atol,
+                         safety=safety, n_dominant=n_dominant, rigid_rank_tol=rigid_rank_tol,
+                         eta_warn=eta_warn, options=solver_options)
+        if md is not None:
+            return md
     request = Request(solver, n_modes=n_modes, target=target, band=band, options=solver_options)
     problem = Problem(M, P, Q, G=constraints)
     if (band is not None and n_modes is None and target is None and constraints is None
