@@ -97,7 +97,9 @@ def listing(sol, b, *, N, coordinate_names, n_dominant, eta_warn, tolerances_use
     sel = np.flatnonzero(listed)
     s = s_all[sel].copy()
     is_rigid, real_listed = rigid[sel], near_real[sel]
-    mult = np.where(is_rigid, 0, np.where(real_listed | ~real_problem, 1, 2))
+    # the algebraic multiplicity each listed eigenvalue stands for: 1 for a simple s (its
+    # conjugate, implied for a real problem, is not counted), the rigid share below
+    mult = np.where(is_rigid, 0, 1)
     if rep.size:  # the rigid-body eigenvalues, shared out over the listed rigid modes
         share = np.full(rep.size, accounting["rigid_eigenvalues"] // rep.size)
         share[: accounting["rigid_eigenvalues"] % rep.size] += 1

@@ -59,7 +59,7 @@ class Modes:
     all_eigenvalues: np.ndarray
     tolerances: dict = field(default_factory=dict)
     left_vectors: object = None  # conjugated left vectors ȳ of the listed modes (or None)
-    multiplicity: np.ndarray = None  # eigenvalues each listed mode stands for (pair 2, real 1)
+    multiplicity: np.ndarray = None  # algebraic multiplicity each listed s stands for (rigid: share)
     accounting: dict = field(default_factory=dict)  # every eigenvalue accounted (module doc)
     coverage: str = ""  # partial spectrum: what was computed ("" for the full spectrum)
     partial: bool = False
