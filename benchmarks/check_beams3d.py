@@ -5,6 +5,12 @@ evaluations, predicted and measured δ and ω, the verdict.  Not a test (the uni
 tests/test_check_beams3d.py, run small meshes); run by hand, one thread:
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/check_beams3d.py [REPEAT]
+    OPENBLAS_NUM_THREADS=1 python benchmarks/check_beams3d.py --rhs [REPEAT]
+
+``--rhs``: the cost of one right-hand side of the check (tangent coordinates, fresh states) and
+of its beam parts (force, velocity terms, mass), with the beams evaluated in batches
+(mbseig.model.beam3d_batch) and element by element (``beam3d.BATCHED = False``, the reference
+path), paired in one process: medians of REPEAT rounds (default 5) of 30 states each.
 """
 
 import statistics
@@ -12,7 +18,12 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 from mbseig.check import check_modes
+from mbseig.check.dynamics import ForwardDynamics
+from mbseig.check.tangent import TangentCoordinates
+from mbseig.model import beam3d
 from mbseig.studies import analyze
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -47,5 +58,50 @@ def main(repeat=1):
                   f"{m.predicted_omega:>12.6g} {err:>13.2e}  {'pass' if m.passed else 'FAIL'}")
 
 
+def _parts(path, calls):
+    """{part: run()} of one case: the check's right-hand side and its beam parts at ``calls``
+    fresh states near the equilibrium."""
+    a = analyze(path)
+    m, q0 = a.model, a.eq.q
+    dyn = ForwardDynamics(m, q0)
+    tc = TangentCoordinates(dyn)
+    k = tc.k
+    rng = np.random.default_rng(1)
+    ys = [np.concatenate([1e-4 * m.length_scale * rng.standard_normal(k) / np.sqrt(k),
+                          1e-2 * rng.standard_normal(k) / np.sqrt(k)]) for _ in range(calls)]
+    states = [(q0 + u, v) for u, v, _, _ in (tc.lift(y[:k], y[k:]) for y in ys)]
+    return {"rhs": lambda: [tc.rhs(0.0, y) for y in ys],
+            "force": lambda: [m.generalized_force(q, v) for q, v in states],
+            "h": lambda: [dyn.velocity_terms(q, v) for q, v in states],
+            "mass": lambda: [m.mass_matrix(q) for q, _ in states]}
+
+
+def rhs_costs(repeat=5, calls=30):
+    """Per-evaluation milliseconds, batched against element by element (module docstring)."""
+    print(f"{'case':<30} {'part':<6} {'element [ms]':>13} {'batched [ms]':>13} {'ratio':>6}")
+    for name, _ in CASES:
+        path = ROOT / "cases" / name
+        if not path.exists():
+            continue
+        parts = _parts(path, calls)
+        times = {}
+        for _ in range(repeat):
+            for batched in (False, True):
+                beam3d.BATCHED = batched
+                for part, run in parts.items():
+                    t = time.perf_counter()
+                    run()
+                    times.setdefault((part, batched), []).append(
+                        (time.perf_counter() - t) / calls * 1e3)
+        beam3d.BATCHED = True
+        for part in parts:
+            ref, new = (statistics.median(times[(part, b)]) for b in (False, True))
+            print(f"{name:<30} {part:<6} {ref:>13.3f} {new:>13.3f} {ref / new:>6.1f}")
+
+
 if __name__ == "__main__":
-    main(int(sys.argv[1]) if len(sys.argv) > 1 else 1)
+    if "--rhs" in sys.argv:
+        args = [x for x in sys.argv[1:] if x != "--rhs"]
+        rhs_costs(int(args[0]) if args else 5)
+    else:
+        main(int(sys.argv[1]) if len(sys.argv) > 1 else 1)

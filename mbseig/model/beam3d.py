@@ -59,6 +59,12 @@ Two layers.
    rotation rates R_eᵀ ω_i, ω_i = ½ (a_i × ȧ_i + b_i × ḃ_i + c_i × ċ_i); M(q) = Tᵀ M_loc T (as
    the planar co-rotational beams: configuration-dependent, evaluated at q₀ by the
    linearization) and the gyroscopic force g = −Ω Tᵀ G T q̇, so C = −∂g/∂q̇ = Ω Tᵀ G T.
+
+3. Evaluation.  ``force``, ``jacobians``, ``mass`` and ``velocity_terms`` of real states are
+   served by the beam's batch (:mod:`mbseig.model.beam3d_batch`: all elements of the beam at
+   once, :mod:`mbseig.model.beam3d_kernel`; the force forms no Hessians); the ``*_reference``
+   methods evaluate one element alone with the formulas above (complex states, ``BATCHED =
+   False``), and the batch equals them to rounding (tests/test_beam3d_kernel.py).
 """
 
 from __future__ import annotations
@@ -70,6 +76,8 @@ import numpy as np
 from ..errors import EquilibriumError
 from .affine import Affine
 from .base import ConfigurationMass, Force
+from .beam3d_batch import group_of
+from .beam3d_local import BeamProperties3D, ElementMatrices, element_matrices
 from .beam_sections import (
     SHAPES,
     cowper_shear_coefficient,
@@ -95,117 +103,9 @@ __all__ = [
     "section_properties",
 ]
 
-_FLIP = np.diag([1.0, -1.0, 1.0, -1.0])  # xz-plane: the planar rotation ψ is −θy
-_XY = [1, 5, 7, 11]  # (v₁, θz₁, v₂, θz₂)
-_XZ = [2, 4, 8, 10]  # (w₁, θy₁, w₂, θy₂)
-
-
-@dataclass(frozen=True)
-class BeamProperties3D:
-    """Material and section of a spatial beam: E, G [Pa], ρ [kg/m³], A [m²], Iy, Iz [m⁴] (about
-    the section's y and z axes), J [m⁴] (torsion constant), κ_y, κ_z (shear coefficients for
-    shear along y and z), theory; ``rotary_inertia`` None follows the theory (Timoshenko: yes)."""
-
-    E: float
-    G: float
-    rho: float
-    A: float
-    Iy: float
-    Iz: float
-    J: float
-    kappa_y: float = 5.0 / 6.0
-    kappa_z: float = 5.0 / 6.0
-    theory: str = "timoshenko"
-    rotary_inertia: bool | None = None
-
-    def __post_init__(self):
-        if self.theory not in THEORIES:
-            raise ValueError(f"theory must be one of {', '.join(THEORIES)}, got {self.theory!r}")
-
-    @property
-    def polar(self) -> float:
-        """I_p = I_y + I_z, the polar second moment that carries the mass's torsional inertia."""
-        return self.Iy + self.Iz
-
-    @property
-    def has_rotary_inertia(self) -> bool:
-        if self.rotary_inertia is None:
-            return self.theory == "timoshenko"
-        return bool(self.rotary_inertia)
-
-    def shear_parameters(self, L: float) -> tuple[float, float]:
-        """(Φ_y, Φ_z) = (12 E I_z/(κ_y G A L²), 12 E I_y/(κ_z G A L²)); zeros for Euler–Bernoulli."""
-        if self.theory == "euler-bernoulli":
-            return 0.0, 0.0
-        c = 12.0 * self.E / (self.G * self.A * L * L)
-        return c * self.Iz / self.kappa_y, c * self.Iy / self.kappa_z
-
-
-# ---------------------------------------------------------------------------------------------
-# the linear local element
-@dataclass(frozen=True)
-class ElementMatrices:
-    """Local 12×12 matrices of one element: M d̈ + Ω G ḋ + (K + N K_g) d = f (module docstring),
-    d = [u, v, w, θx, θy, θz] at node 1 then node 2, x along the beam."""
-
-    M: np.ndarray
-    K: np.ndarray
-    G: np.ndarray
-    Kg: np.ndarray
-    L: float
-    Phi_y: float
-    Phi_z: float
-
-
-def _bending_stiffness(EI, L, Phi):
-    """Closed-form Timoshenko bending stiffness on planar (w, ψ) (Przemieniecki; Friswell eq. 5.x)."""
-    return EI / (L**3 * (1 + Phi)) * np.array([
-        [12.0, 6 * L, -12, 6 * L],
-        [6 * L, (4 + Phi) * L**2, -6 * L, (2 - Phi) * L**2],
-        [-12, -6 * L, 12, -6 * L],
-        [6 * L, (2 - Phi) * L**2, -6 * L, (4 + Phi) * L**2]])
-
-
-def _plane_fields(L, Phi, dofs, flip):
-    """(N, N′, N_ψ) of one bending plane as (ng, 12) arrays on d (rotation field as ψ of that
-    plane: θz in xy, −θy in xz is returned as the rotation about y, i.e. sign restored)."""
-    N, dN, Npsi = timoshenko_shape_functions(GAUSS_X, L, Phi)
-    S = _FLIP if flip else np.eye(4)
-    out = []
-    for F in (N, dN, Npsi):
-        full = np.zeros((GAUSS_X.size, 12))
-        full[:, dofs] = F @ S
-        out.append(full)
-    if flip:  # the planar ψ is −θy: the rotation about y is −ψ
-        out[2] = -out[2]
-    return out
-
-
-def element_matrices(props: BeamProperties3D, L: float) -> ElementMatrices:
-    """The standard local matrices of one uniform element of length L (module docstring)."""
-    p = props
-    Phi_y, Phi_z = p.shear_parameters(L)
-    M, K, Kg, G = (np.zeros((12, 12)) for _ in range(4))
-    lin = np.array([[2.0, 1.0], [1.0, 2.0]]) / 6.0
-    spring = np.array([[1.0, -1.0], [-1.0, 1.0]])
-    for dofs, k, m in (([0, 6], p.E * p.A / L, p.rho * p.A * L),
-                       ([3, 9], p.G * p.J / L, p.rho * p.polar * L)):
-        K[np.ix_(dofs, dofs)] += k * spring
-        M[np.ix_(dofs, dofs)] += m * lin
-    wq = GAUSS_W * L
-    psi = {}
-    for dofs, flip, I_bend, Phi in ((_XY, False, p.Iz, Phi_y), (_XZ, True, p.Iy, Phi_z)):
-        S = _FLIP if flip else np.eye(4)
-        K[np.ix_(dofs, dofs)] += S @ _bending_stiffness(p.E * I_bend, L, Phi) @ S
-        N, dN, Npsi = _plane_fields(L, Phi, dofs, flip)
-        M += p.rho * p.A * (N.T * wq) @ N
-        if p.has_rotary_inertia:
-            M += p.rho * I_bend * (Npsi.T * wq) @ Npsi
-        Kg += (dN.T * wq) @ dN
-        psi["z" if not flip else "y"] = Npsi
-    Ny, Nz = psi["y"], psi["z"]
-    G = p.rho * p.polar * ((Ny.T * wq) @ Nz - (Nz.T * wq) @ Ny)
-    return ElementMatrices(M=M, K=K, G=G, Kg=Kg, L=L, Phi_y=Phi_y, Phi_z=Phi_z)
+#: evaluate float states through the beam's batch (mbseig.model.beam3d_batch); False: each
+#: element alone (the reference path, also taken for complex states: complex-step tests)
+BATCHED = True
 
 
 # ---------------------------------------------------------------------------------------------
@@ -276,8 +176,9 @@ class Beam3DElement(Force, ConfigurationMass):
         return self._em
 
     # -- deformations ------------------------------------------------------------------------
-    def _measures(self, z):
-        """p (6,), B = ∂p/∂z (6, 24) and the Hessians ∇²p_k (6, 24, 24) on the section axes z."""
+    def _measures(self, z, hessians=True):
+        """p (6,), B = ∂p/∂z (6, 24) and the Hessians ∇²p_k (6, 24, 24) on the section axes z
+        (None without ``hessians``)."""
         d = _D @ z
         l = np.sqrt(d @ d)
         if l.real == 0.0:
@@ -287,18 +188,21 @@ class Beam3DElement(Force, ConfigurationMass):
         dt = z.dtype
         p = np.zeros(6, dtype=dt)
         B = np.zeros((6, 24), dtype=dt)
-        H = np.zeros((6, 24, 24), dtype=dt)
+        H = np.zeros((6, 24, 24), dtype=dt) if hessians else None
         p[0] = l - self.l0
         B[0] = e @ _D
-        H[0] = _D.T @ (P / l) @ _D
         p[1] = 0.5 * ((_C1 @ z) @ (_B2 @ z) - (_B1 @ z) @ (_C2 @ z))
         B[1] = _H_TWIST @ z
-        H[1] = _H_TWIST
+        if hessians:
+            H[0] = _D.T @ (P / l) @ _D
+            H[1] = _H_TWIST
         for k, (sgn, X) in enumerate(_DOTS, start=2):
             x = X @ z
             ex = e @ x
             p[k] = sgn * ex
             B[k] = sgn * ((x - ex * e) / l @ _D + e @ X)
+            if not hessians:
+                continue
             Hdd = -(np.outer(x, e) + np.outer(e, x) + ex * (np.eye(3) - 3 * np.outer(e, e))) / (l * l)
             Hdx = _D.T @ (P / l) @ X
             H[k] = sgn * (_D.T @ Hdd @ _D + Hdx + Hdx.T)
@@ -307,7 +211,7 @@ class Beam3DElement(Force, ConfigurationMass):
     def local_deformation(self, q):
         """(u, θ, φz₁, φz₂, φy₁, φy₂): elongation, twist, end rotations about z and y (module
         docstring)."""
-        return self._measures(self._nodes(q))[0]
+        return self._measures(self._nodes(q), hessians=False)[0]
 
     def _energy_derivatives(self, p):
         EA, l0 = self.props.E * self.props.A, self.l0
@@ -340,14 +244,39 @@ class Beam3DElement(Force, ConfigurationMass):
         return velocity_map_z(self._nodes(q)) @ self._nodes.C
 
     def velocity_terms(self, q, qd) -> np.ndarray:
-        """h = Ṁ q̇ − ½ ∂(q̇ᵀ M q̇)/∂q on idx, in closed form (:mod:`mbseig.model.beam_whirl`)."""
+        """h = Ṁ q̇ − ½ ∂(q̇ᵀ M q̇)/∂q on idx, in closed form (batched: :meth:`_batched`)."""
+        if self._batched(q, qd):
+            return group_of(self.props).evaluate("velocity_terms", self, q, qd)
+        return self.velocity_terms_reference(q, qd)
+
+    def velocity_terms_reference(self, q, qd) -> np.ndarray:
+        """:meth:`velocity_terms` of this element alone (:mod:`mbseig.model.beam_whirl`)."""
         C = self._nodes.C
         return C.T @ velocity_terms_z(self._nodes(q), C @ qd[self.idx], self._em.M)
 
     # -- force element interface ------------------------------------------------------------
+    def _batched(self, q, qd=None) -> bool:
+        """Whether (q, q̇) is served by the beam's batch (:mod:`mbseig.model.beam3d_batch`):
+        real vectors; anything else (complex steps) is evaluated here alone."""
+        return BATCHED and _real(q) and (qd is None or _real(qd))
+
+    def kernel_record(self) -> dict:
+        """This element's constant data for :class:`mbseig.model.beam3d_kernel.Stack`."""
+        p, (Gz, Kbz), (Gy, Kby) = self.props, *self._planes
+        return {"idx": self._nodes.idx, "C": self._nodes.C, "d": self._nodes.d, "l0": self.l0,
+                "EA": p.E * p.A, "GJ": p.G * p.J / self.l0, "spin": self.spin, "Gz": Gz,
+                "Kbz": Kbz, "Gy": Gy, "Kby": Kby, "M": self._em.M, "G": self._em.G}
+
     def force(self, q, qd):
+        if self._batched(q, qd):
+            return group_of(self.props).evaluate("force", self, q, qd)
+        return self.force_reference(q, qd)
+
+    def force_reference(self, q, qd):
+        """:meth:`force` of this element alone, through the Hessian-free part of
+        :meth:`_measures`."""
         z = self._nodes(q)
-        p, B, _ = self._measures(z)
+        p, B, _ = self._measures(z, hessians=False)
         Up = self._energy_derivatives(p)[1]
         g = -(self._nodes.C.T @ (B.T @ Up))
         if self.spin:
@@ -358,6 +287,12 @@ class Beam3DElement(Force, ConfigurationMass):
     def jacobians(self, q, qd):
         """(K, C): K exact for the elastic part; the gyroscopic force's ∂/∂q (∝ Ω q̇) is left
         out, so K is exact at rest (q̇ = 0, where the linearization evaluates it)."""
+        if self._batched(q, qd):
+            return group_of(self.props).evaluate("jacobians", self, q, qd)
+        return self.jacobians_reference(q, qd)
+
+    def jacobians_reference(self, q, qd):
+        """:meth:`jacobians` of this element alone."""
         z = self._nodes(q)
         p, B, H = self._measures(z)
         _, Up, Upp, _ = self._energy_derivatives(p)
@@ -374,5 +309,15 @@ class Beam3DElement(Force, ConfigurationMass):
     # -- inertia -----------------------------------------------------------------------------
     def mass(self, q):
         """Consistent mass on idx in the current element frame: Tᵀ M_loc T."""
+        if self._batched(q):
+            return group_of(self.props).evaluate("mass", self, q, None)
+        return self.mass_reference(q)
+
+    def mass_reference(self, q):
+        """:meth:`mass` of this element alone."""
         T = self.velocity_map(q)
         return T.T @ self._em.M @ T
+
+
+def _real(v) -> bool:
+    return isinstance(v, np.ndarray) and v.dtype == np.float64 and v.ndim == 1
