@@ -56,13 +56,16 @@ from .structure import BIG, SMALL, fro, is_symmetric, rayleigh_fit, sumsq  # noq
 __all__ = [
     "EPS",
     "backward_errors",
+    "backward_errors_norms",
     "better_half",
+    "better_half_norms",
     "colnorm",
     "componentwise",
     "conditions",
     "expand_pairs",
     "fro",
     "is_symmetric",
+    "plain_norms",
     "pow2_scale",
     "rayleigh_fit",
     "unit_columns",
@@ -79,13 +82,18 @@ def pow2_scale(X, e):
     return np.ldexp(X, e)
 
 
-def colnorm(X):
+def colnorm(X, m=None):
     """Column 2-norms without underflow or overflow of the squares (entries beyond 1e±150 are
-    scaled per column first; the others take the fast path)."""
+    scaled per column first; the others take the fast path).  ``m``: max |X| per column, if
+    already formed."""
     X = np.asarray(X)
     if X.size == 0:
         return np.zeros(X.shape[1] if X.ndim == 2 else 0)
-    m = np.max(np.abs(X), axis=0)
+    if m is None:
+        fast = _colnorm_fast(X)
+        if np.all(_plain(fast, X.shape[0])):  # max |X| provably within (SMALL, BIG): no |X|
+            return fast
+        m = np.max(np.abs(X), axis=0)
     odd = (m > BIG) | ((m < SMALL) & (m > 0))
     if not np.any(odd):
         return _colnorm_fast(X)
@@ -100,21 +108,48 @@ def colnorm(X):
     return out
 
 
-def unit_columns(X):
-    """X with unit columns (zero columns left as they are).  Columns beyond 1e±150 are first
-    scaled by a power of 2 (exact): a complex division by a subnormal norm would overflow."""
+def _plain(fast, rows):
+    """Columns whose computed 2-norm ``fast`` proves max |x| inside [SMALL, BIG] (‖x‖/√rows ≤
+    max |x| ≤ ‖x‖, with a factor 2 of margin for the rounding of ``fast``): no scaling needed,
+    so ``fast`` is the norm and no |X| pass is made."""
+    return (fast <= 0.5 * BIG) & (fast >= 2.0 * SMALL * np.sqrt(rows))
+
+
+def plain_norms(X):
+    """The divisors of :func:`unit_columns` (column norms, 1 for a zero column) where no column
+    needs the power-of-2 scaling first, else None: X / plain_norms(X) is unit_columns(X)."""
     X = np.asarray(X)
-    if X.ndim == 2 and X.size:
+    if X.ndim != 2 or not X.size:
+        return None
+    nrm = _colnorm_fast(X)
+    if not np.all(_plain(nrm, X.shape[0])):
         m = np.max(np.abs(X), axis=0)
-        odd = ((m > BIG) | (m < SMALL)) & (m > 0)
-        if np.any(odd):
+        if np.any(((m > BIG) | (m < SMALL)) & (m > 0)):
+            return None
+        nrm = colnorm(X, m)
+    nrm[nrm == 0] = 1.0
+    return nrm
+
+
+def unit_columns(X, inplace=False):
+    """X with unit columns (zero columns left as they are).  Columns beyond 1e±150 are first
+    scaled by a power of 2 (exact): a complex division by a subnormal norm would overflow.
+    ``inplace``: X (a float or complex array the caller owns) is overwritten where it can be."""
+    X = np.asarray(X)
+    nrm = plain_norms(X)
+    if nrm is None:
+        if X.ndim == 2 and X.size:
+            m = np.max(np.abs(X), axis=0)
+            odd = ((m > BIG) | (m < SMALL)) & (m > 0)
             X = X.copy()
             X[:, odd] = pow2_scale(X[:, odd], -np.frexp(m[odd])[1][None, :])
-    nrm = colnorm(X)
-    nrm[nrm == 0] = 1.0
+            inplace = True
+        nrm = colnorm(X)
+        nrm[nrm == 0] = 1.0
+    if inplace and X.dtype.kind in "fc" and X.flags.writeable:
+        X /= nrm
+        return X
     return X / nrm
-
-
 
 
 #: entries of one block of rows in the measures (≈ 16 MB of complex numbers): the per-column
@@ -212,6 +247,12 @@ def backward_errors(ops, s, X, norms):
 
     A pair with zero residual has η = 0 even where the weights vanish (s = 0 with Q = 0).
     """
+    return backward_errors_norms(ops, s, X, norms)[:3]
+
+
+def backward_errors_norms(ops, s, X, norms):
+    """(η, M X, P X, ‖x‖ per column): :func:`backward_errors` and the column norms of X, for
+    :func:`conditions` to reuse."""
     M, P, Q = _row_sliceable(ops)
     X = np.ascontiguousarray(X)  # each block's Q[r] @ X would otherwise copy the whole X
     MX, PX = M @ X, P @ X
@@ -221,14 +262,16 @@ def backward_errors(ops, s, X, norms):
         rn = _add_colnorm(rn, colnorm(_residual(MX[r], PX[r], Q[r] @ X, s)))
     xn = colnorm(X)
     eta = np.where(xn > 0, _ratio(rn, weights(s, norms) * xn), np.inf)  # x = 0: no eigenvector
-    return eta, MX, PX
+    return eta, MX, PX, xn
 
 
-def conditions(s, X, Yc, MX, PX, norms):
-    """κ per pair, with ``Yc`` the conjugated left vectors (yᴴ = Ycᵀ) and MX, PX the products."""
+def conditions(s, X, Yc, MX, PX, norms, xn=None):
+    """κ per pair, with ``Yc`` the conjugated left vectors (yᴴ = Ycᵀ) and MX, PX the products;
+    ``xn``: the column norms of X if already formed (those of Yc too where Yc is X)."""
     s = np.asarray(s)
     w = weights(s, norms)
-    num = w * colnorm(X) * colnorm(Yc)
+    xn = colnorm(X) if xn is None else xn
+    num = w * xn * (xn if Yc is X else colnorm(Yc))
     den = np.zeros(s.size, complex)
     for r in _row_blocks(X):
         den += np.einsum("ij,ij->j", Yc[r], _derivative(MX[r], PX[r], s))
@@ -252,10 +295,14 @@ def componentwise(ops, s, X, Yc, *, abs_ops=None):
     M, P, Q = ops = _row_sliceable(ops)
     aM, aP, aQ = _row_sliceable(abs_ops if abs_ops is not None else tuple(abs(A) for A in ops))
     s = np.asarray(s)
-    Yc = X if Yc is None else Yc
+    same = Yc is None or Yc is X
     X = np.ascontiguousarray(X)  # each block's products would otherwise copy the whole X
+    Yc = X if same else Yc
     t, big = reversal(s)
     a = np.abs(t)
+    # the coefficients of |M|, |P|, |Q| in |s|²|M| + |s||P| + |Q| (or its reversal): a factor 1
+    # where a term has none (exact, so the sums are those of the two branches written out)
+    cM, cQ = np.where(big, 1.0, a * a), np.where(big, a * a, 1.0)
     AX = np.abs(X)
     eta_c = np.zeros(s.size)
     num = np.zeros(s.size)
@@ -263,10 +310,12 @@ def componentwise(ops, s, X, Yc, *, abs_ops=None):
     for r in _row_blocks(X):  # the products, residual and |·| bound one block of rows at a time
         MX, PX = M[r] @ X, P[r] @ X
         R = np.abs(_residual(MX, PX, Q[r] @ X, s))
-        AMX, APX, AQX = aM[r] @ AX, aP[r] @ AX, aQ[r] @ AX  # each product once, both forms
-        D = np.where(big, AMX + APX * a + AQX * (a * a), AMX * (a * a) + APX * a + AQX)
+        D = aM[r] @ AX  # each product once, both forms
+        D *= cM
+        D += (aP[r] @ AX) * a
+        D += (aQ[r] @ AX) * cQ
         eta_c = np.maximum(eta_c, np.max(_ratio(R, D), axis=0, initial=0.0))
-        num += np.einsum("ij,ij->j", np.abs(Yc[r]), D)
+        num += np.einsum("ij,ij->j", AX[r] if same else np.abs(Yc[r]), D)
         den += np.einsum("ij,ij->j", Yc[r], _derivative(MX, PX, s))
     den = np.abs(den)
     kappa_c = _unreverse(_ratio(num, den), s, den)
@@ -281,40 +330,61 @@ def better_half(ops, s, X1, X2, norms):
     Both halves are brought to one dtype first (a real half and a complex one of a real problem
     with real eigenvalues), so no imaginary part is cast away.
     """
+    return better_half_norms(ops, s, X1, X2, norms)[:5]
+
+
+def better_half_norms(ops, s, X1, X2, norms, own=False):
+    """:func:`better_half` and the column norms of X; ``own``: X1 and X2 may be overwritten."""
     dtype = np.result_type(X1, X2)
     same = X2 is X1
-    X1 = np.ascontiguousarray(unit_columns(X1), dtype=dtype)
+
+    def unit(X):
+        inplace = own and X.dtype == dtype and X.flags.c_contiguous
+        return np.ascontiguousarray(unit_columns(X, inplace=inplace), dtype=dtype)
+
+    X1 = unit(X1)
     if same:  # one vector per pair (a path without companion halves)
-        eta, MX, PX = backward_errors(ops, s, X1, norms)
-        return X1, eta, MX, PX, 0
-    X2 = np.ascontiguousarray(unit_columns(X2), dtype=dtype)
+        eta, MX, PX, xn = backward_errors_norms(ops, s, X1, norms)
+        return X1, eta, MX, PX, 0, xn
+    X2 = unit(X2)
     if X1.size > ROW_BLOCK:  # large: η of both halves first, products of the kept one only
         e1, e2 = (backward_errors(ops, s, X, norms)[0] for X in (X1, X2))
         take2 = e2 < e1
         X1[:, take2] = X2[:, take2]
         del X2
-        eta, MX, PX = backward_errors(ops, s, X1, norms)
-        return X1, eta, MX, PX, int(np.sum(take2))
+        eta, MX, PX, xn = backward_errors_norms(ops, s, X1, norms)
+        return X1, eta, MX, PX, int(np.sum(take2)), xn
     e1, MX1, PX1 = backward_errors(ops, s, X1, norms)
     e2, MX2, PX2 = backward_errors(ops, s, X2, norms)
     take2 = e2 < e1
     for a, b in ((X1, X2), (MX1, MX2), (PX1, PX2)):
         a[:, take2] = b[:, take2]
-    return X1, np.minimum(e1, e2), MX1, PX1, int(np.sum(take2))
+    return X1, np.minimum(e1, e2), MX1, PX1, int(np.sum(take2)), colnorm(X1)
 
 
-def expand_pairs(Xu, pos, partner, rows=8192):
+def expand_pairs(Xu, pos, partner, rows=8192, divide=None):
     """Columns Xu[:, pos], conjugated where ``partner``: every eigenpair of a real problem from
     one measured column per conjugate pair.  A block of rows at a time, so that the gather and
     the sign flip stay in cache (10⁶ rows, 40 columns: 0.45 s, against 1.2–2 s for one gather
-    and a conjugated copy of the whole array)."""
+    and a conjugated copy of the whole array).  ``divide``: per column of Xu, divisors applied
+    on the way ((Xu / divide)[:, pos] with no intermediate copy, e.g. :func:`plain_norms`)."""
+    pos = np.asarray(pos, int)
     out = np.empty((Xu.shape[0], len(pos)), np.result_type(Xu), order="C")
     flip = np.flatnonzero(partner) if np.iscomplexobj(out) else np.zeros(0, int)
+    d = None if divide is None else np.asarray(divide)[pos]
+    direct = Xu.flags.f_contiguous and not Xu.flags.c_contiguous  # take() is fast from there
     for r in range(0, Xu.shape[0], rows):
-        blk = Xu[r:r + rows][:, pos]
+        if direct:  # gathered straight into the output (no temporary block)
+            blk = out[r:r + rows]
+            np.take(Xu[r:r + rows], pos, axis=1, out=blk)
+        else:
+            blk = Xu[r:r + rows][:, pos]
+        if d is not None:
+            blk /= d
         if flip.size:
             blk.imag[:, flip] *= -1.0
-        out[r:r + rows] = blk
+        if not direct:
+            out[r:r + rows] = blk
     return out
 
 

@@ -5,9 +5,13 @@ componentwise measures formed on demand.
 
 Symmetric paths (eigh, proportional): each undamped mode v gives both roots of
 s² + (α + βω²) s + ω² = 0 with x = v; with stiffness-proportional damping the multiplier rows
-of a bordered vector scale as μ = (1 + βs) λ.  General paths: of each companion vector the
-better half is kept (:func:`mbseig.eigen.measures.better_half`), and the left vectors are the
-right ones for a symmetric pencil, else found by inverse iteration where asked.
+of a bordered vector scale as μ = (1 + βs) λ.  The roots of an oscillating mode are exact
+conjugates and so are their vectors, so each such mode is measured once.  General paths: of
+each companion vector the better half is kept (:func:`mbseig.eigen.measures.better_half`), and
+the left vectors are the right ones for a symmetric pencil, else found by inverse iteration
+where asked; a search that knows its partners (partial-slepc) passes the measured columns and
+the partner map, else the partners are found in the expanded vectors.  The measures of a
+partner are bitwise those of its pair (every quantity is the conjugate or the same modulus).
 """
 
 from __future__ import annotations
@@ -16,20 +20,30 @@ import numpy as np
 
 from ..errors import SolverError
 from .measures import (
-    backward_errors,
-    better_half,
+    backward_errors_norms,
+    better_half_norms,
     colnorm,
     componentwise,
     conditions,
     expand_pairs,
     is_symmetric,
+    plain_norms,
     unit_columns,
 )
 from .selection import partner_columns
 from .shift_invert import left_vectors
 from .undamped import undamped_roots
 
-__all__ = ["symmetric_pairs", "general_pairs", "Componentwise"]
+__all__ = ["Componentwise", "general_pairs", "symmetric_pairs", "take_columns"]
+
+
+def take_columns(X, cols):
+    """X[:, cols] in row-major order (the measures run over blocks of rows), X itself where
+    ``cols`` is every column in order and X is row-major already."""
+    cols = np.asarray(cols)
+    if X.flags.c_contiguous and cols.size == X.shape[1] and np.array_equal(cols, np.arange(cols.size)):
+        return X
+    return expand_pairs(X, cols, np.zeros(cols.size, bool))
 
 
 def _verified(name, s, eta, verify_tol):
@@ -45,22 +59,43 @@ def symmetric_pairs(found, extras, pencil, norms, n, m, verify_tol, name):
     Mb, Pb, Qb = pencil
     w, V = found["w"], found["V"]
     alpha, beta = extras.get("alpha", 0.0), extras.get("beta", 0.0)
-    s = undamped_roots(w, alpha, beta)
+    s_all = undamped_roots(w, alpha, beta)  # [s₊; s₋], s₋ = s̄₊ exactly for an oscillating mode
+    k = w.size
     V = np.divide(V, colnorm(V), order="C")  # row-major: the measures run over blocks of rows
-    X = np.concatenate([V, V], axis=1)
+    # the returned pairs are (s₊, v) then (s₋, v); the multipliers scaled by (1 + βs) are
+    # conjugate with s, so (s̄₊, x̄₊) is the partner of (s₊, x₊) and is measured once (module doc)
+    partner = np.zeros(2 * k, bool)
+    partner[k:] = s_all[k:] == np.conj(s_all[:k])
+    partner[k:] &= s_all[:k].imag != 0
+    pos = np.cumsum(~partner) - 1
+    pos[k:][partner[k:]] = pos[:k][partner[k:]]
+    meas = np.flatnonzero(~partner)  # the returned pair of each measured column
+    vcol = meas % k
+    s = s_all[meas]
+    X = V if vcol.size == k else take_columns(V, vcol)
     if m and beta != 0.0:  # multipliers of the damped mode: μ = (1 + βs) λ (module doc)
         X = X.astype(complex)
         X[n:, :] *= (1.0 + beta * s)[None, :]
-        X = unit_columns(X)
-    eta, MX, PX = backward_errors((Mb, Pb, Qb), s, X, norms)
-    Yc = X
-    kappa = conditions(s, X, Yc, MX, PX, norms)
+        X = unit_columns(X, inplace=True)
+    eta, MX, PX, xn = backward_errors_norms((Mb, Pb, Qb), s, X, norms)
+    kappa = conditions(s, X, X, MX, PX, norms, xn=xn)
+    del MX, PX
     _verified(name, s, eta, verify_tol)
     # the componentwise measures on demand (the listing asks for the few pairs the normwise
     # bound leaves undecided; at 10⁶ coordinates all of them cost ≈ 4 s)
-    lazy = Componentwise((Mb, Pb, Qb), s, X, Yc, None, None)
-    Xq = unit_columns(X[:n]) if m else X
-    return s, Xq, Xq, eta, kappa, lazy, 0
+    lazy = Componentwise((Mb, Pb, Qb), s, X, None, pos, partner)
+    Xq = _returned(X, n, m, pos, partner)
+    return s_all, Xq, Xq, eta[pos], kappa[pos], lazy, 0
+
+
+def _returned(X, n, m, pos, partner):
+    """The returned vectors: the measured columns in the coordinates of M (unit columns),
+    one per returned pair, conjugated for the partners."""
+    Xn = X[:n] if m else X
+    nrm = plain_norms(Xn) if m else None
+    if m and nrm is None:
+        Xn = unit_columns(Xn)
+    return expand_pairs(Xn, pos, partner, divide=nrm)
 
 
 def general_pairs(found, pencil, norms, n, m, verify_tol, name, sym_tol, left):
@@ -69,33 +104,35 @@ def general_pairs(found, pencil, norms, n, m, verify_tol, name, sym_tol, left):
     Mb, Pb, Qb = pencil
     # a conjugate partner (s̄, x̄) of real M, P, Q has the η, κ, η_c, κ_c of (s, x): the
     # measures are formed on one column per pair (half the work) and copied to the partner
-    s_all, X1, X2 = found["s"], found["X1"], found["X2"]
-    src = partner_columns(s_all, X1)
-    uniq = np.flatnonzero(src == np.arange(s_all.size))
+    s_all = found["s"]
+    if "partner" in found:  # the search's measured columns (row-major) and its partner map
+        partner = found.pop("partner")
+        X1 = X2 = found.pop("X")
+        pos = np.cumsum(~partner) - 1
+        uniq = np.flatnonzero(~partner)
+    else:
+        X1, X2 = found.pop("X1"), found.pop("X2")
+        src = partner_columns(s_all, X1)
+        uniq = np.flatnonzero(src == np.arange(s_all.size))
+        if uniq.size < s_all.size:
+            X1, X2 = take_columns(X1, uniq), (None if X2 is X1 else take_columns(X2, uniq))
+            X2 = X1 if X2 is None else X2
+        pos = np.searchsorted(uniq, src)  # the measured column of each returned pair
+        partner = src != np.arange(s_all.size)
     s = s_all[uniq]
-    if uniq.size < s_all.size:
-        X1, X2 = X1[:, uniq], (None if X2 is X1 else X2[:, uniq])
-        X2 = X1 if X2 is None else X2
-    del found["X1"], found["X2"]
-    X, eta, MX, PX, n_second = better_half((Mb, Pb, Qb), s, X1, X2, norms)
+    X, eta, MX, PX, n_second, xn = better_half_norms((Mb, Pb, Qb), s, X1, X2, norms, own=True)
     del X1, X2
     symmetric_all = all(is_symmetric(A, sym_tol) for A in (Mb, Pb, Qb))
     Yc = X if symmetric_all or not left else left_vectors(Mb, Pb, Qb, s)
-    kappa = conditions(s, X, Yc, MX, PX, norms)
+    kappa = conditions(s, X, Yc, MX, PX, norms, xn=xn)
     del MX, PX
-    pos = np.searchsorted(uniq, src)  # the measured column of each returned pair
-    partner = src != np.arange(s_all.size)
     _verified(name, s, eta, verify_tol)
-    lazy = Componentwise((Mb, Pb, Qb), s, X, Yc, pos, partner)
-    Xq = unit_columns(X[:n]) if m else X
-    Yq = Xq if Yc is X else (unit_columns(Yc[:n]) if m else Yc)
-    del X, Yc
-    # back to every returned pair: partners conjugated
-    s, eta, kappa = s_all, eta[pos], kappa[pos]
-    same = Yq is None or Yq is Xq  # y = x̄: the left vectors are the right ones, expanded once
-    Xq = expand_pairs(Xq, pos, partner)
-    Yq = Xq if same else expand_pairs(Yq, pos, partner)
-    return s, Xq, Yq, eta, kappa, lazy, n_second
+    lazy = Componentwise((Mb, Pb, Qb), s, X, None if Yc is X else Yc, pos, partner)
+    # back to every returned pair: partners conjugated; y = x̄: the left vectors are the right
+    # ones, expanded once
+    Xq = _returned(X, n, m, pos, partner)
+    Yq = Xq if Yc is X else _returned(Yc, n, m, pos, partner)
+    return s_all, Xq, Yq, eta[pos], kappa[pos], lazy, n_second
 
 
 class Componentwise:
@@ -106,12 +143,17 @@ class Componentwise:
 
     def __init__(self, pencil, s, X, Y, pos=None, partner=None):
         self.pencil, self.s, self.X, self.Y, self.pos, self.partner = pencil, s, X, Y, pos, partner
+        self.abs_ops = None
 
     def __call__(self, idx):
-        cols = np.asarray(idx) if self.pos is None else np.unique(self.pos[np.asarray(idx)])
-        Y = None if self.Y is None else self.Y[:, cols]
-        eta_c, kappa_c = componentwise(self.pencil, self.s[cols], self.X[:, cols], Y)
+        idx = np.asarray(idx)
+        cols = idx if self.pos is None else np.unique(self.pos[idx])
+        X = take_columns(self.X, cols)
+        Y = None if self.Y is None else take_columns(self.Y, cols)
+        if self.abs_ops is None:  # |M|, |P|, |Q| once per solution
+            self.abs_ops = tuple(abs(A) for A in self.pencil)
+        eta_c, kappa_c = componentwise(self.pencil, self.s[cols], X, Y, abs_ops=self.abs_ops)
         if self.pos is None:
             return eta_c, kappa_c
-        where = np.searchsorted(cols, self.pos[np.asarray(idx)])
+        where = np.searchsorted(cols, self.pos[idx])
         return eta_c[where], kappa_c[where]

@@ -176,7 +176,11 @@ def slepc_search(run, want, omega_t, band):
             break
         nev = min(2 * nev, run.limit)
     cols, conj, s_out = with_partners(upper[idx], s_all, tol)
-    X = expand_pairs(np.asarray(X_up, complex), np.searchsorted(upper, cols), conj)
-    return {"s": s_out, "X1": X, "X2": X, "k": nev, "shifts": [0.0],
+    # the measured columns only (row-major, for the measures' blocks of rows), each partner
+    # marked: the checks run once per conjugate pair and expand to every pair at the end
+    X = expand_pairs(np.asarray(X_up, complex), np.searchsorted(upper, cols[~conj]),
+                     np.zeros(int(np.sum(~conj)), bool))
+    del X_up
+    return {"s": s_out, "X": X, "partner": conj, "k": nev, "shifts": [0.0],
             "coverage": {"measure": "|s|", "omega_n": (lo, hi), "note": note, "verified": ok},
             "slepc": info}

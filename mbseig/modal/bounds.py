@@ -291,15 +291,14 @@ def zero_pair_floor(b, sol, M, P, safety, nQ=None, gamma=1.0):
     err, tol, tol_re, rigid = b.err.copy(), b.tol.copy(), b.tol_re.copy(), b.rigid.copy()
     Mm = M if sp.issparse(M) else np.asarray(M)
     Pm = None if P is None else (P if sp.issparse(P) else np.asarray(P))
-    for k in cand:
-        x = sol.vectors[:, k]
-        if x.shape[0] != Mm.shape[0]:
-            return b
-        mx = abs(np.vdot(x, Mm @ x))
-        px = 0.0 if Pm is None else abs(np.vdot(x, Pm @ x))
+    if sol.vectors.shape[0] != Mm.shape[0]:
+        return b
+    forms = modal_forms(sol.vectors, cand, Mm, Pm)
+    for j, k in enumerate(cand):
+        mx, px, xx = forms[j]
         if mx == 0 or px > abs(s[k]) * mx:
             continue
-        h = math.sqrt(eta[k] * nQ * float(np.vdot(x, x).real) / mx)
+        h = math.sqrt(eta[k] * nQ * xx / mx)
         s_k, h = s[k] * gamma, h * gamma
         if abs(s_k) <= safety * h:
             err[k] = max(err[k], h)
@@ -307,6 +306,40 @@ def zero_pair_floor(b, sol, M, P, safety, nQ=None, gamma=1.0):
             tol_re[k] = max(tol_re[k], safety * h)
             rigid[k] = True
     return dataclasses.replace(b, err=err, tol=tol, tol_re=tol_re, rigid=rigid)
+
+
+#: entries of one block of rows in :func:`modal_forms` (as the measures' blocks)
+FORM_BLOCK = 1 << 20
+
+
+def modal_forms(X, cand, M, P):
+    """(|xᴴMx|, |xᴴPx| (0 without P), ‖x‖²) of the columns ``cand`` of X.  Column by column
+    for a small problem; for a large sparse one the products of all columns at once, a block
+    of rows at a time (one pass over M and P instead of one per column, no strided copies)."""
+    n = X.shape[0]
+    if not (sp.issparse(M) and n * len(cand) > FORM_BLOCK):
+        out = []
+        for k in cand:
+            x = X[:, k]
+            px = 0.0 if P is None else abs(np.vdot(x, P @ x))
+            out.append((abs(np.vdot(x, M @ x)), px, float(np.vdot(x, x).real)))
+        return out
+    Xc = X if np.array_equal(cand, np.arange(X.shape[1])) else np.take(X, cand, axis=1)
+    Xc = np.ascontiguousarray(Xc)
+    M = M.tocsr()
+    P = None if P is None else (P.tocsr() if sp.issparse(P) else P)
+    dt = np.result_type(Xc, M.dtype, *(() if P is None else (P.dtype,)))
+    mx, px = np.zeros(len(cand), dt), np.zeros(len(cand), dt)
+    xx = np.zeros(len(cand))
+    step = max(1, FORM_BLOCK // max(len(cand), 1))
+    for i in range(0, n, step):
+        r = slice(i, min(i + step, n))
+        Xr = Xc[r].conj()
+        mx += np.einsum("ij,ij->j", Xr, M[r] @ Xc)
+        if P is not None:
+            px += np.einsum("ij,ij->j", Xr, P[r] @ Xc)
+        xx += np.einsum("ij,ij->j", Xr, Xc[r]).real
+    return list(zip(np.abs(mx).tolist(), np.abs(px).tolist(), xx.tolist()))
 
 
 def tolerances(sol, *, safety=10.0, stability_rtol=1e-12, stability_atol=0.0, rank_tol=1e-6):
