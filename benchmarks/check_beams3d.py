@@ -8,7 +8,8 @@ tests/test_check_beams3d.py, run small meshes); run by hand, one thread:
     OPENBLAS_NUM_THREADS=1 python benchmarks/check_beams3d.py --rhs [REPEAT]
 
 ``--rhs``: the cost of one right-hand side of the check (tangent coordinates, fresh states) and
-of its beam parts (force, velocity terms, mass), with the beams evaluated in batches
+of its parts (lift: q and q̇ on the constraints; accel: the index-1 solve with force, velocity
+terms, M(q), Φ_q and γ; and those beam parts alone), with the beams evaluated in batches
 (mbseig.model.beam3d_batch) and element by element (``beam3d.BATCHED = False``, the reference
 path), paired in one process: medians of REPEAT rounds (default 5) of 30 states each.
 """
@@ -71,9 +72,12 @@ def _parts(path, calls):
                           1e-2 * rng.standard_normal(k) / np.sqrt(k)]) for _ in range(calls)]
     states = [(q0 + u, v) for u, v, _, _ in (tc.lift(y[:k], y[k:]) for y in ys)]
     return {"rhs": lambda: [tc.rhs(0.0, y) for y in ys],
+            "lift": lambda: [tc.lift(y[:k], y[k:]) for y in ys],
+            "accel": lambda: [dyn.acceleration(q, v) for q, v in states],
             "force": lambda: [m.generalized_force(q, v) for q, v in states],
             "h": lambda: [dyn.velocity_terms(q, v) for q, v in states],
-            "mass": lambda: [m.mass_matrix(q) for q, _ in states]}
+            "mass": lambda: [m.mass_matrix(q) for q, _ in states],
+            "phi_q": lambda: [m.phi_q(q) for q, _ in states]}
 
 
 def rhs_costs(repeat=5, calls=30):

@@ -39,6 +39,7 @@ import scipy.sparse.linalg as spla
 from ..errors import CaseError, SimulationError
 from ..model.linear_case import LinearCase
 from ..numerics import dense, min_norm_projection, null_space_basis
+from .augmented import AugmentedPattern
 
 __all__ = ["INTEGRATORS", "ForwardDynamics", "Simulation", "simulate"]
 
@@ -74,6 +75,7 @@ class ForwardDynamics:
         self.linear = isinstance(model, LinearCase)
         self.n = model.n
         self.nfev = 0
+        self._pattern = None  # of the augmented matrix (_augmented)
         if self.linear:
             self.M = dense(model.M)
             self.P, self.Q = dense(model.P), dense(model.Q)
@@ -181,8 +183,7 @@ class ForwardDynamics:
         gam = self.model.gamma(q, qd)
         n = self.n
         if self.stiff and not self.redundant:  # sparse: M(q) and Φ_q are banded for beams
-            Js = self.model.phi_q(q)
-            A = sp.bmat([[self.model.mass_matrix(q), Js.T], [Js, None]], format="csc")
+            A = self._augmented(q)
             sol = spla.splu(A).solve(np.concatenate([g, gam]))
             return sol[:n], sol[n:]
         M = self.mass(q) if self.stiff else self.M
@@ -197,6 +198,20 @@ class ForwardDynamics:
         else:
             sol = np.linalg.solve(A, rhs)
         return sol[:n], sol[n:]
+
+    def _augmented(self, q):
+        """[[M(q), Φ_qᵀ], [Φ_q, 0]] (CSC) as ``sp.bmat`` forms it from ``mass_matrix(q)`` and
+        ``phi_q(q)``: the same entries, order and stored zeros (none of M's, Φ_q's kept), so
+        that SuperLU orders and factors the very same matrix; filled into the pattern of the
+        first call (``AugmentedPattern``) while M(q) and Φ_q keep their patterns."""
+        Mf, Js = self.model.mass_matrix(q, fixed=True), self.model.phi_q(q)
+        if self._pattern is None:
+            self._pattern = AugmentedPattern(Mf, Js)
+        elif not self._pattern.matches(Mf, Js):  # patterns that change (large models): bmat
+            Mf = Mf.copy()
+            Mf.eliminate_zeros()
+            return sp.bmat([[Mf, Js.T], [Js, None]], format="csc")
+        return self._pattern.fill(Mf, Js)
 
     def rhs(self, t, y):
         n = self.n

@@ -53,6 +53,8 @@ __all__ = ["TangentCoordinates"]
 NEWTON_MAX = 12
 #: constraint residual (max |Φ_k|/scale_k) accepted when Newton stalls in rounding
 RESIDUAL_MAX = 1e-10
+#: a chord step of lift (Φ_q(q₀) R's factors) must shrink the residual at least this much
+CHORD_RATE = 0.1
 
 
 class TangentCoordinates:
@@ -72,7 +74,7 @@ class TangentCoordinates:
             self.N, self.R = np.eye(n), np.zeros((n, 0))
         self.k = self.N.shape[1]
         self.Mr, self.Kr, self.Cr = self._reduced_linear()
-        self._basis = None
+        self._basis = self._lu_q0 = None
 
     # -- the model's own linearization in x --------------------------------------------------
     def _reduced_linear(self):
@@ -101,24 +103,37 @@ class TangentCoordinates:
         return X, np.sqrt(np.abs(lam))
 
     # -- lifting x to q ----------------------------------------------------------------------
+    def _lu0(self):
+        """LU of Φ_q(q₀) R, the chord matrix of :meth:`lift` (factored once per integration)."""
+        if self._lu_q0 is None:
+            self._lu_q0 = sla.lu_factor(self.dyn.model.phi_q(self.dyn.q0) @ self.R)
+        return self._lu_q0
+
     def lift(self, x, xd=None):
-        """(u, v, residual, |R b|): q = q₀ + u on Φ = 0 and q̇ = v with Φ_q q̇ = 0."""
+        """(u, v, residual, |R b|): q = q₀ + u on Φ = 0 and q̇ = v with Φ_q q̇ = 0.
+
+        Both solves iterate with the factors of Φ_q(q₀) R (chord steps) instead of refactoring
+        Φ_q(q) R at each q: their fixed points are those of Newton's method (Φ(q) = 0 to the
+        same ``projection_tol``; Φ_q(q) v = 0 to rounding), reached at a rate |Φ_q(q) − Φ_q(q₀)|
+        / |Φ_q(q₀)| ~ |u|/L (1e-4 at the check's perturbations: one or two steps more, each a
+        back substitution).  A step that contracts by less than ``CHORD_RATE`` switches to
+        Newton at the current q (motions far from q₀)."""
         dyn, N, R = self.dyn, self.N, self.R
         u = N @ x
         v = None if xd is None else N @ xd
         if not dyn.m:
             return u, v, 0.0, 0.0
         b = np.zeros(R.shape[1])
-        res_old, lu, Jq = np.inf, None, None
+        res_old, lu = np.inf, self._lu0()
         for _ in range(NEWTON_MAX):
             q = dyn.q0 + u + R @ b
             r = dyn.model.phi(q)
             res = float(np.max(np.abs(r) / dyn.cscale))
             if res <= dyn.projection_tol or (res >= res_old and res <= RESIDUAL_MAX):
                 break
+            if res > CHORD_RATE * res_old:  # slow or no contraction: Newton at q
+                lu = sla.lu_factor(dyn.model.phi_q(q) @ R)
             res_old = res
-            Jq = dyn.model.phi_q(q)
-            lu = sla.lu_factor(Jq @ R)
             b = b - sla.lu_solve(lu, r)
         else:
             if res > RESIDUAL_MAX:
@@ -127,13 +142,25 @@ class TangentCoordinates:
                     f"constraints (residual {res:.2g} after {NEWTON_MAX} Newton steps)",
                     element="time-domain check")
         if v is not None:
-            Jq = dyn.model.phi_q(q)
-            if lu is None:
-                lu = sla.lu_factor(Jq @ R)
-            # (Φ_q R)⁻¹ of the last Newton iterate, off q by that step: the residual left,
-            # ~|step|·|Φ_q v|, is below rounding
-            v = v - R @ sla.lu_solve(lu, Jq @ v)
+            v = self._tangent_velocity(dyn.model.phi_q(q), v)
         return u + R @ b, v, res, float(np.linalg.norm(b))
+
+    def _tangent_velocity(self, Jq, v):
+        """v − R c with Φ_q R c = Φ_q v, by chord steps with Φ_q(q₀) R's factors until a step
+        no longer changes v (below 1e-16 of it), Newton's solve if they do not contract."""
+        R, lu, last = self.R, self._lu0(), np.inf
+        scale = float(np.max(np.abs(v), initial=0.0))
+        for _ in range(NEWTON_MAX):
+            d = sla.lu_solve(lu, Jq @ v)
+            step = R @ d
+            v = v - step
+            size = float(np.max(np.abs(step), initial=0.0))
+            if size <= 1e-16 * scale or size >= last:
+                return v
+            if size > CHORD_RATE * last:
+                lu = sla.lu_factor(Jq @ R)
+            last = size
+        return v
 
     def rhs(self, t, y):
         """(ẋ, ẍ) at (x, ẋ) = y."""

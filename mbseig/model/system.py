@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
+from itertools import groupby
 
 import numpy as np
 import scipy.sparse as sp
@@ -29,33 +30,29 @@ class Model:
 
     Attributes
     ----------
-    coordinate_names : names of the n coordinates, e.g. ``("B.x", "B.y", ...)``.
-    q_init : initial guess of the coordinates (from the case's point positions).
-    mass : constant n×n mass matrix (CSR).
-    g_const : constant generalized forces (gravity, constant point forces).
+    coordinate_names : names of the n coordinates, e.g. ``("B.x", "B.y", ...)``; q_init : their
+        initial guess (from the case's point positions); mass : constant n×n mass matrix (CSR).
+    g_const : constant generalized forces (gravity, constant point forces); gravity_force : the
+        part of it that is gravity (masses, bodies, beams), or None.
     forces, constraints : element objects (see :mod:`mbseig.model.elements`).
-    points : named affine maps of every basic point and body marker, for reports and drawings.
-    bodies : body name → (basic point i, basic point j).
-    report : the case's ``[report]`` table as parsed by :mod:`mbseig.casefile.report_table`
-        (joint angles with their ranges of motion, pins, actuator), empty when absent.
-    commands : inverse-statics commands not yet resolved, ``(AngleDriver, targets)`` per driver
-        with targets ``("force" | "joint", index, label)`` (the elements it sets); loading leaves
-        them pending and :func:`mbseig.equilibrium` resolves them (:mod:`mbseig.statics.inverse`).
-    drivers : one record per resolved driver (target angle, effort, the free length or locked
-        length it set), on the model that :func:`mbseig.equilibrium` returns as ``eq.model``.
+    points : named affine maps of every basic point and body marker, for reports and drawings;
+        bodies : body name → (basic point i, basic point j).
+    report : the case's ``[report]`` table (:mod:`mbseig.casefile.report_table`: joint angles with
+        their ranges of motion, pins, actuator), empty when absent.
+    commands : pending inverse-statics commands, ``(AngleDriver, targets)`` per driver, targets
+        ``("force" | "joint", index, label)``, resolved by :func:`mbseig.equilibrium`
+        (:mod:`mbseig.statics.inverse`); drivers : one record per resolved driver (target angle,
+        effort, the free or locked length it set) on the model it returns as ``eq.model``.
     mass_elements : (element, M_ref) pairs for masses that depend on the configuration
         (co-rotational beams, ``element.mass(q)`` on ``element.idx``); ``mass`` holds them as
         M_ref (at the builder's initial positions) and :meth:`mass_matrix` re-evaluates them.
     inputs, outputs : named :class:`~mbseig.model.signals.Input` / ``Output`` of the case's
-        ``[[inputs]]`` and ``[[outputs]]`` (:mod:`mbseig.model.signals`).
-    gravity_force : the part of ``g_const`` that is gravity (masses, bodies, beams), or None.
-    mass_parts : (name, rows, cols, block) per body and point mass: ``mass`` is their sum plus any
-        batched or flexible masses (modal energy per body, :mod:`mbseig.studies.design`).
+        ``[[inputs]]`` and ``[[outputs]]``.  mass_parts : (name, rows, cols, block) per body and
+        point mass: ``mass`` is their sum plus any batched or flexible masses.
     flexible : ``{"bodies": {name: record}, "refinement": {...}}`` for beams and FE bodies
         (theory, slenderness, elements, warnings), see :mod:`mbseig.casefile.flexible`.
-    coordinate_kinds : the kind of each coordinate (length, direction, angle, modal) and
-    element_ends : the named points each element acts between, both recorded by the reader
-        (:mod:`mbseig.model.assembly`).
+    coordinate_kinds, element_ends : the kind of each coordinate (length, direction, angle,
+        modal) and the named points each element acts between (:mod:`mbseig.model.assembly`).
     """
 
     name: str
@@ -85,13 +82,11 @@ class Model:
     coordinate_kinds: tuple = ()  # per coordinate: length, direction, angle, modal (assembly)
     velocity_constraints: tuple = ()  # non-holonomic rows A(q) q̇ = 0 (model.base)
     element_ends: dict = field(default_factory=dict)  # element → the points it acts between
-    # the last dense evaluations (K and C, Φ_q, H(λ)) of a small model, keyed by q (and λ):
-    # a sweep point's corrector, force scale, static stability and linearization ask for the
-    # same matrices at one q; read-only arrays, so that a caller cannot change a kept one
+    # the last dense evaluations (K and C, Φ_q, H(λ)) of a small model, keyed by q (and λ): a
+    # sweep point's steps ask for the same matrices at one q; read-only (callers cannot change them)
     _dense_kept: KeptValues = field(default_factory=lambda: KeptValues(8, readonly=True),
                                     init=False, repr=False, compare=False)
 
-    # ---- sizes ---------------------------------------------------------------------------
     @property
     def n(self) -> int:
         return len(self.coordinate_names)
@@ -103,22 +98,16 @@ class Model:
     def constraint_row_names(self) -> list[str]:
         return [c.name for c in self.constraints for _ in range(c.n_eq)]
 
-    def _row_offsets(self):
-        return self._layout[0]
-
     @cached_property
     def _layout(self):
-        """What the dense assembly of a small model repeats at every evaluation, made once per
-        model (the elements are fixed), each entry at its first use: [0] the constraint row
-        offsets, then the flat keys (row · n_cols + column, row-major as each block) of [1]
-        every single force's K and C blocks, [2] Φ_q's and [3] H's blocks in element order.
-        The dense sums are then one bincount of the blocks' values on these keys, as
-        :func:`mbseig.numerics.scatter` forms them (the same sums in the same order)."""
+        """What every assembly repeats, made once per model at first use: [0] the constraint
+        row offsets, the flat keys of [1] the single forces' K and C, [2] Φ_q's, [3] H's blocks
+        (dense sums: one bincount, scatter's sums in its order); ``pairs``, ``mass_plan``."""
         return _Layout(self)
 
     def _sparse(self, which, n_rows, blocks):
-        """The sparse sum of the blocks, as :func:`mbseig.numerics.scatter` forms it (the same
-        triplets in the same order), on the indices of ``self._layout.pairs(which)``."""
+        """The sparse sum of the blocks as :func:`mbseig.numerics.scatter` forms it (the same
+        triplets, order and sums: ``self._layout.pairs``)."""
         rows, cols = self._layout.pairs(which)
         vals = [np.asarray(v, dtype=float).ravel() for _, _, v in blocks]
         if sum(v.size for v in vals) != rows.size or not rows.size:
@@ -126,18 +115,16 @@ class Model:
         v = np.concatenate(vals)
         if v.size > FAST_CSR:  # (coo_sum's own path for so many, without copying the indices)
             return sp.coo_matrix((v, (rows, cols)), shape=(n_rows, self.n)).tocsr()
-        return coo_sum(n_rows, self.n, [(rows, cols, v)])
+        return self._layout.pairs(which, n_rows).csr(v)
 
     @cached_property
     def _groups(self):
-        """(constraint groups, single forces, their groups): the elements of one kind that
-        one kernel evaluates at once (:func:`mbseig.model.batched.kernel_groups`), made once."""
+        """(constraint groups, single forces, their groups): :func:`~.batched.kernel_groups`."""
         singles = [f for f in self.forces if not isinstance(f, BatchForce)]
         return kernel_groups(self.constraints), singles, kernel_groups(singles)
 
     def _each(self, which, method, *args):
-        """[element.method(*args)] of the constraints (``which`` 0) or the single forces (1),
-        in element order, the grouped ones evaluated by their group."""
+        """[element.method(*args)] of the constraints (``which`` 0) or single forces (1)."""
         elements = self.constraints if which == 0 else self._groups[1]
         groups = self._groups[2 * which]
         if not groups:
@@ -148,23 +135,32 @@ class Model:
                 out[k] = v
         return [getattr(e, method)(*args) if v is None else v for e, v in zip(elements, out)]
 
-    def mass_matrix(self, q=None) -> sp.csr_matrix:
-        """M(q): ``mass`` with the configuration-dependent element masses evaluated at q."""
+    def mass_matrix(self, q=None, *, fixed=False) -> sp.csr_matrix:
+        """M(q): ``mass`` with the configuration-dependent element masses evaluated at q, the
+        sums of ``mass + scatter(blocks)`` (no stored zeros; ``fixed``: one pattern at all q)."""
         if q is None or not self.mass_elements:
             return self.mass
         blocks = [(e.idx, e.idx, e.mass(q) - M_ref) for e, M_ref in self.mass_elements]
-        return (self.mass + scatter(self.n, self.n, blocks)).tocsr()
+        vals = [np.asarray(v, dtype=float).ravel() for _, _, v in blocks]
+        S, pos, U = self._layout.mass_plan()
+        if S is None or sum(v.size for v in vals) != S.order.size:
+            return (self.mass + scatter(self.n, self.n, blocks)).tocsr()
+        data = np.zeros(U.keys.size)
+        data[pos[0]] = self.mass.data
+        data[pos[1]] += S.values(np.concatenate(vals))  # mass + (the blocks' sum), as scipy adds
+        M = U.csr(data, summed=True)
+        if not fixed:
+            M.eliminate_zeros()  # (the sparse sum stores none)
+        return M
 
     def _kept(self, key, compute):
         """compute() once per key among the last few dense evaluations (read-only arrays,
-        :class:`~mbseig.model.cache.KeptValues`); a model above the dense-assembly size keeps
-        nothing (a dense K of a model examined up to the dense limit of 4000 unknowns would
-        hold 128 MB)."""
+        :class:`~mbseig.model.cache.KeptValues`); none above the dense-assembly size (128 MB
+        for a dense K at its limit of 4000 unknowns)."""
         if not self.dense_assembly:
             return compute()
         return self._dense_kept.get(key, compute)
 
-    # ---- forces --------------------------------------------------------------------------
     def generalized_force(self, q, qd=None, u=None) -> np.ndarray:
         """g(q, q̇), plus Σ b_i(q) u_i of the named inputs when ``u`` ({name: value}) is given
         (:mod:`mbseig.model.signals`)."""
@@ -194,13 +190,11 @@ class Model:
         single = iter(self._each(1, "jacobians", q, qd))
         for f in self.forces:
             if isinstance(f, BatchForce):  # batches give COO triplets
-                Kt, Ct = f.jacobian_coo(q, qd)
-                kt.append(Kt)
-                ct.append(Ct)
+                for t, x in zip((kt, ct), f.jacobian_coo(q, qd)):
+                    t.append(x)
                 continue
-            K, C = next(single)
-            kb.append((f.idx, f.idx, K))
-            cb.append((f.idx, f.idx, C))
+            for b, x in zip((kb, cb), next(single)):
+                b.append((f.idx, f.idx, x))
         if dense:
             K, C = (_summed(self.n, self.n, self._layout[1], b) for b in (kb, cb))
         else:
@@ -210,7 +204,6 @@ class Model:
             C = C + coo_sum(self.n, self.n, ct, dense=dense)
         return K, C
 
-    # ---- constraints ---------------------------------------------------------------------
     def phi(self, q) -> np.ndarray:
         if not self.constraints:
             return np.zeros(0)
@@ -223,16 +216,13 @@ class Model:
         return self._phi_q(q, False)
 
     def _phi_q(self, q, dense):
-        off = self._row_offsets()
+        off, jacs = self._layout[0], self._each(0, "jac", q)
+        blocks = lambda: [(np.arange(off[k], off[k + 1]), c.idx, jacs[k])
+                          for k, c in enumerate(self.constraints)]
         if dense:
-            jacs = self._each(0, "jac", q)
             return _summed(self.n_constraints, self.n, self._layout[2],
-                           [(None, None, J) for J in jacs],
-                           lambda: [(np.arange(off[k], off[k + 1]), c.idx, jacs[k])
-                                    for k, c in enumerate(self.constraints)])
-        jacs = self._each(0, "jac", q)
-        blocks = [(np.arange(off[k], off[k + 1]), c.idx, jacs[k]) for k, c in enumerate(self.constraints)]
-        return self._sparse(2, self.n_constraints, blocks)
+                           [(None, None, J) for J in jacs], blocks)
+        return self._sparse(2, self.n_constraints, blocks())
 
     def constraint_hessian(self, q, lam, *, dense=False) -> sp.csr_matrix:
         """H(λ) = Σ_k λ_k ∇²Φ_k(q), the stiffness of the constraint forces (CSR; a dense array
@@ -244,7 +234,7 @@ class Model:
         return self._constraint_hessian(q, lam, False)
 
     def _constraint_hessian(self, q, lam, dense):
-        off = self._row_offsets()
+        off = self._layout[0]
         hs = [None] * len(self.constraints)
         for pos, group in self._groups[0]:  # the members' multipliers, one row each
             rows = off[pos][:, None] + np.arange(group.B.shape[1])
@@ -303,8 +293,7 @@ class Model:
 
 
 class _Layout:
-    """Model._layout: its entries made at their first use (a model's statics may need Φ_q and
-    never the force blocks' keys)."""
+    """Model._layout, each entry made at its first use."""
 
     def __init__(self, model):
         self.model, self.kept = model, {}
@@ -315,72 +304,91 @@ class _Layout:
                                 if which == 0 else _block_keys(self._blocks(which), self.model.n))
         return self.kept[which]
 
-    def pairs(self, which):
+    def pairs(self, which, n_rows=None):
         """(rows, columns) of entry ``which``'s triplets, as scatter forms them from the blocks
-        (the sparse sums; int32 where scipy takes them so)."""
-        if ("pairs", which) not in self.kept:
-            m = self.model
+        (the sparse sums; int32 where scipy takes them so); their :class:`_Sum` if n_rows."""
+        m, key = self.model, ("pairs" if n_rows is None else "sum", which)
+        if key not in self.kept:
             kind = np.int32 if max(m.n, m.n_constraints) < 2**31 - 1 else np.int64
-            self.kept[("pairs", which)] = _block_pairs(self._blocks(which), kind)
-        return self.kept[("pairs", which)]
+            self.kept[key] = (_block_pairs(self._blocks(which), kind) if n_rows is None
+                              else _Sum(n_rows, m.n, *self.pairs(which)))
+        return self.kept[key]
+
+    def mass_plan(self):
+        """(S, positions of ``mass``'s and of S's entries in U, U): the _Sum S of the mass
+        elements' blocks, U of the union with ``mass``'s pattern (Nones: past FAST_CSR)."""
+        if "mass" not in self.kept:
+            m, n, M = self.model, self.model.n, self.model.mass
+            r, c = _block_pairs([(e.idx, e.idx) for e, _ in m.mass_elements], np.int64)
+            self.kept["mass"] = (None,) * 3
+            if M.has_canonical_format and r.size <= FAST_CSR:
+                S, keys = _Sum(n, n, r, c), np.repeat(np.arange(n), np.diff(M.indptr)) * n + M.indices
+                U = _Sum(n, n, *np.divmod(np.union1d(keys, S.keys), n))
+                self.kept["mass"] = (S, [np.searchsorted(U.keys, k) for k in (keys, S.keys)], U)
+        return self.kept["mass"]
 
     def _blocks(self, which):
-        m = self.model
+        m, off = self.model, self[0]
         if which == 1:
-            blocks = [(f.idx, f.idx) for f in m.forces if not isinstance(f, BatchForce)]
-        elif which == 2:
-            off = self[0]
-            blocks = [(np.arange(off[k], off[k + 1]), c.idx) for k, c in enumerate(m.constraints)]
-        else:
-            blocks = [(c.idx, c.idx) for c in m.constraints]
-        return blocks
+            return [(f.idx, f.idx) for f in m.forces if not isinstance(f, BatchForce)]
+        if which == 2:
+            return [(np.arange(off[k], off[k + 1]), c.idx) for k, c in enumerate(m.constraints)]
+        return [(c.idx, c.idx) for c in m.constraints]
+
+
+class _Sum:
+    """CSR sums of values on fixed triplets (rows, cols): the order and segments of
+    :func:`mbseig.numerics.csr_from_triplets` (stable sort of the keys, ``reduceat``) made once."""
+
+    def __init__(self, n_rows, n_cols, r, c):
+        r, c = np.asarray(r, dtype=np.int64), np.asarray(c, dtype=np.int64)
+        self.order = np.argsort(r * n_cols + c, kind="stable")
+        key = (r * n_cols + c)[self.order]
+        self.first = np.flatnonzero(np.concatenate(([True], key[1:] != key[:-1])))
+        self.keys, self.shape = key[self.first], (n_rows, n_cols)
+        rows = self.keys // n_cols
+        self.indices = (self.keys - rows * n_cols).astype(np.int32)
+        self.indptr = np.cumsum(np.bincount(rows + 1, minlength=n_rows + 1)).astype(np.int32)
+
+    def values(self, v):
+        return np.add.reduceat(np.asarray(v, dtype=float)[self.order], self.first)
+
+    def csr(self, v, summed=False):  # of the triplets' values v (of the sums' if ``summed``)
+        v = v if summed else self.values(v)
+        return sp.csr_matrix((v, self.indices.copy(), self.indptr.copy()), shape=self.shape)
 
 
 def _runs(blocks):
     """(R, C) stacked row and column indices of the runs of blocks of one shape, in order."""
-    run = []
-    for r, c in blocks:
-        r, c = np.asarray(r).ravel(), np.asarray(c).ravel()
-        if run and (r.size != run[0][0].size or c.size != run[0][1].size):
-            yield np.array([x for x, _ in run]), np.array([y for _, y in run])
-            run = []
-        run.append((r, c))
-    if run:
-        yield np.array([x for x, _ in run]), np.array([y for _, y in run])
+    blocks = [(np.asarray(r).ravel(), np.asarray(c).ravel()) for r, c in blocks]
+    for _, run in groupby(blocks, key=lambda b: (b[0].size, b[1].size)):
+        yield tuple(np.array(x) for x in zip(*run))
 
 
 def _block_keys(blocks, n_cols):
     """The flat keys row · n_cols + column of the blocks (row-major each, in block order)."""
-    parts = [(R[:, :, None] * n_cols + C[:, None, :]).ravel() for R, C in _runs(blocks)]
-    if not parts:
-        return np.zeros(0, np.intp)
-    return (parts[0] if len(parts) == 1 else np.concatenate(parts)).astype(np.intp, copy=False)
+    rows, cols = _block_pairs(blocks, np.intp)
+    return rows * n_cols + cols
 
 
 def _block_pairs(blocks, kind):
     """(rows, columns) of the blocks' entries, row-major each, in block order."""
-    rows, cols = [], []
+    rows, cols = [np.zeros(0, kind)], [np.zeros(0, kind)]
     for R, C in _runs(blocks):
         shape = (R.shape[0], R.shape[1], C.shape[1])
         rows.append(np.broadcast_to(R[:, :, None], shape).astype(kind).ravel())
         cols.append(np.broadcast_to(C[:, None, :], shape).astype(kind).ravel())
-    if not rows:
-        return np.zeros(0, kind), np.zeros(0, kind)
-    return tuple(x[0] if len(x) == 1 else np.concatenate(x) for x in (rows, cols))
+    return np.concatenate(rows), np.concatenate(cols)
 
 
 def _summed(n_rows, n_cols, keys, blocks, full=None):
-    """The dense sum of the blocks' values on the model's precomputed keys (one bincount, as
-    :func:`mbseig.numerics.scatter` sums them); scatter itself (of ``full()``, the blocks with
-    their indices, when given) where the values do not match the keys."""
+    """The dense sum of the blocks' values on the precomputed keys (one bincount, as scatter
+    sums them); scatter itself (of ``full()`` when given) where the values do not match."""
     vals = [np.asarray(v, dtype=float).ravel() for _, _, v in blocks]
-    total = sum(v.size for v in vals)
-    if total != keys.size:
+    if (total := sum(v.size for v in vals)) != keys.size:
         return scatter(n_rows, n_cols, full() if full is not None else blocks, dense=True)
-    if not total:
-        return np.zeros((n_rows, n_cols))
-    return np.bincount(keys, weights=np.concatenate(vals),
-                       minlength=n_rows * n_cols).reshape(n_rows, n_cols)
+    w = np.concatenate(vals) if total else np.zeros(0)
+    return np.bincount(keys, weights=w, minlength=n_rows * n_cols).reshape(n_rows, n_cols)
 
 
 def _finite(evaluate) -> bool:
