@@ -89,10 +89,11 @@ def nullity(sol, mean, spread, scale, max_order=2000):
 
 
 def components(n, pairs):
-    """Connected components (labels) of the graph on n nodes with the given edges."""
-    parent = np.arange(n)
+    """Connected components (labels: the smallest node of each) of the graph on n nodes with the
+    given edges; union-find on a list (Python integers: faster than numpy scalars here)."""
     if not pairs:  # every node its own component (the common case: well separated eigenvalues)
-        return parent
+        return np.arange(n)
+    parent = list(range(n))
 
     def find(i):
         while parent[i] != i:

@@ -18,7 +18,7 @@ import numpy as np
 from ..eigen import EPS
 from ..eigen.small import solve_small
 from ..eigen.small_measures import componentwise_small
-from .bounds import Bounds, frequency_scale, nullity
+from .bounds import Bounds, components, frequency_scale, nullity
 from .small_listing import floor_zero_pairs, rank, small_listing
 
 __all__ = ["small_modes"]
@@ -52,25 +52,6 @@ def _holder_blocks(Df, S, eta, safety, first_reach):
         if not grown.any():
             return counts
         k = np.where(grown, counts, k)
-
-
-def _components(k, pairs):
-    """bounds.components (each node labelled by the smallest node of its component) on lists."""
-    if not pairs:
-        return np.arange(k)
-    parent = list(range(k))
-
-    def find(i):
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    for i, j in pairs:
-        ri, rj = find(i), find(j)
-        if ri != rj:
-            parent[max(ri, rj)] = min(ri, rj)
-    return np.array([find(i) for i in range(k)])
 
 
 def bounds(sol, safety, stability_rtol, stability_atol, rank_tol):
@@ -118,7 +99,7 @@ def bounds(sol, safety, stability_rtol, stability_atol, rank_tol):
             ii, jj = np.nonzero(mask)
             ok = (jj != ii) & (np.abs(s[ii] - s[jj]) <= safety * (radius[ii] + radius[jj]))
             pairs = set(zip(np.minimum(ii, jj)[ok].tolist(), np.maximum(ii, jj)[ok].tolist()))
-        cluster = _components(k, pairs)
+        cluster = components(k, pairs)
     sizes = np.bincount(cluster, minlength=k)
     alone = (sizes[cluster] == 1) & ~np.isfinite(err)
     err[alone], block[alone] = holder2[alone], 2
