@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 import mbseig
-from mbseig.bench.beam_rows import BETA_L, run_comb
+from mbseig.bench.beam_rows import BETA_L, run_comb, timed_pipeline
 from mbseig.numerics import blas_limit
 
 CASE = Path(__file__).resolve().parent.parent / "cases" / "cantilever_3d_oblique.toml"
@@ -43,20 +43,8 @@ def closed_forms(p):
                     for b in BL for inertia in (p["Iy"], p["Iz"])])
 
 
-def run_once(n, n_modes=20, sparse=None):
-    times = {}
-    t = time.perf_counter()
-    m = mbseig.load_case(CASE, n=n)
-    times["load"] = time.perf_counter() - t
-    t = time.perf_counter()
-    eq = mbseig.equilibrium(m)
-    times["equilibrium"] = time.perf_counter() - t
-    t = time.perf_counter()
-    lin = mbseig.linearize(m, eq, sparse=sparse)
-    times["linearize"] = time.perf_counter() - t
-    t = time.perf_counter()
-    md = mbseig.modes(lin, n_modes=n_modes)
-    times["modes"] = time.perf_counter() - t
+def run_once(n, n_modes=20):
+    m, md, times = timed_pipeline(CASE, n_modes, n=n)
     dof = m.n - m.n_constraints
     w = np.sort(md.omega_n)
     err = w[:4] / closed_forms(m.parameters) - 1

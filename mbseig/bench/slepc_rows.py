@@ -61,17 +61,9 @@ def reduced(M, C, K, G):
     return tuple((N.T @ A @ N).tocsr() for A in (M, C, K))
 
 
-def _peak_rss_mb():
-    with open("/proc/self/status") as f:
-        for line in f:
-            if line.startswith("VmHWM:"):
-                return int(line.split()[1]) / 1024.0
-    return float("nan")
-
-
 def slepc_worker(kind, n, constrained=True):
     """Run in a fresh process: one solve of ``kind`` (module docstring), JSON on stdout."""
-    from .sparse_rows import large_chain
+    from .sparse_rows import large_chain, peak_rss_mb
 
     M, C, K, G = large_chain(n, every=10 if constrained else n + 1)
     t0 = time.perf_counter()
@@ -80,7 +72,7 @@ def slepc_worker(kind, n, constrained=True):
 
         path = "auto" if kind == "mbseig" else "partial-slepc"
         sol = solve(Problem(M, C, K, G=G if G.shape[0] else None), Request(path, n_modes=20))
-        out = {"seconds": time.perf_counter() - t0, "rss_mb": _peak_rss_mb(),
+        out = {"seconds": time.perf_counter() - t0, "rss_mb": peak_rss_mb(),
                "solver": sol.solver, "eta": float(np.max(sol.backward_error)),
                "lowest": float(np.min(np.abs(sol.eigenvalues)))}
     else:

@@ -29,8 +29,6 @@ from .dense_rows import (
 # ---------------------------------------------------------------------------------------------
 def partial_worker(kind, n, n_modes):
     """Run in a fresh process: whole pipeline for the damped chain, JSON on stdout."""
-    import resource
-
     import scipy.sparse as sp
 
     t0 = time.perf_counter()
@@ -48,15 +46,17 @@ def partial_worker(kind, n, n_modes):
         md = modes(lin.M, P, lin.Q, N=lin.N, coordinate_names=lin.coordinate_names, n_modes=n_modes)
     t4 = time.perf_counter()
     err = rel_error(md.eigenvalues, chain_exact(n)[: n_modes + 5]) if kind == "proportional" else math.nan
-    rss = _peak_rss_mb(resource)
+    rss = peak_rss_mb()
     print(json.dumps({"kind": kind, "n": n, "load": t1 - t0, "equilibrium": t2 - t1, "linearize": t3 - t2,
                       "modes": t4 - t3, "total": t4 - t0, "rss_mb": rss, "error": err,
                       "eta": float(md.backward_error.max()), "solver": md.solver,
                       "n_listed": len(md), "verdict": md.verdict}))
 
 
-def _peak_rss_mb(resource):
+def peak_rss_mb():
     """Peak resident memory of this process (VmHWM: ru_maxrss would inherit the parent's peak)."""
+    import resource
+
     try:
         for line in Path("/proc/self/status").read_text().splitlines():
             if line.startswith("VmHWM:"):
@@ -119,8 +119,6 @@ def large_chain(n, every=10, k=1000.0, c_ground=1e-5, beta=2e-4):
 
 def large_worker(kind, n, n_modes):
     """Fresh process: one solve of the large constrained model, JSON on stdout (peak RSS)."""
-    import resource
-
     import scipy.sparse.linalg as spla
 
     from ..eigen import Problem, Request, solve
@@ -147,7 +145,7 @@ def large_worker(kind, n, n_modes):
                                                    "eta_history", "seconds")}
             out["projected"]["certificate"] = {k: pj["certificate"].get(k) for k in
                                                ("R", "tau", "rho", "Omega", "n_inside", "why")}
-    out.update(solve=time.perf_counter() - t1, rss_mb=_peak_rss_mb(resource))
+    out.update(solve=time.perf_counter() - t1, rss_mb=peak_rss_mb())
     print(json.dumps(out, default=json_default))
 
 
