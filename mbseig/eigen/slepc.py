@@ -161,7 +161,9 @@ def slepc_solve(Mb, Pb, Qb, nev, target=0.0, *, tol=1e-14, maxit=1000, ncv=None,
     partners of the others; half the vectors to gather and to pass back)."""
     exe = worker_python()
     if exe is None:
-        raise SolverError(_MISSING)
+        named = os.environ.get("MBSEIG_SLEPC_PYTHON")
+        raise SolverError(_MISSING + (f": MBSEIG_SLEPC_PYTHON names {named}, which does not exist"
+                                      if named else ""))
     ranks = slepc_ranks(ranks)
     factor = factor or ("umfpack" if ranks == 1 else "mumps")
     env = _env()
