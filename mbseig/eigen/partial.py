@@ -104,7 +104,7 @@ def _csr(A, n=None):
             raise SolverError("the partial paths take real M, P, Q; a complex problem (e.g. "
                               "hysteretic damping) needs the dense path")
         A = sp.csr_matrix((A.data.real, A.indices, A.indptr), shape=A.shape)
-    return A.astype(float)
+    return A.astype(float, copy=False)  # the caller's float CSR itself: nothing here writes to it
 
 
 def sparse_structure(M, P, Q, *, sym_tol=1e-13, rayleigh_tol=1e-12, probes=3, seed=0):

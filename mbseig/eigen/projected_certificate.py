@@ -62,6 +62,13 @@ def small_qep(Ms, Ps, Qs):
     return s, Y
 
 
+def basis_products(P, Phi, ZP):
+    """(ΦᵀPΦ, (PΦ)ᵀ ZP) with ZP = Q_b⁻¹[PΦ; 0] (x rows, a view into the basis' solves): the
+    k × k products the certificate needs, without an n-row copy of ZP."""
+    PPhi = P @ Phi
+    return Phi.T @ PPhi, PPhi.T @ ZP
+
+
 def hypotheses(M, P, Q, Gc, sym_tol, sig):
     """The certificate's structural hypotheses: (ok, why)."""
     if sig != 0.0:
@@ -87,9 +94,10 @@ def sigma_min_circle(Pll, lam, R, n_pts):
     return float(np.min(smin) - lip * (th[1] - th[0]) / 2), float(np.min(smin))
 
 
-def certificate(lu, hyp, Phi, lam, ZP, s_found, s_ritz, M, P, n, m):
+def certificate(lu, hyp, Phi, lam, products, s_found, s_ritz, M, P, n, m):
     """The count certificate of the module docstring: dict with ``verified``, ``why``, R, τ,
-    ρ, Ω, counts; ``grow`` when more undamped modes could help."""
+    ρ, Ω, counts; ``grow`` when more undamped modes could help.  ``products``: (ΦᵀPΦ,
+    (PΦ)ᵀ Q_b⁻¹[PΦ; 0]) from the basis (:func:`basis_products`), None when ``hyp`` fails."""
     out = {"verified": False, "grow": False, "R": 0.0, "n_inside": 0}
     ok, why = hyp
     if not ok:
@@ -100,11 +108,9 @@ def certificate(lu, hyp, Phi, lam, ZP, s_found, s_ritz, M, P, n, m):
     if not float(np.min(lam)) > 0:
         out["why"] = "an undamped ω² ≤ 0 (Q not positive definite on the constraints)"
         return out
-    PPhi = P @ Phi
-    Pll = Phi.T @ PPhi
+    Pll, G1 = products
     Pll = 0.5 * (Pll + Pll.T)
     # ‖Λ_H^-½ Π_HL‖² ≤ λ_max(Φ_LᵀP Q_b⁻¹ P Φ_L − Π_LL Λ_L⁻¹ Π_LL)
-    G1 = PPhi.T @ ZP  # ZP = Q_b⁻¹[PΦ_L; 0] (x rows), formed with the basis
     G1 = 0.5 * (G1 + G1.T)
     D = G1 - Pll @ (Pll / lam[:, None])
     b2 = max(float(np.max(np.linalg.eigvalsh(0.5 * (D + D.T)))), 0.0) \
