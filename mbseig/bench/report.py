@@ -304,8 +304,9 @@ def write_report(res, out_dir):
         _table(L, "Against SLEPc: lowest 20 modes, general damping (mbseig.bench.slepc_rows)",
                "The large chain with and without its rigid links; each solve in a fresh process, "
                "interleaved, median of the stated runs (spread in brackets). `slepc`: SLEPc's PEP "
-               "(TOAR, shift-and-invert at 0) on the reduced problem, its own time and its "
-               "worker's peak memory; `mbseig`: `auto` with every check; `pslepc`: mbseig's "
+               "(TOAR, shift-and-invert at 0) on the reduced problem, its own time (the "
+               "worker's imports, numpy's included, reading, assembly and the solve; not the "
+               "process start and the file transfer) and its worker's peak memory; `mbseig`: `auto` with every check; `pslepc`: mbseig's "
                "partial-slepc path whole; `bslepc`: SLEPc on the bordered pencil that path "
                "hands over. Peak memory includes each interpreter's own (≈ 64 MB for mbseig's "
                "before the solve).",

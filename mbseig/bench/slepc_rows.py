@@ -11,8 +11,8 @@ without links ("unconstrained").  Kinds:
   reduced problem NᵀMN s² + NᵀPN s + NᵀQN (N the chain's sparse null basis: one coordinate of
   each link eliminated; N = I without links), asked for the eigenvalues mbseig returns for 20
   modes: 41 nearest 0, tolerance 1e-14 (the backward error mbseig reaches).  Its time is its own
-  (the worker's imports, matrix assembly and PEPSolve), without the process start and the file
-  transfer; its memory is the worker's peak.
+  (the worker's imports, numpy's included, matrix assembly and PEPSolve), without the process
+  start and the file transfer; its memory is the worker's peak.
 - ``mbseig``: ``mbseig.eigen.solve(Problem(M, P, Q, G=G), Request("auto", n_modes=20))`` on the
   model as it is (constraints in the bordered pencil), with every check it makes.
 - ``pslepc`` and ``bslepc``: mbseig's ``partial-slepc`` path (worker, transfer and checks
