@@ -62,12 +62,7 @@ def _undamped_eigh(M, Q, m=None):
     Qs = np.add(Q, Q.T)
     Qs *= 0.5
     if m is not None:
-        l = np.sqrt(m)
-        if np.any(l != 1.0):
-            Qs /= l[:, None]
-            Qs /= l[None, :]
-        w, U = sla.eigh(Qs, driver="evd", overwrite_a=True, check_finite=False)
-        V = np.divide(U, l[:, None], order="C")
+        w, V = diagonal_mass_eigh(Qs, m)
     else:
         Ms = np.add(M, M.T)
         Ms *= 0.5
@@ -76,6 +71,17 @@ def _undamped_eigh(M, Q, m=None):
         V = np.ascontiguousarray(U)
     V /= colnorm(V)
     return w, V
+
+
+def diagonal_mass_eigh(Qs, m):
+    """(ω², V) of Qs v = ω² diag(m) v, Qs symmetric (overwritten): diag(m) scaled out, a
+    standard problem for LAPACK's divide and conquer (``syevd``); V in C order."""
+    l = np.sqrt(m)
+    if np.any(l != 1.0):
+        Qs /= l[:, None]
+        Qs /= l[None, :]
+    w, U = sla.eigh(Qs, driver="evd", overwrite_a=True, check_finite=False)
+    return w, np.divide(U, l[:, None], order="C")
 
 
 def _times(A, V):

@@ -27,7 +27,7 @@ from scipy.linalg.blas import daxpy as _daxpy
 
 from .base import QEPSolution
 from .dense import COMPANION_COND, STRUCTURED_COND, problem_scaling, small_blas
-from .dense_paths import REFINE_ETA, diagonal_positive
+from .dense_paths import REFINE_ETA, diagonal_mass_eigh, diagonal_positive
 from .measures import EPS_LD, LD
 from .small_measures import better_half, cn, coefficients, conditions, unit
 from .structure import SUMSQ_HI, SUMSQ_LO
@@ -219,12 +219,7 @@ def _eigh(M, P, Q, memo, norms):
     Qs *= 0.5
     if diag:
         m = np.diagonal(M).copy()
-        l = np.sqrt(m)
-        if np.any(l != 1.0):
-            Qs /= l[:, None]
-            Qs /= l[None, :]
-        w, U = sla.eigh(Qs, driver="evd", overwrite_a=True, check_finite=False)
-        V = np.divide(U, l[:, None], order="C")
+        w, V = diagonal_mass_eigh(Qs, m)
     else:
         m = None
         Ms = np.add(M, M.T)

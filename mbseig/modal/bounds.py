@@ -160,6 +160,15 @@ def neighbour_index(points, small=256):
     return cKDTree(points)
 
 
+def sharpen(err, idx, eta_c, kappa_c):
+    """err[idx] lowered, in place, to the componentwise bound κ_c·max(η_c, ε) where that is
+    smaller (a NaN bound counts as none)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        err_c = kappa_c * np.maximum(eta_c, EPS)
+    err_c = np.where(np.isnan(err_c), np.inf, err_c)
+    err[idx] = np.minimum(err[idx], err_c)
+
+
 def _holder_blocks(tree, points, S, eta, safety, first_reach):
     """The size k of the block each eigenvalue may belong to: the number of eigenvalues within
     safety·S·η^{1/k} of it, grown from k = 2 until it stops growing (radii in units of the
@@ -204,11 +213,7 @@ def error_bounds(sol, *, safety=10.0, stability_rtol=1e-12, stability_atol=0.0, 
     undecided = safety * err >= np.minimum.reduce(gaps)
     idx = np.flatnonzero(undecided)
     if idx.size:
-        eta_c, kappa_c = sol.componentwise(idx)
-        with np.errstate(over="ignore", invalid="ignore"):
-            err_c = kappa_c * np.maximum(eta_c, EPS)
-        err_c = np.where(np.isnan(err_c), np.inf, err_c)
-        err[idx] = np.minimum(err[idx], err_c)
+        sharpen(err, idx, *sol.componentwise(idx))
     # linking radius: the first-order bound, but where other eigenvalues lie within it (first
     # order is then unreliable) no more than the Hölder radius S·η^{1/k} of a block of all k of
     # them; an infinite bound (an exactly defective pair) links within the double's S·√η

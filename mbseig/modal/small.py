@@ -18,7 +18,7 @@ import numpy as np
 from ..eigen import EPS
 from ..eigen.small import solve_small
 from ..eigen.small_measures import componentwise_small
-from .bounds import Bounds, components, frequency_scale, nullity
+from .bounds import Bounds, components, frequency_scale, nullity, sharpen
 from .small_listing import floor_zero_pairs, rank, small_listing
 
 __all__ = ["small_modes"]
@@ -77,10 +77,7 @@ def bounds(sol, safety, stability_rtol, stability_atol, rank_tol):
                       np.minimum(np.where(s.imag != 0, np.abs(s.imag), np.inf), near))
     idx = (safety * err >= gaps).nonzero()[0]
     if idx.size:
-        eta_c, kappa_c = componentwise_small(sol, idx)
-        err_c = kappa_c * np.maximum(eta_c, EPS)
-        err_c = np.where(np.isnan(err_c), np.inf, err_c)
-        err[idx] = np.minimum(err[idx], err_c)
+        sharpen(err, idx, *componentwise_small(sol, idx))
     radius = np.where(np.isfinite(err), err, holder2)
     cluster = np.arange(k)
     block = np.ones(k, int)
