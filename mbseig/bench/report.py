@@ -163,6 +163,12 @@ def _table(L, title, intro, header, rows, row):
     L.extend(row(r) for r in rows)
 
 
+def _spatial_line(r):
+    cells = [r["method"], r["coordinates"], _seconds(r["stages"]["read + assemble"]),
+             _seconds(r["stages"]["first Φ, Φ_q, g, K, C"]), _seconds(r["floor"]), r["repeats"]]
+    return "| " + " | ".join(str(c) for c in cells) + " |"
+
+
 def write_report(res, out_dir):
     out_dir = Path(out_dir)
     cfg = res["config"]
@@ -324,11 +330,7 @@ def write_report(res, out_dir):
                "stated runs; floor: tomllib alone on the case text and M, Φ_q as CSR from their "
                "own triplets.",
                "| model | coordinates | read + assemble | first Φ, Φ_q, g, K, C | floor | runs |",
-               spatial,
-               lambda r: f"| {r['method']} | {r['coordinates']} | "
-                         f"{_seconds(r['stages']['read + assemble'])} | "
-                         f"{_seconds(r['stages']['first Φ, Φ_q, g, K, C'])} | "
-                         f"{_seconds(r['floor'])} | {r['repeats']} |")
+               spatial, _spatial_line)
     beams = _rows(res, "beams")
     if beams:
         _table(L, "3-D beams: a large beam model (10⁵ DOF in the full run), lowest 20 modes",
