@@ -370,8 +370,7 @@ def _one_attempt(run, want, k_u, lu, hyp, verify_tol, max_iter, n, m, clock):
             sb = s[b] = _rayleigh(s[b], Ub[:n], MU, PU, QU[:n])
             MU *= (sb * sb)[None, :]  # the bordered residual, in place: s²MU + sPU + Q_b U
             PU *= sb[None, :]
-            MU += PU
-            QU[:n] += MU
+            QU[:n] += np.add(MU, PU, out=MU)
             rn[b] = colnorm(QU)
             del MU, PU, QU, Ub
         eta = rn / ((np.abs(s) ** 2 * norms[0] + np.abs(s) * norms[1] + norms[2]) * colnorm(U))
