@@ -312,10 +312,10 @@ def write_report(res, out_dir):
                "interleaved, median of the stated runs (spread in brackets). `slepc`: SLEPc's PEP "
                "(TOAR, shift-and-invert at 0) on the reduced problem, its own time (the "
                "worker's imports, numpy's included, reading, assembly and the solve; not the "
-               "process start and the file transfer) and its worker's peak memory; `mbseig`: `auto` with every check; `pslepc`: mbseig's "
-               "partial-slepc path whole; `bslepc`: SLEPc on the bordered pencil that path "
-               "hands over. Peak memory includes each interpreter's own (≈ 64 MB for mbseig's "
-               "before the solve).",
+               "process start and the file transfer) and its worker's peak memory; `mbseig`: "
+               "`auto` with every check; `pslepc`: mbseig's partial-slepc path whole; `bslepc`: "
+               "SLEPc on the bordered pencil that path hands over. Peak memory includes each "
+               "interpreter's own (≈ 64 MB for mbseig's before the solve).",
                "| model | n | kind | time | peak memory | / reference | runs |", sl,
                lambda r: f"| {r['model']} | {r['n']:.0e} | {r['method']} | "
                          f"{r['time']:.2f} s ({r['spread'][0]:.2f}–{r['spread'][1]:.2f}) | "

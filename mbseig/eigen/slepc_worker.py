@@ -14,8 +14,8 @@ transformation shift-and-invert at ``target`` (one LU of T(target) = target²M +
 ``preonly`` KSP), eigenpairs nearest ``target`` in magnitude.  OUT is a folder too: ``X.npy``
 (complex n × k: the vectors of the eigenvalues ``columns``, all of them unless ``upper_tol`` is
 given) and ``result.npz`` with ``s`` (complex), ``columns``, ``its``, ``nconv`` and the timings
-(``setup``: the imports, numpy's included, reading IN and assembling the matrices; ``solve``: PEPSolve;
-``extract``: the eigenvectors gathered and written).
+(``setup``: the imports, numpy's included, reading IN and assembling the matrices; ``solve``:
+PEPSolve; ``extract``: the eigenvectors gathered and written).
 Only numpy, petsc4py and slepc4py are imported here (no scipy, no mbseig).
 
 Under MPI (``mpiexec -n P python slepc_worker.py IN OUT``) the same script runs on P
