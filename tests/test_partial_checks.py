@@ -85,6 +85,27 @@ def _direct(M, P, Q, s, X, norms):
     return eta, kappa, eta_c, kappa_c
 
 
+@pytest.mark.parametrize("left", [False, True])
+@pytest.mark.parametrize("block", [1 << 20, 3000])
+def test_eta_kappa_in_one_pass_is_the_two_steps_bitwise(monkeypatch, left, block):
+    """η and κ formed block by block without M X and P X whole are bitwise those of
+    backward_errors_norms then conditions (one block, and 10 blocks of rows: same operations)."""
+    monkeypatch.setattr(measures, "ROW_BLOCK", block)
+    M, P, Q = _chain(5000)
+    P = (P + sp.diags(np.linspace(0.0, 0.2, 4999), 1)).tocsr()  # not symmetric
+    rng = np.random.default_rng(4)
+    s = rng.standard_normal(6) * 30.0 + 1j * rng.standard_normal(6) * 30.0
+    s[0] = 0.3 + 0.1j  # |s| < 1 and > 1: both evaluations of the polynomial
+    X = rng.standard_normal((5000, 6)) + 1j * rng.standard_normal((5000, 6))
+    Yc = rng.standard_normal((5000, 6)) + 1j * rng.standard_normal((5000, 6)) if left else X
+    norms = tuple(measures.fro(A) for A in (M, P, Q))
+    eta, MX, PX, xn = measures.backward_errors_norms((M, P, Q), s, X, norms)
+    kappa = measures.conditions(s, X, Yc, MX, PX, norms, xn=xn)
+    got = measures.eta_kappa((M, P, Q), s, X, Yc, norms)
+    for a, b in zip(got, (eta, kappa, xn)):
+        assert np.array_equal(a, b)
+
+
 @pytest.mark.parametrize("solver,ground", [("partial-proportional", False),
                                            ("partial-companion", True)])
 def test_measures_per_pair_are_those_of_every_returned_pair(solver, ground):

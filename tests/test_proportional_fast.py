@@ -1,5 +1,5 @@
 """The eigh and proportional dense paths form η and κ from the real residual of the undamped
-pair (mbseig.eigen.measures, "Undamped and proportional pairs"): the values they report must be
+pair (mbseig.eigen.undamped, "Undamped and proportional pairs"): the values they report must be
 what the definitions give on the returned pairs.
 
 References, each an independent evaluation in this file or another solver path:

@@ -20,11 +20,11 @@ import numpy as np
 
 from ..errors import SolverError
 from .measures import (
-    backward_errors_norms,
     better_half_norms,
     colnorm,
     componentwise,
     conditions,
+    eta_kappa,
     expand_pairs,
     is_symmetric,
     plain_norms,
@@ -77,9 +77,7 @@ def symmetric_pairs(found, extras, pencil, norms, n, m, verify_tol, name):
         X = X.astype(complex)
         X[n:, :] *= (1.0 + beta * s)[None, :]
         X = unit_columns(X, inplace=True)
-    eta, MX, PX, xn = backward_errors_norms((Mb, Pb, Qb), s, X, norms)
-    kappa = conditions(s, X, X, MX, PX, norms, xn=xn)
-    del MX, PX
+    eta, kappa, _ = eta_kappa((Mb, Pb, Qb), s, X, X, norms)
     _verified(name, s, eta, verify_tol)
     # the componentwise measures on demand (the listing asks for the few pairs the normwise
     # bound leaves undecided; at 10⁶ coordinates all of them cost ≈ 4 s)
@@ -120,12 +118,19 @@ def general_pairs(found, pencil, norms, n, m, verify_tol, name, sym_tol, left):
         pos = np.searchsorted(uniq, src)  # the measured column of each returned pair
         partner = src != np.arange(s_all.size)
     s = s_all[uniq]
-    X, eta, MX, PX, n_second, xn = better_half_norms((Mb, Pb, Qb), s, X1, X2, norms, own=True)
-    del X1, X2
     symmetric_all = all(is_symmetric(A, sym_tol) for A in (Mb, Pb, Qb))
-    Yc = X if symmetric_all or not left else left_vectors(Mb, Pb, Qb, s)
-    kappa = conditions(s, X, Yc, MX, PX, norms, xn=xn)
-    del MX, PX
+    Yc = None if symmetric_all or not left else left_vectors(Mb, Pb, Qb, s)
+    if X2 is X1:  # one vector per pair: η and κ in one pass (no whole M X, P X)
+        X, n_second = unit_columns(X1, inplace=True), 0
+        X = np.ascontiguousarray(X)
+        Yc = X if Yc is None else Yc
+        eta, kappa, _ = eta_kappa((Mb, Pb, Qb), s, X, Yc, norms)
+    else:
+        X, eta, MX, PX, n_second, xn = better_half_norms((Mb, Pb, Qb), s, X1, X2, norms, own=True)
+        Yc = X if Yc is None else Yc
+        kappa = conditions(s, X, Yc, MX, PX, norms, xn=xn)
+        del MX, PX
+    del X1, X2
     _verified(name, s, eta, verify_tol)
     lazy = Componentwise((Mb, Pb, Qb), s, X, None if Yc is X else Yc, pos, partner)
     # back to every returned pair: partners conjugated; y = x̄: the left vectors are the right

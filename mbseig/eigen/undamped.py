@@ -1,6 +1,28 @@
 """Eigenvalues and error measures of the structured paths (eigh, proportional): the roots of
 s² + (α + βω²) s + ω² = 0 per undamped mode, their η and κ from the one real residual of each
-mode, and the sharper error bound of Re s under Rayleigh damping."""
+mode, and the sharper error bound of Re s under Rayleigh damping.
+
+Undamped and proportional pairs (:func:`undamped_pairs`).  With a real unit v and ω² = w from the
+undamped problem, its residual r = Qv − wMv, and P = αM + βQ + E (E the deviation of the
+Rayleigh fit; E = 0 and α = β = 0 when P = 0), every root s of s² + (α + βw)s + w = 0 has,
+exactly::
+
+    (s²M + sP + Q)v = ρ(s) Mv + (1 + βs) r + s Ev,    ρ(s) = s² + (α + βw)s + w
+
+so that, with ‖Ev‖ ≤ ‖E‖_F,
+
+    η ≤ (|ρ(s)| ‖Mv‖ + |1 + βs| ‖r‖ + |s| ‖E‖_F) / w(s)
+
+and, as vᵀPv = (α + βw)vᵀMv + β vᵀr + vᵀEv,
+
+    κ ≤ w(s) / (|(2s + α + βw) vᵀMv + β vᵀr| − ‖E‖_F).
+
+|ρ(s)| of the computed s is evaluated in extended precision and increased by the rounding bound
+of that evaluation; r, Mv, vᵀMv, vᵀr are the only quantities that involve the matrices: one
+real residual per mode, for both roots, no complex n-vector.  ρ is at the rounding level of s,
+so η is |1 + βs|‖r‖/w(s) plus terms of order ε and ‖E‖/‖P‖: the directly evaluated η of the
+same pair (tests/test_proportional_fast.py) up to the rounding of either evaluation.
+"""
 
 from __future__ import annotations
 
