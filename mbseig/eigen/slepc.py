@@ -212,7 +212,10 @@ def slepc_solve(Mb, Pb, Qb, nev, target=0.0, *, tol=1e-14, maxit=1000, ncv=None,
                 s, columns = out["s"], out["columns"]
                 info = {k: out[k].item() for k in ("its", "nconv", "setup", "solve", "extract",
                                                    "reason", "factor", "ranks")}
-            X = np.load(os.path.join(path_out, "X.npy"))
+            # mapped, not read (the folder goes at the end of this block; a mapped file stays
+            # readable until it is unmapped): the search gathers its columns from it once
+            X = np.load(os.path.join(path_out, "X.npy"),
+                        mmap_mode="r" if os.name == "posix" else None)
             info["columns"] = columns
             info["peak_rss_mb"] = []
             for r in range(ranks):
