@@ -86,24 +86,36 @@ def _direct(M, P, Q, s, X, norms):
 
 
 @pytest.mark.parametrize("left", [False, True])
-@pytest.mark.parametrize("block", [1 << 20, 3000])
-def test_eta_kappa_in_one_pass_is_the_two_steps_bitwise(monkeypatch, left, block):
-    """η and κ formed block by block without M X and P X whole are bitwise those of
-    backward_errors_norms then conditions (one block, and 10 blocks of rows: same operations)."""
-    monkeypatch.setattr(measures, "ROW_BLOCK", block)
-    M, P, Q = _chain(5000)
-    P = (P + sp.diags(np.linspace(0.0, 0.2, 4999), 1)).tocsr()  # not symmetric
+@pytest.mark.parametrize("block", [None, 1 << 20, 3000])
+def test_eta_kappa_in_one_pass_is_the_two_steps(monkeypatch, left, block):
+    """η and κ formed block by block without M X and P X whole: bitwise those of
+    backward_errors_norms then conditions where both take the same blocks of rows (one block,
+    and 24), and with their own default blocks (here 1 and 2) the same sums grouped otherwise:
+    η to 1e-14 (a norm of 12000 squares regrouped: a few ε), κ to 1e-12 (yᴴ(2sM + P)x of random
+    vectors: Σ|terms| / |Σ terms| ≈ √12000 ≈ 110 times a few ε)."""
+    if block is not None:
+        monkeypatch.setattr(measures, "ROW_BLOCK", block)
+        monkeypatch.setattr(measures, "FUSED_BLOCK", block)
+    n = 12000
+    M, P, Q = _chain(n)
+    P = (P + sp.diags(np.linspace(0.0, 0.2, n - 1), 1)).tocsr()  # not symmetric
     rng = np.random.default_rng(4)
     s = rng.standard_normal(6) * 30.0 + 1j * rng.standard_normal(6) * 30.0
     s[0] = 0.3 + 0.1j  # |s| < 1 and > 1: both evaluations of the polynomial
-    X = rng.standard_normal((5000, 6)) + 1j * rng.standard_normal((5000, 6))
-    Yc = rng.standard_normal((5000, 6)) + 1j * rng.standard_normal((5000, 6)) if left else X
+    X = rng.standard_normal((n, 6)) + 1j * rng.standard_normal((n, 6))
+    Yc = rng.standard_normal((n, 6)) + 1j * rng.standard_normal((n, 6)) if left else X
     norms = tuple(measures.fro(A) for A in (M, P, Q))
     eta, MX, PX, xn = measures.backward_errors_norms((M, P, Q), s, X, norms)
     kappa = measures.conditions(s, X, Yc, MX, PX, norms, xn=xn)
     got = measures.eta_kappa((M, P, Q), s, X, Yc, norms)
-    for a, b in zip(got, (eta, kappa, xn)):
-        assert np.array_equal(a, b)
+    if block is None:
+        assert n * 6 > measures.FUSED_BLOCK and n * 6 <= measures.ROW_BLOCK
+        np.testing.assert_allclose(got[0], eta, rtol=1e-14)
+        np.testing.assert_allclose(got[1], kappa, rtol=1e-12)
+        assert np.array_equal(got[2], xn)
+    else:
+        for a, b in zip(got, (eta, kappa, xn)):
+            assert np.array_equal(a, b)
 
 
 @pytest.mark.parametrize("solver,ground", [("partial-proportional", False),

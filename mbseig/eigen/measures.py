@@ -35,22 +35,9 @@ from ..numerics import colnorm as _colnorm_fast
 from .structure import BIG, SMALL, fro, is_symmetric, rayleigh_fit, sumsq  # noqa: F401
 
 __all__ = [
-    "EPS",
-    "backward_errors",
-    "backward_errors_norms",
-    "better_half",
-    "better_half_norms",
-    "colnorm",
-    "componentwise",
-    "conditions",
-    "eta_kappa",
-    "expand_pairs",
-    "fro",
-    "is_symmetric",
-    "plain_norms",
-    "pow2_scale",
-    "rayleigh_fit",
-    "unit_columns",
+    "EPS", "backward_errors", "backward_errors_norms", "better_half", "better_half_norms",
+    "colnorm", "componentwise", "conditions", "eta_kappa", "expand_pairs", "fro", "is_symmetric",
+    "plain_norms", "pow2_scale", "rayleigh_fit", "unit_columns",
 ]
 
 EPS = np.finfo(float).eps
@@ -139,13 +126,16 @@ def unit_columns(X, inplace=False):
 #: runs on contiguous memory (a block of columns of a C-ordered n × k array is strided: at
 #: 10⁶ rows the column-blocked residual took twice as long)
 ROW_BLOCK = 1 << 20
+#: the same for :func:`eta_kappa`, whose block temporaries (M X, P X, Q X, residual,
+#: derivative) stay in cache at 1 MB: 1.1·10⁴ × 21 pairs 24 → 10 ms, 1.1·10⁶ × 21 0.73 → 0.61 s
+FUSED_BLOCK = 1 << 16
 
 
-def _row_blocks(X):
-    """Slices of X's rows with at most ``ROW_BLOCK`` entries each (at least one row)."""
+def _row_blocks(X, entries=None):
+    """Slices of X's rows with at most ``entries`` (``ROW_BLOCK``) entries each (≥ one row)."""
     n = X.shape[0]
     k = X.shape[1] if X.ndim == 2 else 1
-    step = max(1, ROW_BLOCK // max(k, 1))
+    step = max(1, (entries or ROW_BLOCK) // max(k, 1))
     return [slice(i, min(i + step, n)) for i in range(0, n, step)] or [slice(0, 0)]
 
 
@@ -262,17 +252,17 @@ def conditions(s, X, Yc, MX, PX, norms, xn=None):
 
 
 def eta_kappa(ops, s, X, Yc, norms):
-    """(η, κ, ‖x‖ per column): :func:`backward_errors_norms` then :func:`conditions`, bitwise
-    (the same blocks of rows, the same operations), in one pass over blocks of rows, so that
-    M X and P X are never formed whole (at 10⁶ rows the first touch of those two n × k arrays
-    cost more than the products).  ``Yc``: the conjugated left vectors, or X itself."""
+    """(η, κ, ‖x‖ per column): :func:`backward_errors_norms` then :func:`conditions` in one
+    pass over blocks of ``FUSED_BLOCK`` entries, so that M X and P X are never formed whole (at
+    10⁶ rows the first touch of those two n × k arrays cost more than the products); with
+    blocks of the same rows, bitwise their result.  ``Yc``: conjugated left vectors, or X."""
     M, P, Q = _row_sliceable(ops)
     same = Yc is X
     X = np.ascontiguousarray(X)
     Yc = X if same else Yc
     s = np.asarray(s)
     rn, den = None, np.zeros(s.size, complex)
-    for r in _row_blocks(X):
+    for r in _row_blocks(X, FUSED_BLOCK):
         MX, PX = M[r] @ X, P[r] @ X
         rn = _add_colnorm(rn, colnorm(_residual(MX, PX, Q[r] @ X, s)))
         den += np.einsum("ij,ij->j", Yc[r], _derivative(MX, PX, s))
