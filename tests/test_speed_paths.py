@@ -3,8 +3,9 @@
 References, each an independent computation in this file:
 - is_symmetric: ‖A − Aᵀ‖_F ≤ tol‖A‖_F with numpy's norm of the explicit difference;
 - fro: numpy's norm (ordinary magnitudes) and a scaled sum (entries near 1e±200);
-- rayleigh_fit (dense): numpy's lstsq on the n² × 2 system, residual checked directly; the fast
-  fit must accept every P lstsq accepts, and whatever it accepts must pass the residual test;
+- rayleigh_fit (dense, and sparse on probe products): numpy's lstsq on the same system, residual
+  checked directly; the fast fit must accept every P lstsq accepts, and whatever it accepts must
+  pass the residual test;
 - numerics.scatter: the meshgrid assembly it replaced, bitwise;
 - the column-blocked η, κ and componentwise measures: the same functions on one block (the
   measures are per column, so blocking must not change a single bit);
@@ -80,6 +81,30 @@ def test_dense_rayleigh_fit_never_misses_what_lstsq_finds():
     assert measures.rayleigh_fit(M, 0.3 * M, np.zeros((4, 4)), 1e-12) == pytest.approx((0.3, 0.0))
     fit = measures.rayleigh_fit(M, 0.3 * M, 2.0 * M, 1e-12)
     assert fit is not None and abs(fit[0] + 2.0 * fit[1] - 0.3) <= 1e-14
+
+
+def test_probe_rayleigh_fit_never_misses_what_lstsq_finds():
+    """The sparse (probe) fit by the dense fit's inner products: whatever lstsq on the same probe
+    products accepts is accepted (an exact combination always), and what is accepted passes the
+    residual test on those products, recomputed here."""
+    rng = np.random.default_rng(6)
+    for _ in range(40):
+        n = int(rng.integers(2, 400))
+        K = sp.random(n, n, density=0.05, random_state=rng) * 10.0 ** int(rng.integers(-30, 30))
+        K = (K + K.T + sp.eye(n)).tocsr()
+        M = sp.diags(rng.uniform(0.5, 2.0, n)).tocsr()
+        a, b = rng.standard_normal(2) * 10.0 ** rng.integers(-4, 4, 2)
+        for P in (a * M + b * K, a * M + b * K + 1e-6 * abs(a) * sp.eye(n, k=1),
+                  sp.diags(rng.standard_normal(n))):
+            fast = measures.rayleigh_fit(M, P, K, 1e-12, probes=3)
+            V = np.random.default_rng(0).standard_normal((n, 3))
+            ref = _lstsq_fit(M @ V, P @ V, K @ V, 1e-12)  # the probes rayleigh_fit draws
+            if ref is not None:
+                assert fast is not None
+            if fast is not None:
+                R = P @ V - fast[0] * (M @ V) - fast[1] * (K @ V)
+                assert np.linalg.norm(R) <= 1e-12 * np.linalg.norm(P @ V)
+        assert measures.rayleigh_fit(M, a * M + b * K, K, 1e-12, probes=3) is not None
 
 
 def test_scatter_is_bitwise_the_meshgrid_assembly():
