@@ -99,7 +99,7 @@ def rayleigh_fit(M, P, Q, tol, *, probes=None, seed=0, residual=False):
     else:  # the fit of P V to M V and Q V: the dense fit's inner products where they serve
         V = np.random.default_rng(seed).standard_normal((M.shape[0], probes))
         MV, QV, PV = M @ V, Q @ V, P @ V
-        fit = _dense_fit(MV, PV, QV, tol)  # 1.1·10⁶ rows: 0.26 s of lstsq on the stack saved
+        fit = _dense_fit(MV, PV, QV, tol)  # 10⁶ rows: 0.08 s a call, 0.19 s by lstsq
         if fit is not False:
             return fit if fit is None else fit[:2]
         cols, b = [MV.ravel(), QV.ravel()], PV.ravel()
