@@ -233,22 +233,31 @@ def backward_errors_norms(ops, s, X, norms):
     for r in _row_blocks(X):  # Q X and the residual one block of rows at a time
         rn = _add_colnorm(rn, colnorm(_residual(MX[r], PX[r], Q[r] @ X, s)))
     xn = colnorm(X)
-    eta = np.where(xn > 0, _ratio(rn, weights(s, norms) * xn), np.inf)  # x = 0: no eigenvector
-    return eta, MX, PX, xn
+    return _eta(rn, weights(s, norms), xn), MX, PX, xn
+
+
+def _eta(rn, w, xn):
+    """η from the residual norms, the weights w(s) and ‖x‖ (x = 0: no eigenvector, η = ∞)."""
+    return np.where(xn > 0, _ratio(rn, w * xn), np.inf)
+
+
+def _kappa(den, s, w, xn, X, Yc):
+    """κ from the summed yᴴ(2sM + P)x (``den``), the weights, ‖x‖ and ‖y‖ (that of X where
+    Yc is X)."""
+    num = w * xn * (xn if Yc is X else colnorm(Yc))
+    den = np.abs(den)
+    return fixed_zero(_unreverse(_ratio(num, den), s, den), w)
 
 
 def conditions(s, X, Yc, MX, PX, norms, xn=None):
     """κ per pair, with ``Yc`` the conjugated left vectors (yᴴ = Ycᵀ) and MX, PX the products;
     ``xn``: the column norms of X if already formed (those of Yc too where Yc is X)."""
     s = np.asarray(s)
-    w = weights(s, norms)
     xn = colnorm(X) if xn is None else xn
-    num = w * xn * (xn if Yc is X else colnorm(Yc))
     den = np.zeros(s.size, complex)
     for r in _row_blocks(X):
         den += np.einsum("ij,ij->j", Yc[r], _derivative(MX[r], PX[r], s))
-    den = np.abs(den)
-    return fixed_zero(_unreverse(_ratio(num, den), s, den), w)
+    return _kappa(den, s, weights(s, norms), xn, X, Yc)
 
 
 def eta_kappa(ops, s, X, Yc, norms):
@@ -268,10 +277,7 @@ def eta_kappa(ops, s, X, Yc, norms):
         den += np.einsum("ij,ij->j", Yc[r], _derivative(MX, PX, s))
     xn = colnorm(X)
     w = weights(s, norms)
-    eta = np.where(xn > 0, _ratio(rn, w * xn), np.inf)  # x = 0: no eigenvector
-    num = w * xn * (xn if Yc is X else colnorm(Yc))
-    den = np.abs(den)
-    return eta, fixed_zero(_unreverse(_ratio(num, den), s, den), w), xn
+    return _eta(rn, w, xn), _kappa(den, s, w, xn, X, Yc), xn
 
 
 def fixed_zero(kappa, w):
@@ -363,7 +369,8 @@ def expand_pairs(Xu, pos, partner, rows=512, divide=None):
     the sign flip stay in cache (10⁶ rows, 40 columns: 0.45 s, against 1.2–2 s for one gather
     and a conjugated copy of the whole array), and few pages at a time: gathering 21 of
     1.1·10⁶ × 23 column-major vectors in a partial-slepc process, blocks of 8192 rows took
-    0.84–0.89 s a call and blocks of 512 rows 0.11 s (in a fresh process both 0.12 s).
+    0.84–0.89 s a call and blocks of 512 rows 0.11 s (in a fresh process both 0.12 s; from
+    the mapped file the search now gathers from, both 0.11 s after a first call of 0.75 s).
     ``divide``: per column of Xu, divisors applied on the way ((Xu / divide)[:, pos] with no
     intermediate copy, e.g. :func:`plain_norms`)."""
     pos = np.asarray(pos, int)

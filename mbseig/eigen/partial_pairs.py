@@ -125,7 +125,7 @@ def general_pairs(found, pencil, norms, n, m, verify_tol, name, sym_tol, left):
         X = np.ascontiguousarray(X)
         Yc = X if Yc is None else Yc
         eta, kappa, _ = eta_kappa((Mb, Pb, Qb), s, X, Yc, norms)
-    else:
+    else:  # two halves: the better one per column first, then κ from its products
         X, eta, MX, PX, n_second, xn = better_half_norms((Mb, Pb, Qb), s, X1, X2, norms, own=True)
         Yc = X if Yc is None else Yc
         kappa = conditions(s, X, Yc, MX, PX, norms, xn=xn)
