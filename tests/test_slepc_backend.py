@@ -12,6 +12,7 @@ are separated by > 1e-2 relative).  Skipped where slepc4py cannot be imported by
 Python (mbseig.eigen.slepc.slepc_python).
 """
 
+import os
 import shutil
 
 import numpy as np
@@ -115,3 +116,40 @@ def test_slepc_ranks_must_be_a_positive_integer(monkeypatch, value):
     monkeypatch.setenv("MBSEIG_SLEPC_RANKS", value)
     with pytest.raises(SolverError, match="MBSEIG_SLEPC_RANKS must be a positive integer"):
         slepc_mod.slepc_ranks()
+
+
+def test_a_killed_solve_leaves_no_scratch_behind(tmp_path):
+    """A solve killed by SIGKILL cannot remove its scratch folder (in /dev/shm: memory); the next
+    solve removes it.  Reference: the rule of ``reap_stale`` — a folder goes only when every
+    process it names is gone; a live solve's folder, a folder without its list (being set up),
+    another container's folder and other files stay."""
+    import subprocess
+    import sys
+
+    gone = subprocess.Popen([sys.executable, "-c", "pass"])
+    gone.wait()  # a PID that has just ended (not reused within this test)
+    try:  # the owners file's first line: the PID namespace of the solve (Linux; "-" elsewhere)
+        space = os.readlink("/proc/self/ns/pid").replace(" ", "")
+    except OSError:
+        space = "-"
+
+    def folder(name, text):
+        d = tmp_path / (slepc_mod.PREFIX + name)
+        (d / "in").mkdir(parents=True)
+        (d / "in" / "M_data.npy").write_bytes(b"x" * 1000)
+        if text is not None:
+            (d / "owners").write_text(text)
+        return d
+
+    dead = folder("dead", f"{space}\n{gone.pid}\n")
+    live = folder("live", f"{space}\n{os.getpid()}\n{gone.pid}\n")
+    unlisted = folder("setup", None)
+    elsewhere = folder("other-ns", f"pid:[0]\n{gone.pid}\n")
+    other = tmp_path / "unrelated"
+    other.mkdir()
+    (other / "owners").write_text(f"{space}\n{gone.pid}\n")
+    removed = slepc_mod.reap_stale(str(tmp_path))
+    assert removed == [str(dead)]
+    assert not dead.exists()
+    assert live.exists() and unlisted.exists() and elsewhere.exists() and other.exists()
+    assert slepc_mod.reap_stale(str(tmp_path / "missing")) == []

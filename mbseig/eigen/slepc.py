@@ -9,8 +9,10 @@ numpy than the one mbseig runs on, so the solve runs in a separate process: the 
 ``MBSEIG_SLEPC_PYTHON``, else this Python if it imports slepc4py, else ``/usr/bin/python3``.  The
 matrices go to it as ``.npy`` files in a temporary folder (in ``/dev/shm`` where it has room)
 and the eigenpairs come back the same way (:mod:`mbseig.eigen.slepc_worker`); a worker on one
-process is started before the files are written and imports PETSc meanwhile.  ``PETSC_DIR`` and ``SLEPC_DIR`` default to the
-distribution's real-scalar builds when unset.
+process is started before the files are written and imports PETSc meanwhile.  The folder names
+the PIDs of the solve and of its worker; a folder left by a killed solve goes at the next solve
+(:func:`reap_stale`).  ``PETSC_DIR`` and ``SLEPC_DIR`` default to the distribution's real-scalar
+builds when unset.
 
 LU package: ``umfpack`` by default (with pivoting: the bordered matrix has a zero block, on which
 PETSc's own LU, which does not pivot, stops with a zero pivot); ``superlu`` and ``mumps`` also work.
@@ -38,7 +40,8 @@ import numpy as np
 
 from ..errors import SolverError
 
-__all__ = ["slepc_available", "slepc_python", "slepc_ranks", "slepc_solve", "worker_python"]
+__all__ = ["reap_stale", "slepc_available", "slepc_python", "slepc_ranks", "slepc_solve",
+           "worker_python"]
 
 _WORKER = Path(__file__).with_name("slepc_worker.py")
 
@@ -142,6 +145,64 @@ def _scratch(*mats):
     return None
 
 
+PREFIX = "mbseig-slepc-"
+_OWNERS = "owners"  # in each scratch folder: the PIDs of the solve and of its worker
+
+
+def reap_stale(folder=None):
+    """Remove the scratch folders of solves whose processes are all gone (a solve killed by
+    SIGKILL or a power cut leaves its folder, up to the size of its matrices and vectors, in
+    ``/dev/shm``, that is in memory).  Only this user's folders that name their processes are
+    touched: a folder being set up (no list yet) and one of a live solve stay.  Returns the
+    folders removed."""
+    folder = folder or tempfile.gettempdir()
+    removed = []
+    try:
+        entries = [e for e in os.scandir(folder) if e.name.startswith(PREFIX) and e.is_dir()]
+    except OSError:
+        return removed
+    uid = os.getuid() if hasattr(os, "getuid") else None
+    for entry in entries:
+        try:
+            if uid is not None and entry.stat().st_uid != uid:
+                continue
+            with open(os.path.join(entry.path, _OWNERS)) as f:
+                space, *words = f.read().split()
+            pids = [int(w) for w in words]
+        except (OSError, ValueError):
+            continue
+        if space != _namespace():  # (another container's processes are not visible from here)
+            continue
+        if pids and not any(_alive(pid) for pid in pids):
+            shutil.rmtree(entry.path, ignore_errors=True)
+            removed.append(entry.path)
+    return removed
+
+
+def _alive(pid):
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # (another user's process of that number: not ours to judge)
+        return True
+    return True
+
+
+def _namespace():
+    """This process's PID namespace (Linux), so that a folder in a ``/dev/shm`` shared between
+    containers is judged only by processes that can see its owners."""
+    try:
+        return os.readlink("/proc/self/ns/pid").replace(" ", "")
+    except OSError:
+        return "-"
+
+
+def _own(tmp, *pids, first=False):
+    with open(os.path.join(tmp, _OWNERS), "w" if first else "a") as f:
+        f.write((f"{_namespace()}\n" if first else "") + "".join(f"{pid}\n" for pid in pids))
+
+
 def _write_input(folder, mats, opts):
     """The worker's IN folder: each CSR array as a ``.npy`` file, the options as JSON."""
     np.save(os.path.join(folder, "shape.npy"), np.array(mats[0].shape))
@@ -176,7 +237,10 @@ def slepc_solve(Mb, Pb, Qb, nev, target=0.0, *, tol=1e-14, maxit=1000, ncv=None,
     opts = {"nev": int(nev), "target": float(target), "tol": float(tol), "maxit": int(maxit),
             "ncv": int(ncv or 0), "factor": factor,
             "upper_tol": None if upper_tol is None else float(upper_tol)}
-    with tempfile.TemporaryDirectory(prefix="mbseig-slepc-", dir=_scratch(Mb, Pb, Qb)) as tmp:
+    scratch = _scratch(Mb, Pb, Qb)
+    reap_stale(scratch)
+    with tempfile.TemporaryDirectory(prefix=PREFIX, dir=scratch) as tmp:
+        _own(tmp, os.getpid(), first=True)
         path_in, path_out = os.path.join(tmp, "in"), os.path.join(tmp, "out")
         os.mkdir(path_in)
         os.mkdir(path_out)
@@ -187,10 +251,12 @@ def slepc_solve(Mb, Pb, Qb, nev, target=0.0, *, tol=1e-14, maxit=1000, ncv=None,
             if wait:
                 proc = subprocess.Popen(cmd, env=env, stdin=subprocess.PIPE,
                                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                _own(tmp, proc.pid)
             _write_input(path_in, (Mb, Pb, Qb), opts)
             if proc is None:
                 proc = subprocess.Popen(cmd, env=env, stdin=subprocess.DEVNULL,
                                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                _own(tmp, proc.pid)
             _, err = proc.communicate("go\n" if wait else None)
         except BaseException:
             if proc is not None and proc.poll() is None:
