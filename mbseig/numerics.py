@@ -26,7 +26,7 @@ from .errors import MbseigError, NumericalError
 
 __all__ = ["LazyModule", "min_norm_projection", "scatter", "coo_sum", "dense", "constraint_rank", "null_space_basis", "colnorm",
            "unit_columns", "jsonable", "nonfinite", "require_finite", "watched", "DOUBLE_RANGE",
-           "blas_limit", "element_name", "user_names"]
+           "blas_limit", "element_name", "user_names", "grow_columns"]
 
 
 # an element's label as the reader makes it (casefile.fields.expand): ``forces[3] 'actuator'``,
@@ -355,3 +355,20 @@ def min_norm_projection(residual, jacobian, x, scales, *, tol, max_iter):
         x += step
         total += step
     return x, res, False, total
+
+
+def grow_columns(owner, name, cols):
+    """``owner.<name>``, a column-major array, widened to ``cols`` columns (the new ones zero) and
+    stored back: in place where nothing else references it (``ndarray.resize``; a large array's
+    pages are remapped by realloc, not copied, so the old and the new never coexist), else a
+    copy.  The first columns keep their values bit for bit either way."""
+    X = getattr(owner, name)
+    setattr(owner, name, None)  # (the attribute's reference would block the in-place growth)
+    try:
+        X.resize((X.shape[0], cols), refcheck=True)
+    except ValueError:  # a view or another name holds it
+        Y = np.zeros((X.shape[0], cols), order="F")
+        Y[:, :X.shape[1]] = X
+        X = Y
+    setattr(owner, name, X)
+    return X

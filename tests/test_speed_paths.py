@@ -14,7 +14,11 @@ References, each an independent computation in this file:
   element blocks (the assembly they replace), bitwise, on bundled planar and spatial cases;
 - the direct LAPACK calls (triangular solve of the companion path, pivoted QR of the cluster
   rank): scipy.linalg.solve_triangular and scipy.linalg.qr, bitwise;
-- the all-pairs ball query of the error bounds: the row-by-row search it replaced.
+- the all-pairs ball query of the error bounds: the row-by-row search it replaced;
+- numerics.grow_columns (the projected basis grown in place): the old columns bitwise, the new
+  ones zero, in place when nothing else holds the array, a copy (the holder untouched) when a
+  view does; the whole projected search bitwise the concatenating code it replaced was checked
+  with ARPACK's start fixed (not repeatable here: that code is gone).
 """
 
 import importlib
@@ -27,7 +31,7 @@ import scipy.sparse as sp
 
 import mbseig
 from mbseig.eigen import measures
-from mbseig.numerics import blas_limit, coo_sum, scatter
+from mbseig.numerics import blas_limit, coo_sum, grow_columns, scatter
 
 
 def _lstsq_fit(M, P, Q, tol):
@@ -292,3 +296,22 @@ def test_blas_held_skips_the_small_solve_cap():
         assert null(small_blas(3))
     assert null(small_blas(3)) is not capping
     assert null(small_blas(500))  # large: never capped here
+
+
+def test_grow_columns_keeps_the_columns_in_place_or_by_copy():
+    class Holder:
+        pass
+
+    rng = np.random.default_rng(5)
+    h = Holder()
+    h.A = np.asfortranarray(rng.standard_normal((1000, 6)))
+    old, before = h.A.copy(), id(h.A)
+    out = grow_columns(h, "A", 10)
+    assert out is h.A and id(out) == before  # grown in place: no second array
+    assert out.flags.f_contiguous and out.shape == (1000, 10)
+    assert np.array_equal(out[:, :6], old) and not np.any(out[:, 6:])
+    view = h.A[:, :3]  # a live view: resize would invalidate it, so a copy is made
+    out = grow_columns(h, "A", 12)
+    assert out is h.A and out is not view.base and out.flags.f_contiguous
+    assert np.array_equal(out[:, :6], old) and not np.any(out[:, 6:])
+    assert np.array_equal(view, old[:, :3])

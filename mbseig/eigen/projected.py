@@ -66,10 +66,10 @@ import time
 
 import numpy as np
 import scipy.linalg as sla
-import scipy.sparse as sp
 
 from ..errors import SolverError
-from ..numerics import LazyModule
+from ..numerics import LazyModule, grow_columns
+from .blockop import BlockOp
 from .measures import EPS, colnorm, is_symmetric
 from .projected_certificate import (
     TIE,
@@ -91,46 +91,6 @@ MAX_ITER = 12  # refinement rounds
 REFINE_ETA = 4 * EPS  # a pair is refined until η ≤ 4ε (or η stops falling)
 BLOCK = 4  # columns of a refined block and of a residual block (memory: 3 complex n-blocks)
 SOLVE_BLOCK = 8  # right-hand sides per LU solve of the basis (the solve copies them twice)
-
-
-class _Op:
-    """A sparse matrix applied to real or complex blocks by real products (a diagonal one as a
-    scaling): no complex copy of the matrix, no layout conversion of the block."""
-
-    def __init__(self, A):
-        self.A = A
-        off = A - sp.diags(A.diagonal(), format="csr")
-        self.d = A.diagonal()[:, None] if not np.any(off.data) else None
-
-    @property
-    def T(self):
-        return _Op(self.A.T.tocsr())
-
-    def __matmul__(self, V):
-        if V.ndim == 1:
-            return self.A @ V
-        if np.iscomplexobj(V):
-            out = np.empty((self.A.shape[0], V.shape[1]), complex, order="F")
-            self._real(V.real, out.real)
-            self._real(V.imag, out.imag)
-            return out
-        if self.d is not None:
-            return self.d * V
-        if V.flags.c_contiguous:
-            return self.A @ V
-        out = np.empty((self.A.shape[0], V.shape[1]), order="F")
-        self._real(V, out)
-        return out
-
-    def _real(self, V, out):
-        """out = A V for a real block V (any layout), column by column where A is sparse: a
-        block product would first copy a column-major V to row-major (scipy's layout), a
-        transposition that cost more than the product at 10⁶ rows; the sums are the same."""
-        if self.d is not None:
-            np.multiply(self.d, V, out=out)
-            return
-        for j in range(V.shape[1]):
-            out[:, j] = self.A @ np.ascontiguousarray(V[:, j])
 
 
 def _rayleigh(s0, U, MU, PU, QU):
@@ -180,7 +140,11 @@ class _Basis:
         rhs[:n, :b], rhs[:n, b:] = self.M @ V, self.P @ V
         MV, PV = rhs[:n, :b], rhs[:n, b:]
         PtV = PV if self.psym else self.P.T @ V
-        W = np.concatenate([self.W, V], axis=1) if k else V
+        if k:
+            W = grow_columns(self, "W", k + b)
+            W[:, k:] = V
+        else:
+            W = V
         def grow(S, AV, AtV):
             out = np.empty((k + b, k + b))
             out[:k, :k] = S
@@ -197,13 +161,15 @@ class _Basis:
         for c0 in range(0, 2 * b, SOLVE_BLOCK):  # in place, a block at a time: the LU's copy
             c = slice(c0, min(c0 + SOLVE_BLOCK, 2 * b))  # and work array are a block's, not A's
             rhs[:, c] = self.lu.solve(rhs[:, c])
-        A = rhs
-        del rhs
         self.W = np.asfortranarray(W)
-        if k:  # columns [A_M | A_P] kept in that order
-            self.A = np.asfortranarray(np.concatenate([self.A[:, :k], A[:, :b], self.A[:, k:], A[:, b:]], axis=1))
+        if k:  # columns [A_M | A_P] kept in that order, A grown in place (no second A)
+            A = grow_columns(self, "A", 2 * (k + b))
+            for j in range(2 * k - 1, k - 1, -1):  # the old A_P moves right by b, last first
+                A[:, j + b] = A[:, j]
+            A[:, k:k + b], A[:, 2 * k + b:] = rhs[:, :b], rhs[:, b:]
         else:
-            self.A = np.asfortranarray(A)
+            self.A = np.asfortranarray(rhs)
+        del rhs
         self.k = k + b
 
     def add(self, V):
@@ -227,6 +193,7 @@ class _Basis:
         G = V.T @ (self.M @ V)
         L = np.linalg.cholesky(0.5 * (G + G.T))
         V = np.asfortranarray(sla.solve_triangular(L, V.T, lower=True).T)
+        del W  # (so that W can grow in place)
         self._append(V)
         return V.shape[1]
 
@@ -341,14 +308,14 @@ def _one_attempt(run, want, k_u, lu, hyp, verify_tol, max_iter, n, m, clock):
                                 run.maxiter, run.tol, False, lu=lu)
     Vx = np.asfortranarray(V[:n])
     del V
-    Ms = Vx.T @ (_Op(M) @ Vx)
+    Ms = Vx.T @ (BlockOp(M) @ Vx)
     Qs = Vx.T @ (Q @ Vx)
     lam, Y = sla.eigh(0.5 * (Qs + Qs.T), 0.5 * (Ms + Ms.T))  # Rayleigh–Ritz on the Lanczos span
     Phi = np.asfortranarray(Vx @ Y)
     del Vx
     clock["lanczos"] = time.perf_counter()
     p = want + GUARD
-    Mo, Po, Qo, Qbo = _Op(M), _Op(P), _Op(Q), _Op(Qb)
+    Mo, Po, Qo, Qbo = BlockOp(M), BlockOp(P), BlockOp(Q), BlockOp(Qb)
     psym = is_symmetric(P, run.sym_tol)
     B = _Basis(Mo, Po, Qo, lu, m, Phi, lam, psym)
     hist = []
