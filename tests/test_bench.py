@@ -20,6 +20,11 @@ def test_bench_quick_writes_report(tmp_path, capsys):
     # every mbseig dense path meets its backward-error target on the chain family
     assert all(r["eta"] <= 1e-12 for r in res["rows"] if r["method"].startswith("mbseig"))
     assert all(f["naive_wrong"] and f["mbseig_right"] for f in res["failures"])
+    # the machine's load is stated, as recorded at the start and at the end of the run
+    for k in ("start", "end"):
+        assert len(res["load"][k]) == 3 and all(x >= 0 for x in res["load"][k])
+    said = ", ".join(f"{x:.2f}" for x in res["load"]["start"])
+    assert f"Load average (1, 5, 15 min): {said} at the start and " in md
 
 
 def test_bench_quick_large_and_startup_sections(tmp_path, capsys):

@@ -169,6 +169,14 @@ def _spatial_line(r):
     return "| " + " | ".join(str(c) for c in cells) + " |"
 
 
+def _load_words(res):
+    """' Load average (1, 5, 15 min): … at the start, … at the end.' (empty where not recorded)."""
+    load = res.get("load") or {}
+    said = [f"{', '.join(f'{x:.2f}' for x in load[k])} at the {k}" for k in ("start", "end")
+            if load.get(k)]
+    return f" Load average (1, 5, 15 min): {' and '.join(said)}." if said else ""
+
+
 def write_report(res, out_dir):
     out_dir = Path(out_dir)
     cfg = res["config"]
@@ -177,8 +185,9 @@ def write_report(res, out_dir):
              f"(median of {cfg['repeats']} interleaved runs per point unless stated; BLAS threads: "
              f"{cfg['threads'] or 'library default'}; total {res.get('elapsed', 0):.0f} s). Machine: "
              f"{res['machine']['cpus']} CPUs, Python {res['machine']['python']}, numpy "
-             f"{res['machine']['numpy']}, scipy {res['machine']['scipy']}. The machine is shared and "
-             f"noisy: compare ratios measured in the same run, not absolute times across runs.")
+             f"{res['machine']['numpy']}, scipy {res['machine']['scipy']}.{_load_words(res)} The "
+             f"machine is shared and noisy: compare ratios measured in the same run, not absolute "
+             f"times across runs.")
     L += ["", "![error against wall time](speed_accuracy.png)", "", "## Targets", "",
           "| target | measured | goal | met |", "|---|---|---|---|"]
     for name, val, goal, ok in _targets(res):

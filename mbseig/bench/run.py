@@ -100,7 +100,7 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
         "peer_sizes": [20] if quick else [50, 200, 500],
         "sweep_grid": (2, 5) if quick else (6, 20),
     }
-    res = {"config": cfg, "rows": [], "machine": _machine()}
+    res = {"config": cfg, "rows": [], "machine": _machine(), "load": {"start": _load()}}
     t_start = time.perf_counter()
     with capped_threads(threads), warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
@@ -157,11 +157,20 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
     if "startup" in sections:
         res["rows"] += bench_startup(cfg["startup_repeats"], log)
     res["elapsed"] = time.perf_counter() - t_start
+    res["load"]["end"] = _load()
     (out_dir / "benchmarks.json").write_text(json.dumps(res, indent=1, default=json_default))
     write_report(res, out_dir)
     return res
 
 
+
+
+def _load():
+    """The machine's load averages over 1, 5 and 15 minutes (None where the system has none)."""
+    try:
+        return [round(x, 2) for x in os.getloadavg()]
+    except (AttributeError, OSError):
+        return None
 
 
 def _machine():
