@@ -370,5 +370,6 @@ def grow_columns(owner, name, cols):
         Y = np.zeros((X.shape[0], cols), order="F")
         Y[:, :X.shape[1]] = X
         X = Y
-    setattr(owner, name, X)
+    finally:  # (on any failure, out of memory included, the owner keeps its array)
+        setattr(owner, name, X)
     return X
