@@ -151,7 +151,7 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
                 zero_delta_tol: float = 1e-5, rigid_tol: float = 1e-3, method: str = "DOP853",
                 ode_rtol: float = 1e-10, mass_tol: float = 1e-12, resolution_k: float = 3.0,
                 max_fast_periods: float = 200.0, recheck_amplification: float = 30.0,
-                defective_amplification: float = 1e8) -> CheckResult:
+                defective_amplification: float = 1e8, progress=None) -> CheckResult:
     """Prove the listed ``modes`` (predicted from ``lin``) against the nonlinear ``model``.
 
     indices : 1-based mode numbers (default: all listed modes).
@@ -173,6 +173,9 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
     method, ode_rtol : integrator and its relative tolerance; absolute tolerances are ode_rtol
         times the smallest expected deviation.
     mass_tol : relative eigenvalue of Nᵀ M N below which the model counts as massless.
+    progress : None, or a callback ``(label, done, total)`` called with "modes" before each
+        mode and once after the last (the CLI's progress bar: a stiff model's mode takes tens
+        of seconds).
     """
     t_start = time.perf_counter()
     for nm, val in (("amplitude", amplitude), ("periods", periods), ("efolds", efolds),
@@ -209,6 +212,8 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
                 tangent=_tangent(dyn, redundant, model))
     results = []
     for k in idx:
+        if progress is not None:
+            progress("modes", len(results), len(idx))
         j = k - 1
         s = complex(modes.eigenvalues[j])
         kind = modes.kind[j]
@@ -242,6 +247,8 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
         results.append(replace(judge(replace(mc, amplification=amp), s, delta_rtol, omega_rtol,
                                       zero_delta_tol, resolution_k, eff),
                                elapsed=time.perf_counter() - t0))
+    if progress is not None:
+        progress("modes", len(results), len(idx))
     reactions = tuple(reaction_forces(model, eq))
     return CheckResult(
         name=model.name, parameters=dict(model.parameters), modes=tuple(results),

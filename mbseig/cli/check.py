@@ -6,6 +6,7 @@ Exit 0 when every simulated mode passes, 1 when one fails, 2 on bad input.
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
 
@@ -60,6 +61,11 @@ def register(sub):
                    help="eigensolver path for the prediction (default: chosen by structure)")
     p.add_argument("--plot", default=None, metavar="DIR",
                    help="write one PNG per checked mode (response and envelopes) into DIR")
+    prog = p.add_mutually_exclusive_group()
+    prog.add_argument("--progress", dest="progress", action="store_true", default=None,
+                      help="always show a progress bar over the modes on stderr")
+    prog.add_argument("--no-progress", dest="progress", action="store_false",
+                      help="never show it (default: only when stderr is a terminal)")
     p.set_defaults(run=run)
 
 
@@ -77,13 +83,16 @@ def _options(args):
 def _checked(a, args):
     """check_modes between its boundary checks: no overflow inside, finite measurements."""
     indices = None if args.modes is None else parse_mode_list(args.modes, len(a.modes))
+    show = args.progress if args.progress is not None else sys.stderr.isatty()
+    if show:
+        from ..studies.runners import progress_bar
     try:
         with watched("check", CHECK_CAUSE):
             res = check_modes(a.model, a.eq, a.linear, a.modes, indices=indices,
                               amplitude=args.amplitude, periods=args.periods, efolds=args.efolds,
                               delta_rtol=args.delta_rtol, omega_rtol=args.omega_rtol,
                               zero_delta_tol=args.zero_delta_tol, method=args.method,
-                              ode_rtol=args.ode_rtol)
+                              ode_rtol=args.ode_rtol, progress=progress_bar() if show else None)
         for m in res.modes:
             if not m.skipped and not (math.isfinite(m.measured_delta)
                                       and math.isfinite(m.measured_omega)):
