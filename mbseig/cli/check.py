@@ -6,7 +6,6 @@ Exit 0 when every simulated mode passes, 1 when one fails, 2 on bad input.
 from __future__ import annotations
 
 import math
-import sys
 
 import numpy as np
 
@@ -18,12 +17,14 @@ from ..statics.reactions import multiplier_error
 from ..studies import analyze
 from .common import (
     add_case_arguments,
+    add_progress_options,
     case_command,
     case_kwargs,
     number_option,
     output_notes,
     print_json,
     print_reactions,
+    show_progress,
 )
 
 CHECK_CAUSE = (f"the simulation left {DOUBLE_RANGE} (an amplitude too large for the model, or "
@@ -61,11 +62,7 @@ def register(sub):
                    help="eigensolver path for the prediction (default: chosen by structure)")
     p.add_argument("--plot", default=None, metavar="DIR",
                    help="write one PNG per checked mode (response and envelopes) into DIR")
-    prog = p.add_mutually_exclusive_group()
-    prog.add_argument("--progress", dest="progress", action="store_true", default=None,
-                      help="always show a progress bar over the modes on stderr")
-    prog.add_argument("--no-progress", dest="progress", action="store_false",
-                      help="never show it (default: only when stderr is a terminal)")
+    add_progress_options(p, "a progress bar over the modes")
     p.set_defaults(run=run)
 
 
@@ -83,7 +80,7 @@ def _options(args):
 def _checked(a, args):
     """check_modes between its boundary checks: no overflow inside, finite measurements."""
     indices = None if args.modes is None else parse_mode_list(args.modes, len(a.modes))
-    show = args.progress if args.progress is not None else sys.stderr.isatty()
+    show = show_progress(args)
     if show:
         from ..studies.runners import progress_bar
     try:

@@ -13,8 +13,7 @@ from ..numerics import jsonable
 
 __all__ = ["add_case_arguments", "case_kwargs", "print_json", "print_reactions", "number_option",
            "output_notes", "equilibrium_notes", "moving_case", "case_command",
-           "analyzed",
-           "parameter_units_of"]
+           "analyzed", "parameter_units_of", "add_progress_options", "show_progress"]
 
 
 def add_case_arguments(parser):
@@ -24,6 +23,21 @@ def add_case_arguments(parser):
     parser.add_argument("--config", default=None, metavar="NAME",
                         help="a named configuration of the case's [configurations] table")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
+
+
+def add_progress_options(parser, what="the progress bar"):
+    """``--progress`` / ``--no-progress``: ``what`` on stderr always / never (default: only when
+    stderr is a terminal; :func:`show_progress`)."""
+    prog = parser.add_mutually_exclusive_group()
+    prog.add_argument("--progress", dest="progress", action="store_true", default=None,
+                      help=f"always show {what} on stderr")
+    prog.add_argument("--no-progress", dest="progress", action="store_false",
+                      help="never show it (default: only when stderr is a terminal)")
+
+
+def show_progress(args) -> bool:
+    """Whether to draw progress: as asked, else when stderr is a terminal."""
+    return args.progress if args.progress is not None else sys.stderr.isatty()
 
 
 def case_kwargs(args) -> dict:

@@ -19,7 +19,7 @@ from ..errors import CaseError
 from ..numerics import jsonable
 from ..studies.periodic_sweep import periodic_sweep
 from ..studies.tracking import parse_range
-from .common import print_json
+from .common import print_json, show_progress
 
 
 def run(args, spec) -> int:
@@ -35,7 +35,7 @@ def run(args, spec) -> int:
     if len(ranges) == 2 and ranges[0][0] == ranges[1][0]:
         raise CaseError(f"the two ranges sweep the same parameter {ranges[0][0]!r}",
                         element="--param", file=spec.source)
-    show = args.progress if args.progress is not None else sys.stderr.isatty()
+    show = show_progress(args)
 
     def progress(done, total):
         print(f"\rpoint {done}/{total}", end="" if done < total else "\n", file=sys.stderr)

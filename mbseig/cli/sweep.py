@@ -3,12 +3,18 @@ tracked modes, stability boundaries, folds, two-parameter boundary curves."""
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 from ..casefile import parse_param_overrides
 from ..errors import CaseError
-from .common import add_case_arguments, case_command, parameter_units_of, print_json
+from .common import (
+    add_case_arguments,
+    add_progress_options,
+    case_command,
+    parameter_units_of,
+    print_json,
+    show_progress,
+)
 
 
 def register(sub):
@@ -39,11 +45,7 @@ def register(sub):
     p.add_argument("--diagram", default=None, metavar="NAME",
                    help="coordinate or named angle of the bifurcation diagram (default: the one "
                         "that varies most along the branch)")
-    prog = p.add_mutually_exclusive_group()
-    prog.add_argument("--progress", dest="progress", action="store_true", default=None,
-                      help="always show the progress bar on stderr")
-    prog.add_argument("--no-progress", dest="progress", action="store_false",
-                      help="never show it (default: only when stderr is a terminal)")
+    add_progress_options(p)
     p.set_defaults(run=run)
 
 
@@ -55,7 +57,7 @@ def run(args, spec) -> int:
     fixed = parse_param_overrides([item for item in args.param if ":" not in item])
     if not ranges:
         raise CaseError("give at least one --param NAME=START:STOP:COUNT", element="--param")
-    show = args.progress if args.progress is not None else sys.stderr.isatty()
+    show = show_progress(args)
     res = run_sweep(spec, ranges, config=args.config, fixed=fixed, jobs=args.jobs,
                     scheduler=args.scheduler, progress=progress_bar() if show else None,
                     xtol_rel=args.xtol_rel, continuation=args.continuation, curves=args.curves,
