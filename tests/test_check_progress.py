@@ -31,3 +31,23 @@ def test_check_cli_bar_only_when_asked_or_on_a_terminal(capsys):
     assert "2/2" not in capsys.readouterr().err
     main(["check", case, "--periods", "2"])  # stderr is captured here: not a terminal
     assert "2/2" not in capsys.readouterr().err
+
+
+def test_an_unfinished_bar_is_ended_before_what_follows():
+    """An error or Ctrl-C in the middle of a check or sweep: ``close()`` ends the bar's line, so
+    that the one-line message starts on its own line; a finished bar is left as it is."""
+    import io
+
+    from mbseig.studies.runners import progress_bar
+
+    stream = io.StringIO()
+    show = progress_bar(stream)
+    show("modes", 1, 3)
+    assert not stream.getvalue().endswith("\n")
+    show.close()
+    text = stream.getvalue()
+    assert text.endswith("\n") and "1/3" in text.splitlines()[-1]
+    show("lines", 2, 2)  # finished: closed at once
+    done = stream.getvalue()
+    show.close()
+    assert stream.getvalue() == done

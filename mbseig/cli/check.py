@@ -80,16 +80,18 @@ def _options(args):
 def _checked(a, args):
     """check_modes between its boundary checks: no overflow inside, finite measurements."""
     indices = None if args.modes is None else parse_mode_list(args.modes, len(a.modes))
-    show = show_progress(args)
-    if show:
+    bar = None
+    if show_progress(args):
         from ..studies.runners import progress_bar
+
+        bar = progress_bar()
     try:
         with watched("check", CHECK_CAUSE):
             res = check_modes(a.model, a.eq, a.linear, a.modes, indices=indices,
                               amplitude=args.amplitude, periods=args.periods, efolds=args.efolds,
                               delta_rtol=args.delta_rtol, omega_rtol=args.omega_rtol,
                               zero_delta_tol=args.zero_delta_tol, method=args.method,
-                              ode_rtol=args.ode_rtol, progress=progress_bar() if show else None)
+                              ode_rtol=args.ode_rtol, progress=bar)
         for m in res.modes:
             if not m.skipped and not (math.isfinite(m.measured_delta)
                                       and math.isfinite(m.measured_omega)):
@@ -97,6 +99,9 @@ def _checked(a, args):
                                      f"likely cause: {CHECK_CAUSE}", element="check")
     except MbseigError as exc:
         raise exc.located(file=getattr(a.model, "source", None)) from None
+    finally:
+        if bar is not None:
+            bar.close()
     return res
 
 

@@ -57,11 +57,15 @@ def run(args, spec) -> int:
     fixed = parse_param_overrides([item for item in args.param if ":" not in item])
     if not ranges:
         raise CaseError("give at least one --param NAME=START:STOP:COUNT", element="--param")
-    show = show_progress(args)
-    res = run_sweep(spec, ranges, config=args.config, fixed=fixed, jobs=args.jobs,
-                    scheduler=args.scheduler, progress=progress_bar() if show else None,
-                    xtol_rel=args.xtol_rel, continuation=args.continuation, curves=args.curves,
-                    diagram=args.diagram, resume=args.resume)
+    bar = progress_bar() if show_progress(args) else None
+    try:
+        res = run_sweep(spec, ranges, config=args.config, fixed=fixed, jobs=args.jobs,
+                        scheduler=args.scheduler, progress=bar, xtol_rel=args.xtol_rel,
+                        continuation=args.continuation, curves=args.curves,
+                        diagram=args.diagram, resume=args.resume)
+    finally:  # (an error's line below the bars, not glued to them)
+        if bar is not None:
+            bar.close()
     stem = Path(args.case).stem + (f"-{args.config}" if args.config else "")
     out_dir = args.out or f"sweep-{stem}"
     units = parameter_units_of(spec)

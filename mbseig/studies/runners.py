@@ -138,7 +138,9 @@ class Runner:
 
 def progress_bar(stream=None):
     """A progress callback ``(label, done, total)`` drawing one tqdm bar a stage (lines,
-    boundaries, curves) on ``stream`` (default stderr) with its rate and the time left."""
+    boundaries, curves) on ``stream`` (default stderr) with its rate and the time left.  Its
+    ``close()`` ends the bars left unfinished (an error or Ctrl-C: the message that follows
+    starts on a line of its own)."""
     from tqdm import tqdm
 
     stream = sys.stderr if stream is None else stream
@@ -157,4 +159,10 @@ def progress_bar(stream=None):
         if done >= total:
             bar.close()
             bars.pop(label, None)
+
+    def close():
+        while bars:
+            bars.popitem()[1].close()
+
+    show.close = close
     return show
