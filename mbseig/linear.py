@@ -99,6 +99,9 @@ class LinearModel:
     angle_names: tuple = ()  # named angles of the case (mode shapes in angles)
     angle_rows: np.ndarray = None  # n_a × n: δθ = angle_rows δq
     independent: tuple = ()  # coordinates whose directions fix the null-space basis
+    #: the rigid-body directions by construction (DESIGN §6), computed at the first call:
+    #: a :class:`~mbseig.model.symmetry.RigidDirections` in full coordinates (None: not known)
+    rigid: object = None
 
     @property
     def dof(self) -> int:
@@ -222,12 +225,30 @@ def _linearize(model, eq, rank_tol, constraint_stiffness, sparse, reference=None
     tol = {"rank_tol": rank_tol}
     if sigma is not None:
         tol["basis_min_cosine"] = sigma  # σ_min(Eᵀ Π E)^(1/2): how well E fixes N
+    rigid = DeclaredRigid(model, q0, lam0, Qr, N) if constraint_stiffness else None
     return LinearModel(
         M=Mr, P=Pr, Q=Qr, N=N, q0=q0, lam0=lam0, coordinate_names=model.coordinate_names,
         name=model.name, parameters=model.parameters, rank=rank,
         n_constraints=model.n_constraints, constraint_stiffness=constraint_stiffness,
-        tolerances=tol, independent=independent, **io,
+        tolerances=tol, independent=independent, rigid=rigid, **io,
     )
+
+
+class DeclaredRigid:
+    """The rigid-body directions by construction of a model at its reference
+    (:func:`mbseig.model.symmetry.rigid_directions`), found at the first call and kept: the
+    modes stage asks only when a mode is rigid-body."""
+
+    def __init__(self, model, q0, lam0, Q, N):
+        self._args, self._value = (model, q0, lam0, Q, N), None
+
+    def __call__(self):
+        if self._value is None:
+            from .model.symmetry import rigid_directions
+
+            self._value = rigid_directions(*self._args)
+            self._args = None
+        return self._value
 
 
 def continuous_null_basis(Phi_q, n, rank_tol, names=None, reference=None):

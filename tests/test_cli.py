@@ -25,8 +25,10 @@ def test_modes_json_schema(path, capsys):
     assert TOP_KEYS <= set(out)
     assert set(out["equilibrium"]) >= {"residual", "iterations"}
     assert out["verdict"] in ("stable", "critical", "unstable")
-    worst = max((m["stability"] for m in out["modes"]),
-                key=["stable", "critical", "unstable"].index)
+    # DESIGN §6: the worst over the modes that are not rigid-body by construction, critical when
+    # no other mode is left
+    counted = [m["stability"] for m in out["modes"] if not m.get("rigid_body")]
+    worst = max(counted, key=["stable", "critical", "unstable"].index, default="critical")
     assert out["verdict"] == worst
     keys = [(m["omega_n"], m["delta"]) for m in out["modes"]]
     assert keys == sorted(keys)

@@ -31,6 +31,7 @@ from .contract import (
     solve,
 )
 from .dense import choose_solver, solve_qep
+from .descriptor import deflate_subspace as deflate_subspace
 from .descriptor import descriptor_problem as descriptor_problem
 from .measures import EPS
 from .partial import solve_partial, sparse_structure

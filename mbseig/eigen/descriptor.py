@@ -29,7 +29,8 @@ import scipy.linalg as sla
 
 from .base import QEPSolution
 
-__all__ = ["GEPSolution", "deflate_zero", "descriptor_problem", "solve_descriptor"]
+__all__ = ["GEPSolution", "deflate_subspace", "deflate_zero", "descriptor_problem",
+           "solve_descriptor"]
 
 
 def deflate_zero(E, A, *, rank_tol=1e-11):
@@ -57,6 +58,29 @@ def deflate_zero(E, A, *, rank_tol=1e-11):
         E, A = Q2.conj().T @ E @ Zp, Q2.conj().T @ A @ Zp
         n_zero += k
     return E, A, n_zero
+
+
+def deflate_subspace(E, A, S):
+    """Remove a declared invariant subspace span S (orthonormal columns) of s E − A exactly:
+    with A S = E S J (J = (E S)⁺ A S), unitary [S S⊥] and [Q₁ Q₂] with Q₁ spanning E S,
+
+        Qᴴ (s E − A) [S S⊥] = [[s E₁₁ − A₁₁, ·], [−Q₂ᴴ A S, s E₂₂ − A₂₂]],   Q₂ᴴ A S = Q₂ᴴ E S J = 0
+
+    so the eigenvalues are those of J (the declared ones) and of (E₂₂, A₂₂).  Returns
+    (E₂₂, A₂₂, J, residual) with residual = ‖A S − E S J‖ / (‖A‖‖S‖): how exactly S is
+    invariant (E S must have full column rank: finite eigenvalues only)."""
+    E, A, S = np.asarray(E), np.asarray(A), np.asarray(S)
+    k = S.shape[1]
+    if k == 0:
+        return E, A, np.zeros((0, 0)), 0.0
+    ES, AS = E @ S, A @ S
+    J = np.linalg.lstsq(ES, AS, rcond=None)[0]
+    residual = float(np.linalg.norm(AS - ES @ J) / max(np.linalg.norm(A), 1e-300))
+    Sf, _ = np.linalg.qr(S, mode="complete")
+    Sp = Sf[:, k:]
+    Qf, _ = np.linalg.qr(ES, mode="complete")
+    Q2 = Qf[:, k:]
+    return Q2.conj().T @ E @ Sp, Q2.conj().T @ A @ Sp, J, residual
 
 
 @dataclass(frozen=True, eq=False)

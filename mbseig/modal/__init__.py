@@ -48,6 +48,7 @@ A partial spectrum lists what it computed: its verdict is "of the modes computed
 from __future__ import annotations
 
 
+import numpy as np
 import scipy.sparse as sp
 
 from ..eigen import Problem, Request, SingularPencilError, solve
@@ -55,7 +56,8 @@ from ..eigen.small import small_problem
 from ..errors import SolverError
 from ..linear import LinearModel
 from .bounds import error_bounds, stability, tolerance_rule, tolerances, worst, zero_pair_floor
-from .listing import band_of, coordinate_text, listing
+from .listing import band_of, coordinate_text, listing, mode_shapes
+from .scope import apply_scope, reduced_directions
 from .small import small_modes
 from .result import BAND_DENSE_MAX, DENSE_MAX, STABILITY_ORDER, Modes, Verdict
 
@@ -72,7 +74,7 @@ def modes(M, P=None, Q=None, *, solver: str = "auto", N=None, coordinate_names=N
           stability_rtol: float = 1e-12, stability_atol: float = 0.0, safety: float = 10.0,
           n_dominant: int = 3, rigid_rank_tol: float = 1e-6, n_modes: int | None = None,
           target: float | None = None, band=None, constraints=None, eta_warn: float = 1e-12,
-          fused: bool = True, **solver_options) -> Modes:
+          fused: bool = True, rigid=None, **solver_options) -> Modes:
     """Solve and classify the modes of (M s² + P s + Q) x = 0.
 
     M may be a :class:`~mbseig.linear.LinearModel` instead of a matrix: its M, P, Q, N,
@@ -87,6 +89,11 @@ def modes(M, P=None, Q=None, *, solver: str = "auto", N=None, coordinate_names=N
         ``band = (ω_lo, ω_hi)``; ``constraints`` is Φ_q when M, P, Q are in full coordinates.
     eta_warn : a listed mode whose backward errors (normwise and componentwise) both exceed it is
         flagged in :attr:`Modes.flags` and named in a RuntimeWarning.
+    rigid : the model's rigid-body directions by construction (DESIGN §6,
+        :mod:`mbseig.modal.scope`): a :class:`~mbseig.model.symmetry.RigidDirections`, a
+        callable returning one (called only when a mode is rigid-body), or an array whose
+        columns are directions in the coordinates of the shapes (full coordinates q when N is
+        given).  The verdict leaves those modes out; a LinearModel supplies its own.
     fused : a small real dense problem (order ≤ :data:`mbseig.eigen.small.SMALL_MAX`, ``auto``,
         the full spectrum) takes the fused implementation of its path
         (:func:`mbseig.modal.small.small_modes`: the same numbers, a fraction of the time);
@@ -100,6 +107,8 @@ def modes(M, P=None, Q=None, *, solver: str = "auto", N=None, coordinate_names=N
         M, P, Q, N, coordinate_names = lin.M, lin.P, lin.Q, lin.N, lin.coordinate_names
         if constraints is None:
             constraints = lin.constraint_jacobian
+        if rigid is None:
+            rigid = lin.rigid
     if Q is None:
         raise SolverError("modes(M, P, Q) needs Q (or a LinearModel alone)")
     if (fused and solver == "auto" and n_modes is None and target is None and band is None
@@ -110,7 +119,7 @@ def modes(M, P=None, Q=None, *, solver: str = "auto", N=None, coordinate_names=N
                          safety=safety, n_dominant=n_dominant, rigid_rank_tol=rigid_rank_tol,
                          eta_warn=eta_warn, options=solver_options)
         if md is not None:
-            return md
+            return _scoped(md, rigid, N, coordinate_names, n_dominant)
     request = Request(solver, n_modes=n_modes, target=target, band=band, options=solver_options)
     problem = Problem(M, P, Q, G=constraints)
     if (band is not None and n_modes is None and target is None and constraints is None
@@ -121,7 +130,7 @@ def modes(M, P=None, Q=None, *, solver: str = "auto", N=None, coordinate_names=N
                      stability_rtol=stability_rtol, stability_atol=stability_atol,
                      safety=safety, n_dominant=n_dominant, rigid_rank_tol=rigid_rank_tol,
                      eta_warn=eta_warn, **solver_options)
-        return band_of(full, band)
+        return band_of(full, band)  # (full was scoped)
     try:
         if (request.family(problem) == "dense" and sp.issparse(M)
                 and M.shape[0] > DENSE_MAX):
@@ -138,8 +147,26 @@ def modes(M, P=None, Q=None, *, solver: str = "auto", N=None, coordinate_names=N
     b = error_bounds(sol, safety=safety, stability_rtol=stability_rtol, stability_atol=stability_atol,
                 rank_tol=rigid_rank_tol)
     b = zero_pair_floor(b, sol, M, P, safety)
-    return listing(sol, b, N=N, coordinate_names=coordinate_names, n_dominant=n_dominant,
-                    eta_warn=eta_warn,
-                    tolerances_used={"stability_rtol": stability_rtol,
-                                     "stability_atol": stability_atol, "safety": safety,
-                                     "rigid_rank_tol": rigid_rank_tol, "eta_warn": eta_warn})
+    md = listing(sol, b, N=N, coordinate_names=coordinate_names, n_dominant=n_dominant,
+                 eta_warn=eta_warn,
+                 tolerances_used={"stability_rtol": stability_rtol,
+                                  "stability_atol": stability_atol, "safety": safety,
+                                  "rigid_rank_tol": rigid_rank_tol, "eta_warn": eta_warn})
+    return _scoped(md, rigid, N, coordinate_names, n_dominant)
+
+
+def _scoped(md, rigid, N, coordinate_names, n_dominant):
+    """The verdict made with the rigid-body directions by construction left out
+    (:mod:`mbseig.modal.scope`); ``rigid`` is asked for them only when a mode is rigid-body."""
+    names, D = (), None
+    if rigid is not None and "rigid-body" in md.kind:
+        got = rigid() if callable(rigid) else rigid
+        if hasattr(got, "vectors"):
+            names, D = tuple(got.names), got.vectors
+        else:
+            D = np.asarray(got)
+            names = tuple(f"declared direction {k + 1}" for k in range(D.shape[1]))
+        if md.vectors.shape[0] != D.shape[0]:  # full-coordinate directions, reduced shapes
+            D = reduced_directions(D, N)
+    return apply_scope(md, D, names,
+                       shape_fn=lambda X: mode_shapes(X, N, coordinate_names, n_dominant))

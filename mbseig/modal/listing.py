@@ -12,6 +12,7 @@ import numpy as np
 from ..errors import SolverError
 from .bounds import stability, worst
 from .result import Modes, Verdict
+from .scope import verdict as scoped_verdict
 
 
 def coordinate_text(coordinate_names, N, vector, limit=4):
@@ -47,7 +48,8 @@ def band_of(md: Modes, band) -> Modes:
                 f"{lo:.6g} ≤ |s| ≤ {hi:.6g} rad/s found (dense solve of the whole spectrum); "
                 f"modes outside were not listed")
     stab = pick(md.stability)
-    verdict = Verdict(worst(stab), f"of the modes computed ({coverage})")
+    rigid_body = pick(md.rigid_body) if md.rigid_body else None
+    verdict = scoped_verdict(stab, rigid_body, f"of the modes computed ({coverage})")
     acc = {**md.accounting, "listed_modes": int(keep.size), "band": [lo, hi]}
     return dataclasses.replace(
         md, eigenvalues=cut(md.eigenvalues), delta=cut(md.delta), omega_n=cut(md.omega_n),
@@ -58,7 +60,7 @@ def band_of(md: Modes, band) -> Modes:
         verdict=verdict, left_vectors=None if md.left_vectors is None else md.left_vectors[:, keep],
         multiplicity=None if md.multiplicity is None else md.multiplicity[keep],
         accounting=acc, coverage=coverage, partial=True,
-        flags=pick(md.flags) if md.flags else md.flags)
+        flags=pick(md.flags) if md.flags else md.flags, rigid_body=rigid_body)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -11,12 +11,22 @@ import numpy as np
 class Verdict(str):
     """The verdict word ("stable", "critical" or "unstable"): it compares equal to, and is written
     to JSON as, the word; ``scope`` says what it covers ("" for the full spectrum, "of the modes
-    computed (...)" for a partial one), and ``str()``/formatting give the word with its scope."""
+    computed (...)" for a partial one), and ``str()``/formatting give the word with its scope;
+    ``rigid_scope`` which modes it leaves out (the rigid-body modes by construction,
+    :mod:`mbseig.modal.scope`), and ``full_scope`` both."""
 
-    def __new__(cls, word, scope=""):
+    def __new__(cls, word, scope="", rigid_scope=""):
         obj = super().__new__(cls, word)
         obj.scope = scope
+        obj.rigid_scope = rigid_scope
         return obj
+
+    def __reduce__(self):
+        return (Verdict, (self.word, self.scope, self.rigid_scope))
+
+    @property
+    def full_scope(self) -> str:
+        return "; ".join(t for t in (self.scope, self.rigid_scope) if t)
 
     @property
     def word(self) -> str:
@@ -65,6 +75,9 @@ class Modes:
     partial: bool = False
     complex_problem: bool = False
     flags: list = field(default_factory=list)  # per mode: notes ("η above eta_warn", ...)
+    #: per mode: the declared rigid-body direction it is (by construction, left out of the
+    #: verdict: mbseig.modal.scope), or None
+    rigid_body: list = None
 
     def __len__(self):
         return self.eigenvalues.size

@@ -247,17 +247,24 @@ def _sort_order(mu):
 
 
 def _verdict(mu, bounds):
+    """The verdict of the multipliers (:func:`mbseig.modal.scope.verdict` over each one's
+    stability: unstable when |μ| − b > 1, stable when |μ| + b < 1, else critical) and the
+    multiplier that decides it, (k, |μ_k|, b_k, margin)."""
+    from ..modal.scope import verdict
+
     mod = np.abs(mu)
     upper, lower = mod + bounds, mod - bounds
-    if np.any(lower > 1.0):
+    stab = ["unstable" if lo > 1.0 else "stable" if up < 1.0 else "critical"
+            for lo, up in zip(lower.tolist(), upper.tolist())]
+    word = verdict(stab).word
+    if word == "unstable":
         k = int(np.argmax(lower))
-        return "unstable", (k, float(mod[k]), float(bounds[k]), float(lower[k] - 1.0))
-    if np.all(upper < 1.0):
-        k = int(np.argmax(upper))
-        return "stable", (k, float(mod[k]), float(bounds[k]), float(1.0 - upper[k]))
-    k = int(np.argmax(upper))  # the interval that contains 1
-    return "critical", (k, float(mod[k]), float(bounds[k]),
-                        float(min(upper[k] - 1.0, 1.0 - lower[k])))
+        return word, (k, float(mod[k]), float(bounds[k]), float(lower[k] - 1.0))
+    k = int(np.argmax(upper))
+    if word == "stable":
+        return word, (k, float(mod[k]), float(bounds[k]), float(1.0 - upper[k]))
+    return word, (k, float(mod[k]), float(bounds[k]),  # the interval that contains 1
+                  float(min(upper[k] - 1.0, 1.0 - lower[k])))
 
 
 def analyze(Phi, Phi_check, period, trace_integral, *, method, tolerances):

@@ -59,7 +59,8 @@ def modes_json(a: Analysis) -> dict:
         "equilibrium": {"residual": float(eq.residual), "iterations": int(eq.iterations),
                         "notes": [str(n) for n in (getattr(eq, "notes", None) or ())]},
         "verdict": md.verdict,
-        "verdict_scope": getattr(md.verdict, "scope", ""),  # partial spectrum: what it covers
+        # what the verdict covers: a partial spectrum, the rigid-body modes by construction
+        "verdict_scope": getattr(md.verdict, "full_scope", ""),
         "coverage": md.coverage,
         "accounting": md.accounting,
         "modes": [],
@@ -94,6 +95,8 @@ def modes_json(a: Analysis) -> dict:
             "zeta": float(md.zeta[k]),
             "stability": md.stability[k],
             "kind": md.kind[k],
+            # the declared rigid-body direction this mode is (left out of the verdict), or None
+            "rigid_body": md.rigid_body[k] if md.rigid_body else None,
             "backward_error": float(md.backward_error[k]),
             "condition": float(md.condition[k]),
             "tolerance": float(md.tolerance[k]),

@@ -8,18 +8,30 @@ paths; the classification follows mbseig's rule (docs/design.md, "Modes"):
     stable: δ = −Re s > τ;  unstable: δ < −τ;  critical: |δ| ≤ τ
 
 so a tolerance never turns an eigenvalue whose real part is positive beyond its own error bound
-into "critical".  The exact s = 0 of the cyclic coordinates (position along the motion,
-heading in straight running) is deflated structurally (:func:`mbseig.eigen.descriptor.deflate_zero`)
-and listed as rigid-body, critical.  Its rank tolerance ``ZERO_TOL`` = 1e-15 relative to ‖A‖₂:
-the cyclic zeros are null vectors of A at rounding level (singular values ≤ 1e-16 ‖A‖₂ in the
-bundled cases), while a real eigenvalue passing through zero (the bicycle's capsize) is deflated
-only within |s| ≲ 1e-15 ‖A‖₂ of it, which keeps a sweep's divergence boundary continuous to
-~1e-11 in the speed.  A cyclic zero the tolerance missed stays in the list as a tiny eigenvalue
-classified rigid-body by its own tolerance (|s| ≤ τ).
+into "critical".
+
+Rigid-body modes by construction (DESIGN §6, :func:`cyclic_directions`): the motion declares its
+cyclic directions, the symmetries of a system rolling on a horizontal plane under gravity:
+
+* straight running: position along the motion, lateral position, heading (a turn of the whole
+  system about the vertical, with its velocities) and speed along the motion (the same motion
+  faster: the velocities and spins scaled), each an exact solution of the linearized equations;
+* a steady turn: the heading (the phase along the turn) and the two positions in the ground
+  plane (in the turning frame a shifted turn, s = ±i r).
+
+Each is checked to be an invariant subspace of the pencil at the rounding level (A S = E S J,
+``INVARIANT_TOL`` relative; a candidate that fails, as the speed of a motion with a speed-
+dependent force, is dropped) and removed exactly (:func:`mbseig.eigen.deflate_subspace`): its
+eigenvalues are those of J (0, and ±i r in a turn), listed as rigid-body and left out of the
+verdict by :mod:`mbseig.modal.scope`.  No eigenvalue is removed for lying near 0: a real
+eigenvalue passing through 0 (the bicycle's capsize) stays in the pencil, is classified by its
+own bound and decides the verdict as any other.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -27,10 +39,13 @@ import numpy as np
 
 from ..errors import CaseError
 
-__all__ = ["SAFETY", "ZERO_TOL", "SteadyAnalysis", "analyze_steady", "mode_rows", "steady_json"]
+__all__ = ["SAFETY", "INVARIANT_TOL", "SteadyAnalysis", "analyze_steady", "cyclic_directions",
+           "mode_rows", "steady_json"]
 
 SAFETY = 10.0  # τ = SAFETY·κη·max(|s|, 1): mbseig's safety factor on the error bound
-ZERO_TOL = 1e-15  # rank tolerance of the cyclic zero deflation, relative to ‖A‖₂ (module docstring)
+#: a declared direction set is invariant when ‖A S − E S J‖ ≤ INVARIANT_TOL ‖A‖ (rounding level of
+#: forming the pencil, whose entries carry a few ε of their magnitude; 1e-11 leaves 10³ of margin)
+INVARIANT_TOL = 1e-11
 
 
 @dataclass(frozen=True, eq=False)
@@ -46,16 +61,14 @@ class SteadyAnalysis:
     modes: tuple
     verdict: str
     notes: tuple
+    cyclic: object = None  # the declared rigid-body directions (Cyclic)
 
 
-def mode_rows(sol, *, safety=SAFETY) -> list:
+def mode_rows(sol, *, safety=SAFETY, declared=None) -> list:
     """Mode records as the quadratic paths list them: δ = −Re s, a pair once (Im s > 0), sorted
-    by ω_n then δ, with η, κ and the tolerance τ (module docstring)."""
-    n_rigid = int(sol.details.get("n_rigid", 0))
-    rows = [{"eigenvalue": [0.0, 0.0], "delta": 0.0, "omega_n": 0.0, "omega_d": 0.0,
-             "freq_hz": 0.0, "freq_n_hz": 0.0, "zeta": 0.0, "stability": "critical",
-             "kind": "rigid-body", "backward_error": 0.0, "condition": 1.0, "tolerance": 0.0}
-            for _ in range(n_rigid)]
+    by ω_n then δ, with η, κ and the tolerance τ (module docstring); first the ``declared``
+    rigid-body modes (:class:`Cyclic`), each named in ``rigid_body``."""
+    rows = [] if declared is None else declared.rows()
     eps = np.finfo(float).eps
     for s, eta, kap in zip(sol.eigenvalues, sol.backward_error, sol.condition):
         tol = safety * kap * max(eta, eps) * max(abs(s), 1.0)
@@ -68,7 +81,8 @@ def mode_rows(sol, *, safety=SAFETY) -> list:
         kind = ("rigid-body" if wn <= tol else
                 ("overdamped" if delta > 0 else "divergence") if wd == 0.0 else
                 ("flutter" if stab == "unstable" else "oscillatory"))
-        rows.append({"eigenvalue": [float(s.real), wd], "delta": delta, "omega_n": wn,
+        rows.append({"rigid_body": None, "eigenvalue": [float(s.real), wd], "delta": delta,
+                     "omega_n": wn,
                      "omega_d": wd, "freq_hz": wd / (2 * math.pi),
                      "freq_n_hz": wn / (2 * math.pi),
                      "zeta": delta / wn if wn > 0 and kind != "rigid-body" else 0.0,
@@ -94,9 +108,130 @@ def dominant(model, lin, s, *, count=3) -> list:
     return [[model.coordinate_names[i], float(shape[i] / top)] for i in order]
 
 
-def verdict_of(rows) -> str:
-    order = {"stable": 0, "critical": 1, "unstable": 2}
-    return max((r["stability"] for r in rows), key=order.get, default="stable")
+def verdict_of(rows):
+    """The verdict of the rows (:func:`mbseig.modal.scope.verdict`: the declared rigid-body
+    modes left out)."""
+    from ..modal.scope import verdict
+
+    return verdict([r["stability"] for r in rows], [r.get("rigid_body") for r in rows],
+                   zero=all(r["omega_n"] == 0 for r in rows if r.get("rigid_body")))
+
+
+@dataclass(frozen=True, eq=False)
+class Cyclic:
+    """The declared rigid-body directions of a steady motion (module docstring): their names,
+    the orthonormal basis S of their span in the state X, J (A S = E S J), the invariance
+    residual, and the candidates dropped (name: residual)."""
+
+    names: tuple
+    basis: np.ndarray
+    J: np.ndarray
+    residual: float
+    dropped: tuple = ()
+    yaw_rate: float = 0.0
+
+    def rows(self) -> list:
+        """One row per declared eigenvalue (a pair once): 0 for each direction of straight
+        running and for a turn's heading, ±i r for a turn's two positions in the ground plane
+        (checked on J: J is nilpotent, or J (J² + r² I) = 0, in :func:`cyclic_directions`)."""
+        plane = [n for n in self.names if n.startswith(PLANE)]
+        rows = []
+        for name in self.names:
+            if name in plane and self.yaw_rate:
+                if name != plane[0]:
+                    continue
+                name, wd = " and ".join(plane), abs(self.yaw_rate)
+            else:
+                wd = 0.0
+            rows.append({"rigid_body": name, "eigenvalue": [0.0, wd], "delta": 0.0,
+                         "omega_n": wd, "omega_d": wd, "freq_hz": wd / (2 * math.pi),
+                         "freq_n_hz": wd / (2 * math.pi), "zeta": 0.0, "stability": "critical",
+                         "kind": "rigid-body", "backward_error": 0.0, "condition": 1.0,
+                         "tolerance": float(self.residual)})
+        return sorted(rows, key=lambda r: r["omega_n"])
+
+
+PLANE = "position in the ground plane"
+
+
+def cyclic_directions(model, state, lin) -> Cyclic:
+    """The declared rigid-body directions of the steady motion ``state`` in the state X of
+    ``lin`` (module docstring)."""
+    from .steady import generator, translation
+
+    motion = state.motion
+    up = np.asarray(motion.up, float)
+    up = up / np.linalg.norm(up)
+    d = np.asarray(motion.direction, float)
+    d = d / np.linalg.norm(d)
+    L, l = generator(model, motion)
+    unit = generator(model, dataclasses.replace(motion, yaw_rate=1.0, speed=0.0))[0]
+    q0, xi, spin = state.q, state.qd, np.asarray(state.spin, float)
+    nw = spin.size
+    zero_w = np.zeros(nw)
+    cands = []
+    turning = abs(float(motion.yaw_rate)) > 0
+    lateral = np.cross(up, d)
+    t_along, t_side = translation(model, d), translation(model, lateral)
+    cands.append((PLANE + " (along the motion)" if turning else "position along the motion",
+                  t_along, -L @ t_along, zero_w))
+    cands.append((PLANE + " (lateral)" if turning else "lateral position",
+                  t_side, -L @ t_side, zero_w))
+    h = unit @ q0
+    cands.append(("heading" if not turning else "heading (phase along the turn)",
+                  h, unit @ xi - L @ h, zero_w))
+    if not turning and motion.speed != 0:
+        cands.append(("speed along the motion", np.zeros(model.n), l / motion.speed,
+                      spin / motion.speed))
+    N, T, S = lin.N, lin.T, lin.S
+    scale = max(float(np.linalg.norm(lin.A)), 1e-300)
+    vecs, misses = [], []
+    for _, dq, dp, dw in cands:  # each candidate in the state X = [x; z]
+        x = N.T @ dq
+        w = np.concatenate([N.T @ dp, dw])
+        z = T.T @ (w + S @ x)
+        ref = max(np.linalg.norm(dq), np.linalg.norm(dp), 1.0)
+        misses.append(max(np.linalg.norm(N @ x - dq), np.linalg.norm(N @ (N.T @ dp) - dp),
+                          np.linalg.norm(T @ z - (w + S @ x))) / ref)
+        vecs.append(np.concatenate([x, z]))
+
+    def invariance(keep):  # ‖A Q − E Q J‖/‖A‖ of the span of the candidates kept
+        Y = np.column_stack([vecs[k] for k in keep])
+        if np.linalg.matrix_rank(Y, tol=1e-9 * np.abs(Y).max()) < len(keep):
+            return np.inf
+        Q, _ = np.linalg.qr(Y)
+        J = np.linalg.lstsq(lin.E @ Q, lin.A @ Q, rcond=None)[0]
+        return float(np.linalg.norm(lin.A @ Q - lin.E @ Q @ J)) / scale
+
+    # the largest set of candidates whose span is invariant (a turn's translations are invariant
+    # only as a pair), earlier candidates first among sets of one size
+    usable = [k for k, m in enumerate(misses) if m <= INVARIANT_TOL]
+    keep = ()
+    for size in range(len(usable), 0, -1):
+        for subset in itertools.combinations(usable, size):
+            if invariance(subset) <= INVARIANT_TOL:
+                keep = subset
+                break
+        if keep:
+            break
+    names = [cands[k][0] for k in keep]
+    dropped = [(cands[k][0], float(misses[k]) if k not in usable else invariance((k,)))
+               for k in range(len(cands)) if k not in keep]
+    if not keep:
+        return Cyclic((), np.zeros((lin.E.shape[0], 0)), np.zeros((0, 0)), 0.0, tuple(dropped))
+    basis, _ = np.linalg.qr(np.column_stack([vecs[k] for k in keep]))
+    from ..eigen import deflate_subspace
+
+    _, _, J, res = deflate_subspace(lin.E, lin.A, basis)
+    # the declared eigenvalues (0; ±i r for a turn's plane pair) are those of J: J is
+    # nilpotent (straight running) or J (J² + r² I) = 0 (a turn), to the rounding of J
+    r = float(motion.yaw_rate)
+    I = np.eye(J.shape[0])
+    poly = np.linalg.matrix_power(J, J.shape[0]) if not turning else J @ (J @ J + r * r * I)
+    jn = max(float(np.linalg.norm(J)), abs(r))
+    pn = float(np.linalg.norm(poly))
+    res = max(res, pn / jn ** (J.shape[0] if not turning else 3) if pn else 0.0)
+    return Cyclic(tuple(names), basis, J, res, tuple(dropped), r)
 
 
 def analyze_steady(spec, *, config=None, params=None, naive=False, model=None):
@@ -104,7 +239,7 @@ def analyze_steady(spec, *, config=None, params=None, naive=False, model=None):
     ``params``.  ``naive=True`` drops the velocity rows' position derivative (shown wrong in
     tests and in ``mbseig bench``; never used by the commands)."""
     from ..casefile.motion_readers import read_motion
-    from ..eigen import Request, descriptor_problem, solve
+    from ..eigen import Request, deflate_subspace, descriptor_problem, solve
     from ..errors import MbseigError
     from ..model.contact import PointContact
     from .steady import SteadyMotionError, linearize_steady, steady_state
@@ -123,8 +258,9 @@ def analyze_steady(spec, *, config=None, params=None, naive=False, model=None):
         with watched("steady motion", cause):
             state = steady_state(model, motion)
             lin = linearize_steady(model, state, naive=naive)
-            sol = solve(descriptor_problem(lin.E, lin.A),
-                        Request(solver="descriptor-qz", options={"zero_tol": ZERO_TOL}))
+            cyc = cyclic_directions(model, state, lin)
+            E2, A2, _, _ = deflate_subspace(lin.E, lin.A, cyc.basis)
+            sol = solve(descriptor_problem(E2, A2), Request(solver="descriptor-qz"))
     except MbseigError as exc:
         raise exc.located(file=file) from None
     except (np.linalg.LinAlgError, ValueError) as exc:  # a solve that did not converge
@@ -132,11 +268,12 @@ def analyze_steady(spec, *, config=None, params=None, naive=False, model=None):
                                 file=file) from None
     notes = tuple(f"wheel {c['name']!r} would pull ({c['force']:.6g} N): the steady motion "
                   f"lifts it off the plane" for c in state.contacts if not c["active"])
-    rows = mode_rows(sol)
+    rows = mode_rows(sol, declared=cyc)
     for r in rows:
         if r["kind"] != "rigid-body":
             r["dominant"] = dominant(model, lin, complex(*r["eigenvalue"]))
-    return SteadyAnalysis(model, motion, state, lin, sol, tuple(rows), verdict_of(rows), notes)
+    return SteadyAnalysis(model, motion, state, lin, sol, tuple(rows), verdict_of(rows), notes,
+                          cyc)
 
 
 def steady_json(a: SteadyAnalysis) -> dict:
@@ -163,9 +300,13 @@ def steady_json(a: SteadyAnalysis) -> dict:
         "contacts": [dict(c) for c in st.contacts],
         "spins": [float(x) for x in st.spin],
         "verdict": a.verdict,
+        "verdict_scope": a.verdict.full_scope,
         "n_infinite": int(sol.n_infinite),
-        "n_rigid_deflated": int(sol.details.get("n_rigid", 0)),
-        "tolerances": {"safety": SAFETY, "zero_tol": ZERO_TOL,
+        "n_rigid_deflated": len(a.cyclic.names) if a.cyclic is not None else 0,
+        "rigid_body_directions": {"names": list(a.cyclic.names), "residual": a.cyclic.residual,
+                                  "dropped": [list(x) for x in a.cyclic.dropped]}
+        if a.cyclic is not None else None,
+        "tolerances": {"safety": SAFETY, "invariant_tol": INVARIANT_TOL,
                        "inf_tol": float(sol.details.get("inf_tol", 0.0)),
                        "rank_tol": float(lin.tolerances.get("rank_tol", 0.0))},
         "modes": [dict(r) for r in a.modes],

@@ -49,17 +49,25 @@ class SteadySweep:
                 "boundaries": [dict(b) for b in self.boundaries]}
 
 
-def growth_rates(a, baseline=None) -> dict:
+def zeros_left(a) -> int:
+    """The eigenvalues of ``a`` within their bound of 0 that are not declared rigid-body
+    directions (a zero the motion has but does not declare, as the rolling disk's steady-turn
+    family, or a real eigenvalue passing through 0)."""
+    return sum(1 for r in a.modes if r["kind"] == "rigid-body" and not r.get("rigid_body"))
+
+
+def growth_rates(a, persistent=0) -> dict:
     """The largest real part of the oscillatory eigenvalues and of the real ones (None where it
-    has none), from the solver's eigenvalues (the exact cyclic zeros are deflated, so a real
-    eigenvalue passing through s = 0 stays continuous), and each wheel's pull (minus its
-    normal force).  ``baseline``: the number of cyclic zeros; a zero deflated beyond it is a
-    real eigenvalue within the deflation tolerance of 0, counted as 0."""
+    has none), from the solver's eigenvalues (the declared cyclic directions are deflated
+    exactly, so a real eigenvalue passing through s = 0 stays continuous), and each wheel's
+    pull (minus its normal force).  ``persistent``: zeros present at both ends of an interval
+    (:func:`zeros_left`): that many real eigenvalues nearest 0 are left out, as they stay at 0
+    and cross nothing (their computed real parts are rounding residue of either sign)."""
     s = np.asarray(a.solution.eigenvalues)
     cplx = np.abs(s.imag) > IMAG_TOL * np.maximum(1.0, np.abs(s))
     osc, real = s[cplx].real, s[~cplx].real
-    if baseline is not None and a.solution.details.get("n_rigid", 0) > baseline:
-        real = np.append(real, 0.0)
+    if persistent:
+        real = real[np.argsort(np.abs(real), kind="stable")][persistent:]
     return {"flutter": float(osc.max()) if osc.size else None,
             "divergence": float(real.max()) if real.size else None,
             **{f"lift-off:{c['name']}": -c["force"] for c in a.state.contacts}}
@@ -90,7 +98,7 @@ def steady_sweep(spec, name, values, *, config=None, fixed=None, xtol=1e-11):
         points.append({"value": float(v), "verdict": a.verdict,
                        "eigenvalues": [[float(s.real), float(s.imag)]
                                        for s in a.solution.eigenvalues],
-                       "n_rigid": int(a.solution.details.get("n_rigid", 0)),
+                       "n_rigid": len(a.cyclic.names) if a.cyclic is not None else 0,
                        "contacts": [dict(c) for c in a.state.contacts]})
     boundaries = []
     for k in range(len(values) - 1):
@@ -120,7 +128,7 @@ def _stability_crossing(at, lo, hi, a0, a1, name, xtol):
     worse = a1 if n1 > n0 else a0
     crossing = min(_unstable(worse), key=lambda r: r["eigenvalue"][0])
     kind = "flutter" if crossing["omega_d"] > 0 else "divergence"
-    base = min(a.solution.details.get("n_rigid", 0) for a in (a0, a1))
+    base = min(zeros_left(a) for a in (a0, a1))
     f0, f1 = growth_rates(a0, base)[kind], growth_rates(a1, base)[kind]
     root = None
     if f0 is not None and f1 is not None and (f0 < 0) != (f1 < 0):
