@@ -102,6 +102,9 @@ class LinearModel:
     #: the rigid-body directions by construction (DESIGN §6), computed at the first call:
     #: a :class:`~mbseig.model.symmetry.RigidDirections` in full coordinates (None: not known)
     rigid: object = None
+    #: the displayed coordinates of mode shapes (:class:`~mbseig.model.naming.DisplayMap`, built
+    #: at the first call): what dominant coordinates are named by
+    display: object = None
 
     @property
     def dof(self) -> int:
@@ -211,7 +214,8 @@ def _linearize(model, eq, rank_tol, constraint_stiffness, sparse, reference=None
             coordinate_names=model.coordinate_names, name=model.name, parameters=model.parameters,
             rank=eq.rank, n_constraints=model.n_constraints,
             constraint_stiffness=constraint_stiffness,
-            tolerances={"rank_tol": rank_tol, "sparse": True}, constraint_jacobian=G)
+            tolerances={"rank_tol": rank_tol, "sparse": True}, constraint_jacobian=G,
+            display=Displayed(model, q0))
     G = model.phi_q(q0, dense=True)
     N, rank, independent, sigma = (continuous_null_basis(G, model.n, rank_tol, model.coordinate_names,
                                                          reference)
@@ -226,12 +230,28 @@ def _linearize(model, eq, rank_tol, constraint_stiffness, sparse, reference=None
     if sigma is not None:
         tol["basis_min_cosine"] = sigma  # σ_min(Eᵀ Π E)^(1/2): how well E fixes N
     rigid = DeclaredRigid(model, q0, lam0, Qr, N) if constraint_stiffness else None
+    display = Displayed(model, q0)
     return LinearModel(
         M=Mr, P=Pr, Q=Qr, N=N, q0=q0, lam0=lam0, coordinate_names=model.coordinate_names,
         name=model.name, parameters=model.parameters, rank=rank,
         n_constraints=model.n_constraints, constraint_stiffness=constraint_stiffness,
-        tolerances=tol, independent=independent, rigid=rigid, **io,
+        tolerances=tol, independent=independent, rigid=rigid, display=display, **io,
     )
+
+
+class Displayed:
+    """The model's :func:`~mbseig.model.naming.display_map` at q₀, built at the first call."""
+
+    def __init__(self, model, q0):
+        self._args, self._value = (model, q0), None
+
+    def __call__(self):
+        if self._value is None:
+            from .model.naming import display_map
+
+            self._value = display_map(*self._args)
+            self._args = None
+        return self._value
 
 
 class DeclaredRigid:

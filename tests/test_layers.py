@@ -71,12 +71,14 @@ def test_loading_the_device_solves_nothing(monkeypatch):
 
 
 def test_modes_accepts_a_linear_model():
-    """mbseig.modes(lin) equals mbseig.modes(lin.M, lin.P, lin.Q, N=lin.N, ...) (same path,
-    same numbers: identical arrays)."""
+    """mbseig.modes(lin) equals mbseig.modes(lin.M, lin.P, lin.Q, N=lin.N, ...) with the linear
+    model's rigid-body directions and displayed coordinates (same path, same numbers: identical
+    arrays)."""
     model = mbseig.load_case(CASES / "four_bar.toml")
     lin = mbseig.linearize(model, mbseig.equilibrium(model))
     a = mbseig.modes(lin)
-    b = mbseig.modes(lin.M, lin.P, lin.Q, N=lin.N, coordinate_names=lin.coordinate_names)
+    b = mbseig.modes(lin.M, lin.P, lin.Q, N=lin.N, coordinate_names=lin.coordinate_names,
+                     rigid=lin.rigid, display=lin.display)
     assert a.solver == b.solver
     np.testing.assert_array_equal(a.eigenvalues, b.eigenvalues)
     np.testing.assert_array_equal(a.shapes, b.shapes)

@@ -48,6 +48,8 @@ A partial spectrum lists what it computed: its verdict is "of the modes computed
 from __future__ import annotations
 
 
+import dataclasses
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -74,7 +76,7 @@ def modes(M, P=None, Q=None, *, solver: str = "auto", N=None, coordinate_names=N
           stability_rtol: float = 1e-12, stability_atol: float = 0.0, safety: float = 10.0,
           n_dominant: int = 3, rigid_rank_tol: float = 1e-6, n_modes: int | None = None,
           target: float | None = None, band=None, constraints=None, eta_warn: float = 1e-12,
-          fused: bool = True, rigid=None, **solver_options) -> Modes:
+          fused: bool = True, rigid=None, display=None, **solver_options) -> Modes:
     """Solve and classify the modes of (M s² + P s + Q) x = 0.
 
     M may be a :class:`~mbseig.linear.LinearModel` instead of a matrix: its M, P, Q, N,
@@ -94,6 +96,9 @@ def modes(M, P=None, Q=None, *, solver: str = "auto", N=None, coordinate_names=N
         callable returning one (called only when a mode is rigid-body), or an array whose
         columns are directions in the coordinates of the shapes (full coordinates q when N is
         given).  The verdict leaves those modes out; a LinearModel supplies its own.
+    display : a :class:`~mbseig.model.naming.DisplayMap` (or a callable returning one): the
+        dominant coordinates are named by its rows (a body's translation and rotation, a beam
+        station) instead of the natural coordinates; a LinearModel supplies its own.
     fused : a small real dense problem (order ≤ :data:`mbseig.eigen.small.SMALL_MAX`, ``auto``,
         the full spectrum) takes the fused implementation of its path
         (:func:`mbseig.modal.small.small_modes`: the same numbers, a fraction of the time);
@@ -109,6 +114,8 @@ def modes(M, P=None, Q=None, *, solver: str = "auto", N=None, coordinate_names=N
             constraints = lin.constraint_jacobian
         if rigid is None:
             rigid = lin.rigid
+        if display is None:
+            display = lin.display
     if Q is None:
         raise SolverError("modes(M, P, Q) needs Q (or a LinearModel alone)")
     if (fused and solver == "auto" and n_modes is None and target is None and band is None
@@ -119,7 +126,7 @@ def modes(M, P=None, Q=None, *, solver: str = "auto", N=None, coordinate_names=N
                          safety=safety, n_dominant=n_dominant, rigid_rank_tol=rigid_rank_tol,
                          eta_warn=eta_warn, options=solver_options)
         if md is not None:
-            return _scoped(md, rigid, N, coordinate_names, n_dominant)
+            return _scoped(md, rigid, N, coordinate_names, n_dominant, display)
     request = Request(solver, n_modes=n_modes, target=target, band=band, options=solver_options)
     problem = Problem(M, P, Q, G=constraints)
     if (band is not None and n_modes is None and target is None and constraints is None
@@ -152,10 +159,10 @@ def modes(M, P=None, Q=None, *, solver: str = "auto", N=None, coordinate_names=N
                  tolerances_used={"stability_rtol": stability_rtol,
                                   "stability_atol": stability_atol, "safety": safety,
                                   "rigid_rank_tol": rigid_rank_tol, "eta_warn": eta_warn})
-    return _scoped(md, rigid, N, coordinate_names, n_dominant)
+    return _scoped(md, rigid, N, coordinate_names, n_dominant, display)
 
 
-def _scoped(md, rigid, N, coordinate_names, n_dominant):
+def _scoped(md, rigid, N, coordinate_names, n_dominant, display=None):
     """The verdict made with the rigid-body directions by construction left out
     (:mod:`mbseig.modal.scope`); ``rigid`` is asked for them only when a mode is rigid-body."""
     names, D = (), None
@@ -168,5 +175,12 @@ def _scoped(md, rigid, N, coordinate_names, n_dominant):
             names = tuple(f"declared direction {k + 1}" for k in range(D.shape[1]))
         if md.vectors.shape[0] != D.shape[0]:  # full-coordinate directions, reduced shapes
             D = reduced_directions(D, N)
-    return apply_scope(md, D, names,
-                       shape_fn=lambda X: mode_shapes(X, N, coordinate_names, n_dominant))
+    md = apply_scope(md, D, names,
+                     shape_fn=lambda X: mode_shapes(X, N, coordinate_names, n_dominant))
+    if display is not None and len(md) and md.shapes.shape[0]:
+        from ..model.naming import dominant
+
+        shown = display() if callable(display) else display
+        if shown.T.shape[1] == md.shapes.shape[0]:
+            md = dataclasses.replace(md, dominant=dominant(shown, md.shapes, n_dominant))
+    return md

@@ -87,12 +87,37 @@ class Modes:
         """Natural frequencies ω_n/2π = |s|/2π (Hz); ``freq_hz`` is the damped ω_d/2π."""
         return self.omega_n / (2 * np.pi)
 
+    def zero_bounds(self):
+        """(bound of Re s and δ, bound of Im s and |s|) per mode, for the zero rule
+        (:mod:`mbseig.display`): the tolerance that decided the stability, and the error bound
+        of s with the safety factor (|s| within it: rigid-body)."""
+        re = np.asarray(self.tolerance, float)
+        safety = float(self.tolerances.get("safety", 10.0)) if self.tolerances else 10.0
+        im = np.maximum(re, safety * np.asarray(self.error_estimate, float))
+        return re, im
+
+    def shown(self):
+        """The listed numbers as a person reads them (the zero rule, :mod:`mbseig.display`):
+        a dict of arrays re, im, delta, omega_n, freq_n_hz, freq_hz, zeta."""
+        from ..display import shown_array
+
+        bre, bim = self.zero_bounds()
+        wn = shown_array(self.omega_n, bim)
+        delta = shown_array(self.delta, bre)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            zeta = np.where(wn > 0, delta / np.where(wn > 0, wn, 1.0), 0.0) + 0.0
+        return {"re": shown_array(self.eigenvalues.real, bre),
+                "im": shown_array(self.eigenvalues.imag, bim), "delta": delta,
+                "omega_n": wn, "freq_n_hz": wn / (2 * np.pi),
+                "freq_hz": shown_array(self.omega_d, bim) / (2 * np.pi), "zeta": zeta}
+
     def __repr__(self):
         n = len(self)
         scope = f", {self.coverage}" if self.coverage else ""
         if n == 0:
             return f"<Modes: none listed, verdict {self.verdict}, solver {self.solver}{scope}>"
-        lo, hi = float(np.min(self.freq_n_hz)), float(np.max(self.freq_n_hz))
+        f = self.shown()["freq_n_hz"]
+        lo, hi = float(np.min(f)), float(np.max(f))
         return (f"<Modes: {n} listed, f_n {lo:.4g} … {hi:.4g} Hz, verdict {self.verdict}, "
                 f"solver {self.solver}{scope}>")
 
@@ -120,18 +145,23 @@ class Modes:
                 f"{'f_n [Hz]':>11} {'f_d [Hz]':>11} "
                 f"{'zeta':>10} {'eta':>8}  {'stability':<9} {'kind':<11} dominant")
         rows = [head, "-" * len(head)]
+        v = self.shown()  # the zero rule: a value within its bound of 0 reads 0
         for k in range(len(self)):
-            s = self.eigenvalues[k]
-            dom = ", ".join(f"{nm}" for nm, _ in self.dominant[k][:3])
+            rb = self.rigid_body[k] if self.rigid_body else None
+            dom = rb if rb else ", ".join(f"{nm}" for nm, _ in self.dominant[k][:3])
             note = f"  [{'; '.join(self.flags[k])}]" if self.flags and self.flags[k] else ""
             rows.append(
-                f"{k + 1:>3} {s.real:>13.6g} {s.imag:>13.6g} {self.delta[k]:>11.4g} "
-                f"{self.omega_n[k]:>11.6g} {self.freq_n_hz[k]:>11.6g} {self.freq_hz[k]:>11.6g} "
-                f"{self.zeta[k]:>10.3g} "
+                f"{k + 1:>3} {v['re'][k]:>13.6g} {v['im'][k]:>13.6g} {v['delta'][k]:>11.4g} "
+                f"{v['omega_n'][k]:>11.6g} {v['freq_n_hz'][k]:>11.6g} {v['freq_hz'][k]:>11.6g} "
+                f"{v['zeta'][k]:>10.3g} "
                 f"{self.backward_error[k]:>8.1e}  {self.stability[k]:<9} {self.kind[k]:<11} {dom}{note}"
             )
         if self.coverage:
             rows.append(f"partial spectrum: {self.coverage}")
+        scope = getattr(self.verdict, "rigid_scope", "")
+        if scope:
+            rows.append(f"verdict scope: {scope}")
+        rows.append("values within their error bound of 0 are printed as 0 (the JSON keeps them)")
         rows.append("f_n = omega_n/2pi = |s|/2pi (natural), f_d = omega_d/2pi (damped; 0 for a "
                     "real eigenvalue)")
         return "\n".join(rows)

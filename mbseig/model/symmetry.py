@@ -52,6 +52,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .base import BatchForce
+from .frames import CoordinateFrames
 
 __all__ = ["RigidDirections", "rigid_directions", "TOL"]
 
@@ -81,80 +82,6 @@ class RigidDirections:
     @classmethod
     def none(cls, n):
         return cls((), np.zeros((n, 0)))
-
-
-# ---------------------------------------------------------------------------------------------
-# coordinate structure
-# ---------------------------------------------------------------------------------------------
-class _Frames:
-    """The model's coordinates grouped: points and unit vectors (component index per axis),
-    planar absolute angles, and frames (a body or node: its triad and origin; a lone point)."""
-
-    def __init__(self, model):
-        self.dim = int(getattr(model, "dimension", 3) or 3)
-        self.n = model.n
-        self.points, self.vectors, self.angles = {}, {}, {}
-        for i, (nm, kind) in enumerate(zip(model.coordinate_names, model.coordinate_kinds)):
-            head, _, axis = nm.rpartition(".")
-            if kind == "length" and axis in "xyz":
-                self.points.setdefault(head, {})[axis] = i
-            elif kind == "direction" and axis in "xyz":
-                self.vectors.setdefault(head, {})[axis] = i
-            elif kind == "angle":
-                self.angles[head] = i
-        frames = {}
-        for head in self.vectors:
-            frames.setdefault(head.rpartition(".")[0] or head, set()).add(("v", head))
-        for head in self.points:
-            frames.setdefault(head, set()).add(("p", head))
-        for head in self.angles:
-            frames.setdefault(head, set()).add(("a", head))
-        self.frames = frames
-
-    def indices(self, members):
-        out = []
-        for kind, head in members:
-            src = {"p": self.points, "v": self.vectors}.get(kind)
-            out.extend(src[head].values() if src is not None else [self.angles[head]])
-        return np.array(sorted(out), dtype=int)
-
-    def generators(self, members, q):
-        """(G, W, labels): the part's rigid-motion generators as columns of G (n × g), the
-        rotation part of each as a function W[j](v) on full vectors, and what each is."""
-        pts = [self.points[h] for k, h in members if k == "p"]
-        vecs = [self.vectors[h] for k, h in members if k == "v"]
-        angs = [self.angles[h] for k, h in members if k == "a"]
-        axes = "xyz"[: self.dim]
-        cols, rots, labels = [], [], []
-        if pts:
-            centre = {a: np.mean([q[p[a]] for p in pts if a in p] or [0.0]) for a in axes}
-        else:
-            centre = dict.fromkeys(axes, 0.0)
-        for a in axes:  # translations
-            g = np.zeros(self.n)
-            for p in pts:
-                if a in p:
-                    g[p[a]] = 1.0
-            cols.append(g), rots.append(None), labels.append(("t", a, centre))
-        rot_axes = "xyz" if self.dim == 3 else ("z" if self.dim == 2 else "")
-        for w in rot_axes:  # rotations about the centroid
-            om = np.array([w == "x", w == "y", w == "z"], float)
-            g = np.zeros(self.n)
-            triples = [(p, True) for p in pts] + [(v, False) for v in vecs]
-            for t, is_point in triples:
-                r = np.array([q[t[a]] - (centre[a] if is_point else 0.0) if a in t else 0.0
-                              for a in "xyz"])
-                dr = np.cross(om, r)
-                for k, a in enumerate("xyz"):
-                    if a in t:
-                        g[t[a]] = dr[k]
-            for i in angs:
-                g[i] = 1.0
-            cols.append(g), rots.append((om, [t for t, _ in triples]))
-            labels.append(("r", w, centre if pts else None))
-        G = np.column_stack(cols) if cols else np.zeros((self.n, 0))
-        keep = np.flatnonzero(np.abs(G).max(axis=0) > 0)
-        return G[:, keep], [rots[k] for k in keep], [labels[k] for k in keep]
 
 
 def _rotate(rot, v):
@@ -351,7 +278,7 @@ def rigid_directions(model, q0, lam0, Qr, N, *, label=None) -> RigidDirections:
     n = model.n
     if N is None or not getattr(model, "coordinate_kinds", ()):
         return RigidDirections.none(n)
-    frames = _Frames(model)
+    frames = CoordinateFrames(model)
     Qr = np.asarray(Qr.toarray() if sp.issparse(Qr) else Qr, float)
     N = np.asarray(N.toarray() if sp.issparse(N) else N, float)
     Phi_q = model.phi_q(q0, dense=True) if model.n_constraints else None

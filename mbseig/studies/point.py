@@ -82,7 +82,7 @@ def eigen_stage(lin: LinearModel, *, solver="auto", modes_options=None) -> Modes
     # arithmetic exceptions become the one-line error here
     with watched("eigen", EIGEN_CAUSE, float_warnings=False):
         md = modes(lin.M, lin.P, lin.Q, solver=solver, N=lin.N,
-                   coordinate_names=lin.coordinate_names, rigid=lin.rigid, **extra,
+                   coordinate_names=lin.coordinate_names, rigid=lin.rigid, display=lin.display, **extra,
                    **(modes_options or {}))
     bad = ~(np.isfinite(md.eigenvalues) & ~np.isnan(md.backward_error))
     if np.any(bad):

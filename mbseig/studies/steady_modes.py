@@ -94,18 +94,17 @@ def mode_rows(sol, *, safety=SAFETY, declared=None) -> list:
     return rows
 
 
-def dominant(model, lin, s, *, count=3) -> list:
+def dominant(display, lin, s, *, count=3) -> list:
     """The mode shape of eigenvalue ``s`` in the full coordinates, q − q₀(t) = N x (x: the
-    position part of the right null vector of s E − A): the ``count`` coordinates that move
-    most, as [name, |component| / largest] (the shape of a moving system, in the frame moving
-    with the reference)."""
+    position part of the right null vector of s E − A), named in the user's terms
+    (:func:`mbseig.model.naming.dominant` over ``display``): the ``count`` rows that move most,
+    as [name, size / largest] (the shape of a moving system, in the frame moving with the
+    reference)."""
+    from ..model.naming import dominant as named
+
     _, _, Vh = np.linalg.svd(s * lin.E - lin.A)
-    shape = np.abs(lin.N @ Vh[-1].conj()[:lin.dof])
-    top = float(shape.max(initial=0.0))
-    if top == 0.0:
-        return []
-    order = np.argsort(-shape)[:count]
-    return [[model.coordinate_names[i], float(shape[i] / top)] for i in order]
+    shape = lin.N @ Vh[-1].conj()[:lin.dof]
+    return [[nm, v] for nm, v in named(display, shape[:, None], count)[0]]
 
 
 def verdict_of(rows):
@@ -269,9 +268,12 @@ def analyze_steady(spec, *, config=None, params=None, naive=False, model=None):
     notes = tuple(f"wheel {c['name']!r} would pull ({c['force']:.6g} N): the steady motion "
                   f"lifts it off the plane" for c in state.contacts if not c["active"])
     rows = mode_rows(sol, declared=cyc)
+    from ..model.naming import display_map
+
+    display = display_map(model, state.q)
     for r in rows:
         if r["kind"] != "rigid-body":
-            r["dominant"] = dominant(model, lin, complex(*r["eigenvalue"]))
+            r["dominant"] = dominant(display, lin, complex(*r["eigenvalue"]))
     return SteadyAnalysis(model, motion, state, lin, sol, tuple(rows), verdict_of(rows), notes,
                           cyc)
 

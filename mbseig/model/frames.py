@@ -1,0 +1,136 @@
+"""The natural coordinates of a model grouped as a person sees them: points (a component index
+per axis), unit vectors, planar absolute angles, and frames (a body or a beam node: its triad
+and origin point; a lone point), with the name a user wrote for each frame.
+
+Coordinates are named by the reader (:mod:`mbseig.model.assembly`): a point ``P.x``, a unit
+vector ``B.u.x`` (``B.v``, ``B.w``: the triad of body or node B), a planar angle ``N.theta``;
+their kinds (length, direction, angle, modal) are recorded.  A beam node ``BEAM.n<k>`` is named
+by its station (``BEAM.NAME``, DESIGN §8) or its arc length (``BEAM at s = 0.25 m``), never by
+its index (an end node without a station: by the beam's end point, ``BEAM at P``).
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+__all__ = ["CoordinateFrames"]
+
+_NODE = re.compile(r"^(?P<beam>.+)\.n(?P<k>\d+)$")
+
+
+class CoordinateFrames:
+    """The model's coordinates grouped: points and unit vectors (component index per axis),
+    planar absolute angles, and frames (a body or node: its triad and origin; a lone point)."""
+
+    def __init__(self, model):
+        self.dim = int(getattr(model, "dimension", 3) or 3)
+        self.n = model.n
+        self.points, self.vectors, self.angles = {}, {}, {}
+        for i, (nm, kind) in enumerate(zip(model.coordinate_names, model.coordinate_kinds)):
+            head, _, axis = nm.rpartition(".")
+            if kind == "length" and axis in "xyz":
+                self.points.setdefault(head, {})[axis] = i
+            elif kind == "direction" and axis in "xyz":
+                self.vectors.setdefault(head, {})[axis] = i
+            elif kind == "angle":
+                self.angles[head] = i
+        frames = {}
+        for head in self.vectors:
+            frames.setdefault(head.rpartition(".")[0] or head, set()).add(("v", head))
+        for head in self.points:
+            frames.setdefault(head, set()).add(("p", head))
+        for head in self.angles:
+            frames.setdefault(head, set()).add(("a", head))
+        self.frames = frames
+
+    def indices(self, members):
+        out = []
+        for kind, head in members:
+            src = {"p": self.points, "v": self.vectors}.get(kind)
+            out.extend(src[head].values() if src is not None else [self.angles[head]])
+        return np.array(sorted(out), dtype=int)
+
+    def generators(self, members, q):
+        """(G, W, labels): the part's rigid-motion generators as columns of G (n × g), the
+        rotation part of each as a function W[j](v) on full vectors, and what each is."""
+        pts = [self.points[h] for k, h in members if k == "p"]
+        vecs = [self.vectors[h] for k, h in members if k == "v"]
+        angs = [self.angles[h] for k, h in members if k == "a"]
+        axes = "xyz"[: self.dim]
+        cols, rots, labels = [], [], []
+        if pts:
+            centre = {a: np.mean([q[p[a]] for p in pts if a in p] or [0.0]) for a in axes}
+        else:
+            centre = dict.fromkeys(axes, 0.0)
+        for a in axes:  # translations
+            g = np.zeros(self.n)
+            for p in pts:
+                if a in p:
+                    g[p[a]] = 1.0
+            cols.append(g), rots.append(None), labels.append(("t", a, centre))
+        rot_axes = "xyz" if self.dim == 3 else ("z" if self.dim == 2 else "")
+        for w in rot_axes:  # rotations about the centroid
+            om = np.array([w == "x", w == "y", w == "z"], float)
+            g = np.zeros(self.n)
+            triples = [(p, True) for p in pts] + [(v, False) for v in vecs]
+            for t, is_point in triples:
+                r = np.array([q[t[a]] - (centre[a] if is_point else 0.0) if a in t else 0.0
+                              for a in "xyz"])
+                dr = np.cross(om, r)
+                for k, a in enumerate("xyz"):
+                    if a in t:
+                        g[t[a]] = dr[k]
+            for i in angs:
+                g[i] = 1.0
+            cols.append(g), rots.append((om, [t for t, _ in triples]))
+            labels.append(("r", w, centre if pts else None))
+        G = np.column_stack(cols) if cols else np.zeros((self.n, 0))
+        keep = np.flatnonzero(np.abs(G).max(axis=0) > 0)
+        return G[:, keep], [rots[k] for k in keep], [labels[k] for k in keep]
+
+
+
+    def frame_label(self, model, key):
+        """The name a user wrote for frame (or point) ``key``: a beam node by its station or
+        arc length, anything else as it is."""
+        m = _NODE.match(key)
+        beams = ((getattr(model, "flexible", None) or {}).get("bodies") or {})
+        rec = beams.get(m["beam"]) if m else None
+        if rec is None or "nodes" not in rec:
+            return key
+        k = int(m["k"])
+        s = self._arc_length(model, rec, k)
+        if s is None:
+            return f"{m['beam']} node {k + 1} of {len(rec['nodes'])}"
+        for name, at in (rec.get("stations") or {}).items():
+            if abs(at - s) <= 1e-9 * max(1.0, float(rec.get("length", 1.0))):
+                return f"{m['beam']}.{name}"
+        pts = rec.get("points") or []
+        if pts and k in (0, len(rec["nodes"]) - 1):  # an end: the point the case names
+            return f"{m['beam']} at {pts[0] if k == 0 else pts[-1]}"
+        return f"{m['beam']} at s = {s:.4g} m"
+
+    def _arc_length(self, model, rec, k):
+        """Arc length of node k of a straight beam in its reference configuration: the distance
+        of the node's point from the start point (end nodes: the beam's own points)."""
+        nodes, pts = rec["nodes"], rec.get("points") or []
+        head = nodes[k]
+        q = model.q_init
+
+        def pos(name):
+            p = self.points.get(name)
+            if p is None:
+                return None
+            return np.array([q[p[a]] if a in p else 0.0 for a in "xyz"])
+
+        start = pos(pts[0]) if pts else None
+        here = pos(head)
+        if here is None and pts:
+            here = pos(pts[0]) if k == 0 else pos(pts[-1]) if k == len(nodes) - 1 else None
+        if start is None or here is None:
+            if k == 0:
+                return 0.0
+            return float(rec["length"]) if k == len(nodes) - 1 and "length" in rec else None
+        return float(np.linalg.norm(here - start))
