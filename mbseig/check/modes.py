@@ -217,8 +217,10 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
         j = k - 1
         s = complex(modes.eigenvalues[j])
         kind = modes.kind[j]
+        bre, bim = modes.zero_bounds()
         base = dict(index=k, kind=kind, eigenvalue=s, predicted_delta=float(modes.delta[j]),
-                    predicted_omega=float(modes.omega_d[j]))
+                    predicted_omega=float(modes.omega_d[j]), bound_delta=float(bre[j]),
+                    bound_omega=float(bim[j]))
         if kind == "rigid-body":
             w_eff, w_ref = probe_rigid(dyn, Mr, N, modes.vectors[:, j], amplitude * length,
                                         modes, eq, length, names)

@@ -9,12 +9,23 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..display import fmt
 from ..plots import plot_check
 
 
 # ---------------------------------------------------------------------------------------------
 # Results
 # ---------------------------------------------------------------------------------------------
+def pd(m):
+    """The predicted δ as read (the zero rule with its bound, :mod:`mbseig.display`)."""
+    return fmt(m.predicted_delta, m.bound_delta)
+
+
+def pw(m):
+    """The predicted ω as read."""
+    return fmt(m.predicted_omega, m.bound_omega)
+
+
 @dataclass(frozen=True, eq=False)
 class ModeCheck:
     """Predicted vs measured δ, ω of one listed mode (1-based ``index`` as in the modes table).
@@ -58,6 +69,10 @@ class ModeCheck:
     amplitude_share_omega: float = 0.0
     resolution_delta: float = math.nan  # u_δ: what the run resolves of δ
     resolution_omega: float = math.nan  # u_ω
+    #: the error bounds of the predicted δ and ω (the mode's tolerance and error bound): a
+    #: prediction within its bound of 0 reads 0 (DESIGN §6; the JSON keeps the raw value)
+    bound_delta: float = math.nan
+    bound_omega: float = math.nan
     tolerance_delta: float = math.nan  # the δ tolerance applied: max(delta_rtol·|δ_p|, u_δ)
     tolerance_omega: float = math.nan
     capped: bool = False  # the run was cut at max_fast_periods of the fastest mode
@@ -75,6 +90,7 @@ class ModeCheck:
             "eigenvalue": [float(self.eigenvalue.real), float(self.eigenvalue.imag)],
             "predicted": {"delta": float(self.predicted_delta),
                           "omega": float(self.predicted_omega)},
+            "predicted_bound": {"delta": num(self.bound_delta), "omega": num(self.bound_omega)},
             "measured": {"delta": num(self.measured_delta), "omega": num(self.measured_omega)},
             "rel_error": {"delta": num(self.rel_error_delta), "omega": num(self.rel_error_omega)},
             "passed": self.passed,
@@ -171,19 +187,19 @@ class CheckResult:
         for m in self.modes:
             if m.skipped:
                 if math.isnan(m.probe_omega):
-                    rows.append(f"{m.index:>3} {m.kind:<11} {m.predicted_delta:>12.6g} {'':>12} "
-                                f"{'':>9} {m.predicted_omega:>12.6g} {'':>12} {'':>9}  skip    "
+                    rows.append(f"{m.index:>3} {m.kind:<11} {pd(m):>12} {'':>12} "
+                                f"{'':>9} {pw(m):>12} {'':>12} {'':>9}  skip    "
                                 f"({m.skipped})")
                 else:
                     rel = probe_ratio(m)
-                    rows.append(f"{m.index:>3} {m.kind:<11} {m.predicted_delta:>12.6g} {'':>12} "
-                                f"{'':>9} {m.predicted_omega:>12.6g} {m.probe_omega:>12.6g} "
+                    rows.append(f"{m.index:>3} {m.kind:<11} {pd(m):>12} {'':>12} "
+                                f"{'':>9} {pw(m):>12} {m.probe_omega:>12.6g} "
                                 f"{'n/a' if rel is None else format(rel, '.2e'):>9}  "
                                 f"{'pass' if m.passed else 'FAIL':<6}  ({probe_text(m)})")
                 continue
             rows.append(
-                f"{m.index:>3} {m.kind:<11} {m.predicted_delta:>12.6g} {m.measured_delta:>12.6g} "
-                f"{m.rel_error_delta:>9.2e} {m.predicted_omega:>12.6g} {m.measured_omega:>12.6g} "
+                f"{m.index:>3} {m.kind:<11} {pd(m):>12} {m.measured_delta:>12.6g} "
+                f"{m.rel_error_delta:>9.2e} {pw(m):>12} {m.measured_omega:>12.6g} "
                 f"{m.rel_error_omega:>9.2e}  {'pass' if m.passed else 'FAIL':<6} {m.periods:>7.1f}")
         return "\n".join(rows)
 

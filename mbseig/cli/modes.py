@@ -4,6 +4,10 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
+from ..display import fmt_complex, shown
+
 from ..eigen import SOLVERS
 from ..errors import CaseError, MbseigError
 from ..statics.reactions import reaction_forces
@@ -116,7 +120,7 @@ def _design(args, spec, a):
     kw = case_kwargs(args)
     try:
         sens = eigen_sensitivities(spec, config=kw["config"], params=kw["params"],
-                                   analysis=a) if args.sensitivities else None
+                                   analysis=a, with_bounds=True) if args.sensitivities else None
         energy = modal_energy(a.model, a.eq, a.linear, a.modes) if args.energy else None
     except MbseigError as exc:
         raise exc.located(file=a.model.source) from None
@@ -133,7 +137,8 @@ def run(args, spec) -> int:
         for k, mode in enumerate(out["modes"]):
             if sens is not None:
                 mode["sensitivity"] = {p: [float(v[k].real), float(v[k].imag)]
-                                       for p, v in sens.items()}
+                                       for p, v in sens[0].items()}
+                mode["sensitivity_bound"] = {p: float(b[k]) for p, b in sens[1].items()}
             if energy is not None:
                 mode["energy"] = energy[k]
         if args.reactions:
@@ -154,14 +159,19 @@ def run(args, spec) -> int:
     print(a.modes.table())
     print(f"verdict: {a.modes.verdict}")
     for k in range(len(a.modes)):
-        if sens:
+        if sens and sens[0]:  # the zero rule on each ∂s/∂p with its propagated bound
             print(f"mode {k + 1} ds/dp: " + "; ".join(
-                f"{p} {v[k].real:.4g}{v[k].imag:+.4g}j" for p, v in sens.items()))
+                f"{p} {fmt_complex(v[k], b[k], b[k], '.4g')}"
+                for (p, v), b in zip(sens[0].items(), sens[1].values())))
         if energy is not None:
             for kind in ("kinetic", "potential"):
-                shares = sorted(energy[k][kind].items(), key=lambda t: -abs(t[1]))
+                parts = energy[k][kind]
+                # a share is a part over the total, each summed in floating point: it errs by
+                # at most 64 ε Σ|share| (Σ|parts| / |total|)
+                bound = 64 * np.finfo(float).eps * sum(abs(v) for v in parts.values())
+                shares = sorted(parts.items(), key=lambda t: -abs(t[1]))
                 print(f"mode {k + 1} {kind} energy: " + (", ".join(
-                    f"{nm} {v:.1%}" for nm, v in shares) or "none"))
+                    f"{nm} {shown(v, bound):.1%}" for nm, v in shares) or "none"))
     if args.reactions:
         print_reactions(reaction_forces(a.model, eq))
     return 0

@@ -12,6 +12,7 @@ import math
 
 from ..errors import CaseError
 from ..studies.periodic import floquet_json, frozen_summary, periodic_analysis
+from ..display import fmt
 from .common import analyzed, case_kwargs, print_json
 
 
@@ -109,9 +110,13 @@ def _run_partial(args, spec) -> int:
 
 def _table(fl):
     print(f"{'k':>3} {'multiplier':>30} {'|mu|':>12} {'bound':>9} {'exponent':>28}")
+    T = float(fl["period"])
     for k, (mu, ex, b) in enumerate(zip(fl["multipliers"], fl["exponents"], fl["error_bounds"])):
-        print(f"{k + 1:>3} {mu[0]:>14.8g} {mu[1]:+14.8g}j {abs(complex(*mu)):>12.8g} {b:>9.1e} "
-              f"{ex[0]:>13.6g} {ex[1]:+13.6g}j")
+        m = abs(complex(*mu))
+        be = b / (m * T) if m else b  # the exponent's bound, to first order
+        # the zero rule (mbseig.display): a part within its bound of 0 reads 0
+        print(f"{k + 1:>3} {fmt(mu[0], b, '.8g'):>14} {fmt(mu[1], b, '+.8g'):>14}j {m:>12.8g} "
+              f"{b:>9.1e} {fmt(ex[0], be, '.6g'):>13} {fmt(ex[1], be, '+.6g'):>13}j")
     d = fl["decided_by"]
     print(f"verdict: {fl['verdict']} (multiplier {d['index'] + 1}: |mu| = {d['modulus']:.10g} "
           f"± {d['bound']:.1e}, margin {d['margin']:.3g})")

@@ -4,6 +4,9 @@ state, its contact forces and the modes of the first-order descriptor system
 
 from __future__ import annotations
 
+import math
+
+from ..display import fmt, shown
 from ..errors import CaseError
 from .common import analyzed, print_json
 
@@ -34,8 +37,9 @@ def run(args, spec) -> int:
     if args.json:
         return print_json(out)
     m = out["motion"]
-    print(f"case {out['case']}: steady motion at {m['speed']:g} along {m['direction']}"
-          + (f", yaw rate {m['yaw_rate']:g}" if m["yaw_rate"] else "")
+    print(f"case {out['case']}: steady motion at {m['speed']:g} m/s along "
+          f"{motion_direction(m['direction'])}"
+          + (f", yaw rate {m['yaw_rate']:g} rad/s" if m["yaw_rate"] else "")
           + f"; {out['n_coordinates']} coordinates, {out['n_constraints']} holonomic and "
           f"{out['n_velocity_constraints']} velocity constraints, {out['dof']} positions, "
           f"{out['n_velocities']} independent velocities")
@@ -47,9 +51,25 @@ def run(args, spec) -> int:
     for note in out["equilibrium"]["notes"]:
         print(f"  {note}")
     print(f"verdict: {out['verdict']} ({out['solver']})")
-    print("  #   Re s            Im s            zeta       kind          stability")
-    for r in out["modes"]:
+    if out.get("verdict_scope"):
+        print(f"verdict scope: {out['verdict_scope']}")
+    print(f"{'#':>3} {'Re s':>14} {'Im s':>14} {'f_n [Hz]':>11} {'zeta':>8}  {'kind':<12} "
+          f"{'stability':<9} dominant")
+    for r in out["modes"]:  # the zero rule: a value within its bound τ of 0 reads 0
         re, im = r["eigenvalue"]
-        print(f"{r['index']:3d}  {re:+.8e}  {im:.8e}  {r['zeta']:+.4f}  {r['kind']:13s} "
-              f"{r['stability']}")
+        b = r["tolerance"]
+        zeta = 0.0 if shown(re, b) == 0 else r["zeta"]
+        what = r.get("rigid_body") or ", ".join(nm for nm, _ in r.get("dominant", []))
+        print(f"{r['index']:>3} {fmt(re, b, '.8g'):>14} {fmt(im, b, '.8g'):>14} "
+              f"{fmt(r['freq_n_hz'], b / (2 * math.pi), '.6g'):>11} {zeta:>8.4f}  "
+              f"{r['kind']:<12} {r['stability']:<9} {what}")
+    print("values within their error bound of 0 are printed as 0 (the JSON keeps them)")
     return 0
+
+
+def motion_direction(d) -> str:
+    """A unit direction as a person reads it: 'x', '−y', or '(0.6, 0.8, 0)'."""
+    axes = [k for k, c in enumerate(d) if c != 0]
+    if len(axes) == 1:
+        return ("−" if d[axes[0]] < 0 else "") + "xyz"[axes[0]]
+    return "(" + ", ".join(f"{c:.4g}" for c in d) + ")"

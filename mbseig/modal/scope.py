@@ -24,7 +24,8 @@ import numpy as np
 
 from .result import STABILITY_ORDER, Verdict
 
-__all__ = ["ANGLE_TOL", "verdict", "apply_scope", "scope_text", "reduced_directions"]
+__all__ = ["ANGLE_TOL", "verdict", "apply_scope", "scope_text", "reduced_directions",
+           "spectrum_verdict"]
 
 #: sin of the largest angle between a declared direction and the computed zero eigenspace for
 #: the direction to count as found there: the computed eigenvectors of an exact, isolated s = 0
@@ -136,3 +137,28 @@ def _replace(md, v, rigid_body, missing):
         v = Verdict(v.word, v.scope, "; ".join(t for t in (v.rigid_scope,
                                                             scope_text((), False, missing)) if t))
     return dataclasses.replace(md, verdict=v, rigid_body=rigid_body)
+
+
+def spectrum_verdict(stabilities, rigid, vectors, rigid_directions=None, N=None,
+                     rank_tol=1e-6) -> Verdict:
+    """The verdict of a whole computed spectrum (every eigenvalue, not a listing: a sweep's
+    point), with the rule of :func:`verdict`: the eigenvalues classified rigid-body
+    (``rigid`` mask, critical) are left out when their eigenvectors span no more than the
+    declared directions found among them (``rigid_directions()``: a RigidDirections in full
+    coordinates, called only when an eigenvalue is rigid-body); any other zero counts."""
+    rigid = np.asarray(rigid, bool)
+    others = [st for st, r in zip(stabilities, rigid) if not r]
+    if not rigid.any() or rigid_directions is None:
+        return verdict(list(stabilities))
+    got = rigid_directions() if callable(rigid_directions) else rigid_directions
+    D = reduced_directions(got.vectors, N)
+    X = np.asarray(vectors)[:, rigid]
+    X = X / np.maximum(np.linalg.norm(X, axis=0), np.finfo(float).tiny)
+    U, sv, _ = np.linalg.svd(X, full_matrices=False)
+    Z = U[:, sv > rank_tol * max(sv.max(initial=0.0), np.finfo(float).tiny)]
+    inside = [nm for nm, d in zip(got.names, D.T)
+              if np.linalg.norm(d - Z @ (Z.conj().T @ d)) <= ANGLE_TOL]
+    extra = Z.shape[1] > len(inside)
+    counted = others + (["critical"] * (Z.shape[1] - len(inside)) if extra else [])
+    word = max(counted, key=STABILITY_ORDER.get) if counted else "critical"
+    return Verdict(word, "", scope_text(inside, not counted))

@@ -39,7 +39,8 @@ from ..casefile.element_readers import ScalarUpdate
 from ..eigen import Problem, Request, solve
 from ..errors import MbseigError
 from ..linear import linearize
-from ..modal import stability, tolerances, worst
+from ..modal import stability, tolerances
+from ..modal.scope import spectrum_verdict
 from ..model import Model
 from ..model.linear_case import LinearCase
 from ..statics import equilibrium, examine, resolve
@@ -154,7 +155,8 @@ def modal_point(model, eq, params, *, safety, stability_rtol, postures=posture, 
         _, _, tol, rigid = tolerances(sol, safety=safety, stability_rtol=stability_rtol)
         X = lin.N @ sol.vectors
         X = X / np.maximum(np.linalg.norm(X, axis=0), np.finfo(float).tiny)
-        verdict = worst(stability(-s.real, tol, rigid))
+        verdict = spectrum_verdict(stability(-s.real, tol, rigid), rigid, sol.vectors,
+                                   lin.rigid, lin.N)
     out_of_range = ([p["name"] for p in postures(model, eq.q) if not p["in_range"]]
                     if (getattr(model, "report", None) or {}).get("angles") else [])
     return SweepPoint(params=dict(params), error=None, eigenvalues=s, shapes=X, tol=tol,

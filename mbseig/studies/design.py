@@ -19,6 +19,12 @@ differenced).  A parameter "enters the model" when one of M, P, Q changes betwee
 parameters written as integers (counts, indices) and as expressions (derived values) are left
 out.
 
+Error bound of ∂s/∂p (for the zero rule, DESIGN §6): the reduced matrices at p ± h are known
+to a relative ρ = max(the equilibrium's xtol, 64 ε), so their central difference errs by at most
+ρ w(s)/h, w(s) = |s|²‖M‖ + |s|‖P‖ + ‖Q‖, and the formula carries that by ‖x‖‖y‖/|yᴴT'(s)x|;
+the O(h²) truncation is below it at h = REL_STEP·|p|.  A rigid-body mode by construction has
+∂s/∂p = 0 exactly.
+
 Modal energy.  For mode k with full-coordinate shape φ = N x (complex), the time-averaged
 energies of a part with matrix A are proportional to Re(φᴴ A φ):
 
@@ -33,7 +39,8 @@ energies of a part with matrix A are proportional to Re(φᴴ A φ):
 
 Shares are the parts divided by their sum (Σ = Re(xᴴ M x), Re(xᴴ Q x) in reduced coordinates),
 so each dict sums to 1; a negative share (a destabilizing preload) is kept.  A mode whose total
-is zero within rounding (a rigid-body mode's potential) gets an empty dict.
+is zero within rounding, and the potential of a rigid-body mode by construction (DESIGN §6),
+get an empty dict.
 """
 
 from __future__ import annotations
@@ -93,8 +100,10 @@ def _left_vector(T):
 
 
 def eigen_sensitivities(case_spec, *, config=None, params=None, analysis=None,
-                        parameters=None) -> dict:
-    """{parameter: complex array ∂s/∂p aligned with the listed modes} (module docstring).
+                        parameters=None, with_bounds=False):
+    """{parameter: complex array ∂s/∂p aligned with the listed modes} (module docstring);
+    with ``with_bounds``, ``(values, bounds)`` with bounds {parameter: float array}: the
+    absolute error bound of each ∂s/∂p (module docstring, "Error bound"), for the zero rule.
 
     case_spec : a path or a :class:`~mbseig.casefile.CaseSpec`; ``analysis`` (the
     :class:`~mbseig.studies.Analysis` of the same case, configuration and parameters) is
@@ -127,6 +136,13 @@ def eigen_sensitivities(case_spec, *, config=None, params=None, analysis=None,
             raise CaseError(f"{unknown[0]!r} is not a real parameter of the case (known: "
                             f"{', '.join(candidates) or 'none'})", element="sensitivities")
         candidates = {p: candidates[p] for p in parameters}
+    bounds = {}
+    rho = max(float(a.eq.tolerances.get("xtol", 0.0)), 64 * np.finfo(float).eps)
+    nM, nP, nQ = (float(np.linalg.norm(A, 2)) for A in (M, P, Q))
+    w = np.abs(s) ** 2 * nM + np.abs(s) * nP + nQ
+    with np.errstate(divide="ignore", invalid="ignore"):
+        gain = np.linalg.norm(X, axis=0) * np.linalg.norm(Y, axis=0) / np.abs(den)
+    rigid = np.array([bool(r) for r in (md.rigid_body or [None] * s.size)])
     for name, value in candidates.items():
         h = REL_STEP * abs(value) if value != 0 else ABS_STEP
         plus = _reduced(spec, config, {**params, name: value + h}, ref)
@@ -141,7 +157,12 @@ def eigen_sensitivities(case_spec, *, config=None, params=None, analysis=None,
             with np.errstate(divide="ignore", invalid="ignore"):
                 ds[k] = -(np.conj(Y[:, k]) @ (Tp @ X[:, k])) / den[k]
         out[name] = ds
-    return out
+        # the central difference of matrices each known to ρ of their size: ρ w(s) / h, through
+        # the first-order formula (‖x‖‖y‖ / |yᴴ T'(s) x|); a rigid-body mode by construction
+        # stays at s = 0 whatever p, so its ∂s/∂p is 0 and any computed value is residue
+        b = np.where(np.isfinite(gain), gain * rho * w / h, np.inf)
+        bounds[name] = np.where(rigid, np.maximum(b, np.abs(ds)), b)
+    return (out, bounds) if with_bounds else out
 
 
 def _shares(parts):
@@ -208,6 +229,9 @@ def modal_energy(model, eq, lin, modes_obj) -> list:
         for name, idx, A in pot_parts:
             v = phi[idx]
             pot[name] = pot.get(name, 0.0) + float(np.real(np.conj(v) @ (A @ v)))
-        out.append({"kinetic": _shares(kin), "potential": _shares(pot)})
+        rigid = bool(modes_obj.rigid_body and modes_obj.rigid_body[k])
+        # a rigid-body mode by construction stores no potential energy (its parts cancel
+        # exactly: each element is blind to it or turns with it, mbseig.model.symmetry)
+        out.append({"kinetic": _shares(kin), "potential": {} if rigid else _shares(pot)})
     return out
 

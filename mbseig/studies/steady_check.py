@@ -172,7 +172,8 @@ def check_steady(spec, *, config=None, params=None, indices=None, naive=False, a
             continue
         s = complex(*row["eigenvalue"])
         base = {"index": row["index"], "kind": row["kind"], "eigenvalue": s,
-                "predicted_delta": -s.real, "predicted_omega": abs(s.imag)}
+                "predicted_delta": -s.real, "predicted_omega": abs(s.imag),
+                "bound_delta": float(row["tolerance"]), "bound_omega": float(row["tolerance"])}
         if row["kind"] == "rigid-body":
             out.append(ModeCheck(**base, skipped="rigid-body (s = 0): not simulated"))
             continue
