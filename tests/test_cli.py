@@ -1,6 +1,7 @@
 """The command line on every case, the fixed JSON schema (DESIGN §8) and exit codes."""
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -12,6 +13,7 @@ from mbseig.cli import main
 pytestmark = pytest.mark.filterwarnings("error")
 
 CASE_FILES = sorted(CASES.glob("*.toml"))
+INTERNAL = re.compile(r"\.[uvw]\.[xyz]\b|\.n\d+\b")  # an internal unit vector or node index
 MODE_KEYS = {"index", "eigenvalue", "delta", "omega_n", "omega_d", "freq_hz", "zeta", "stability",
              "kind", "backward_error"}
 TOP_KEYS = {"case", "parameters", "n_coordinates", "n_constraints", "n_redundant", "dof", "solver",
@@ -41,6 +43,11 @@ def test_modes_json_schema(path, capsys):
         assert m["omega_n"] == pytest.approx(np.hypot(re, im), rel=1e-12)
         assert m["stability"] in ("stable", "critical", "unstable")
         assert m["kind"] in ("oscillatory", "overdamped", "rigid-body", "divergence", "flutter")
+        # DESIGN §6: dominant coordinates named as the user wrote them, never by an internal
+        # unit vector (B.u.x) or node index (BEAM.n3)
+        for name, _ in m.get("dominant") or []:
+            assert not INTERNAL.search(name), name
+        assert not INTERNAL.search(m.get("rigid_body") or ""), m["rigid_body"]
 
 
 @pytest.mark.parametrize("path", CASE_FILES, ids=lambda p: p.stem)
@@ -48,6 +55,7 @@ def test_modes_table_and_linearize(path, capsys, tmp_path):
     assert main(["modes", str(path)]) == 0
     text = capsys.readouterr().out
     assert "verdict:" in text
+    assert not INTERNAL.search(text), INTERNAL.search(text)
     for suffix in (".npz", ".mat", ".json"):
         out = tmp_path / f"lin{suffix}"
         assert main(["linearize", str(path), "--out", str(out)]) == 0
