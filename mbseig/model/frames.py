@@ -15,7 +15,7 @@ import re
 
 import numpy as np
 
-__all__ = ["CoordinateFrames"]
+__all__ = ["CoordinateFrames", "rotate"]
 
 _NODE = re.compile(r"^(?P<beam>.+)\.n(?P<k>\d+)$")
 
@@ -53,44 +53,42 @@ class CoordinateFrames:
         return np.array(sorted(out), dtype=int)
 
     def generators(self, members, q):
-        """(G, W, labels): the part's rigid-motion generators as columns of G (n × g), the
-        rotation part of each as a function W[j](v) on full vectors, and what each is."""
-        pts = [self.points[h] for k, h in members if k == "p"]
-        vecs = [self.vectors[h] for k, h in members if k == "v"]
-        angs = [self.angles[h] for k, h in members if k == "a"]
+        """(G, rots, labels): the part's rigid-motion generators as columns of G (n × g), the
+        rotation part of each (None for a translation; else (axis, I): I the t × 3 indices of
+        the part's points and unit vectors, −1 where a component is absent: see
+        :func:`rotate`), and what each is."""
+        pts = [self.points[h] for k, h in sorted(members) if k == "p"]
+        vecs = [self.vectors[h] for k, h in sorted(members) if k == "v"]
+        angs = [self.angles[h] for k, h in sorted(members) if k == "a"]
         axes = "xyz"[: self.dim]
         cols, rots, labels = [], [], []
+        triad = lambda t: [t.get(a, -1) for a in "xyz"]
+        P = np.array([triad(p) for p in pts], int).reshape(-1, 3)
+        V = np.array([triad(v) for v in vecs], int).reshape(-1, 3)
         if pts:
-            centre = {a: np.mean([q[p[a]] for p in pts if a in p] or [0.0]) for a in axes}
+            centre = {a: float(np.mean(q[P[P[:, k] >= 0, k]])) if (P[:, k] >= 0).any() else 0.0
+                      for k, a in enumerate(axes)}
         else:
             centre = dict.fromkeys(axes, 0.0)
-        for a in axes:  # translations
+        for k, a in enumerate(axes):  # translations
             g = np.zeros(self.n)
-            for p in pts:
-                if a in p:
-                    g[p[a]] = 1.0
+            g[P[P[:, k] >= 0, k]] = 1.0
             cols.append(g), rots.append(None), labels.append(("t", a, centre))
+        I = np.vstack([P, V])
+        c = np.array([centre.get(a, 0.0) for a in "xyz"])
+        R = np.where(I >= 0, q[np.maximum(I, 0)], 0.0)
+        R[: len(P)] -= np.where(P >= 0, c, 0.0)  # points about the centroid, vectors as they are
         rot_axes = "xyz" if self.dim == 3 else ("z" if self.dim == 2 else "")
         for w in rot_axes:  # rotations about the centroid
-            om = np.array([w == "x", w == "y", w == "z"], float)
+            k = "xyz".index(w)
             g = np.zeros(self.n)
-            triples = [(p, True) for p in pts] + [(v, False) for v in vecs]
-            for t, is_point in triples:
-                r = np.array([q[t[a]] - (centre[a] if is_point else 0.0) if a in t else 0.0
-                              for a in "xyz"])
-                dr = np.cross(om, r)
-                for k, a in enumerate("xyz"):
-                    if a in t:
-                        g[t[a]] = dr[k]
-            for i in angs:
-                g[i] = 1.0
-            cols.append(g), rots.append((om, [t for t, _ in triples]))
+            _scatter(g, I, _cross_axis(k, R))
+            g[angs] = 1.0
+            cols.append(g), rots.append((k, I))
             labels.append(("r", w, centre if pts else None))
         G = np.column_stack(cols) if cols else np.zeros((self.n, 0))
         keep = np.flatnonzero(np.abs(G).max(axis=0) > 0)
         return G[:, keep], [rots[k] for k in keep], [labels[k] for k in keep]
-
-
 
     def frame_label(self, model, key):
         """The name a user wrote for frame (or point) ``key``: a beam node by its station or
@@ -134,3 +132,28 @@ class CoordinateFrames:
                 return 0.0
             return float(rec["length"]) if k == len(nodes) - 1 and "length" in rec else None
         return float(np.linalg.norm(here - start))
+
+
+def _cross_axis(k, R):
+    """e_k × r for every row r of R (t × 3)."""
+    out = np.zeros_like(R)
+    i, j = (k + 1) % 3, (k + 2) % 3
+    out[:, j] = R[:, i]
+    out[:, i] = -R[:, j]
+    return out
+
+
+def _scatter(out, I, values):
+    ok = I >= 0
+    out[I[ok]] = values[ok]
+
+
+def rotate(rot, v):
+    """W v: the rotation part of a generator (:meth:`CoordinateFrames.generators`) applied to
+    a full vector (zero for a translation)."""
+    out = np.zeros_like(v)
+    if rot is None:
+        return out
+    k, I = rot
+    _scatter(out, I, _cross_axis(k, np.where(I >= 0, v[np.maximum(I, 0)], 0.0)))
+    return out

@@ -52,7 +52,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .base import BatchForce
-from .frames import CoordinateFrames
+from .frames import CoordinateFrames, rotate
 
 __all__ = ["RigidDirections", "rigid_directions", "TOL"]
 
@@ -82,21 +82,6 @@ class RigidDirections:
     @classmethod
     def none(cls, n):
         return cls((), np.zeros((n, 0)))
-
-
-def _rotate(rot, v):
-    """W v: the rotation part of a generator applied to a full vector (0 for a translation)."""
-    out = np.zeros_like(v)
-    if rot is None:
-        return out
-    om, triples = rot
-    for t in triples:
-        sub = np.array([v[t[a]] if a in t else 0.0 for a in "xyz"])
-        dr = np.cross(om, sub)
-        for k, a in enumerate("xyz"):
-            if a in t:
-                out[t[a]] = dr[k]
-    return out
 
 
 # ---------------------------------------------------------------------------------------------
@@ -151,7 +136,7 @@ def _element_pass(item, G, rots, B):
     blind = K @ Gi
     full = np.zeros(G.shape[0])
     full[idx] = load
-    turn = np.column_stack([_rotate(r, full)[idx] for r in rots]) if rots else np.zeros_like(blind)
+    turn = np.column_stack([rotate(r, full)[idx] for r in rots]) if rots else np.zeros_like(blind)
     # the element's own scale, normwise (its matrix is formed with cancellations, so an entry
     # of its product can be rounding residue of the others)
     scale = np.full(len(idx), np.linalg.norm(K) * absG.max(initial=0.0)
