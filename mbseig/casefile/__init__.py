@@ -40,7 +40,7 @@ _TOP_KEYS = {
     "schema_version", "title", "description", "source", "kind", "dimension", "gravity",
     "parameters", "points", "masses", "bodies", "joints", "forces", "matrices", "expected",
     "configurations", "report", "beams", "fe_bodies", "refinement", "inputs", "outputs",
-    "urdf", "motion",
+    "urdf", "motion", "frames",
 }
 
 

@@ -56,7 +56,7 @@ import numpy as np
 
 from ..errors import CaseError
 from ..model.mimic import MimicConstraint, joint_coordinate
-from ..model.spatial_body import inertia_problem
+from .fields import RANGE_RULE, Fields, in_range
 from .urdf_read import (  # noqa: F401
     MOVING,
     Joint,
@@ -66,57 +66,27 @@ from .urdf_read import (  # noqa: F401
     read_urdf,
     rpy_matrix,
 )
+from .urdf_tree import group_problem, groups, kinematics, tree
 
-__all__ = ["UrdfRobot", "expand_urdf", "import_urdf", "read_mimic", "read_urdf", "urdf_tables"]
+__all__ = ["UrdfRobot", "expand_urdf", "import_urdf", "read_frames", "read_mimic", "read_urdf",
+           "urdf_tables"]
 
+ONE_DOF = ("revolute", "continuous", "prismatic")  # the joints with a position and a spring
 _URDF_KEYS = {"file", "positions", "stiffness", "damping", "floating"}
 
 
 # ---------------------------------------------------------------------------------------------
 # URDF → case tables
 # ---------------------------------------------------------------------------------------------
-def _tree(robot: UrdfRobot):
-    """(root, joints in breadth-first order from the root): one root, one parent per link."""
-    parent_joint = {}
-    for j in robot.joints.values():
-        if j.child in parent_joint:
-            raise robot.error(f"joint {j.name!r}", f"link {j.child!r} has two parents (joints "
-                              f"{parent_joint[j.child]!r} and {j.name!r}): kinematic loops are "
-                              f"not supported")
-        if j.child == j.parent:
-            raise robot.error(f"joint {j.name!r}", "parent and child are the same link")
-        parent_joint[j.child] = j.name
-    roots = [n for n in robot.links if n not in parent_joint]
-    if not roots:
-        raise robot.error("robot", "no root link: the joints form a kinematic loop")
-    children: dict[str, list] = {}
-    for j in robot.joints.values():
-        children.setdefault(j.parent, []).append(j)
-    order, queue, seen = [], [roots[0]], {roots[0]}
-    while queue:
-        link = queue.pop(0)
-        for j in children.get(link, []):
-            order.append(j)
-            seen.add(j.child)
-            queue.append(j.child)
-    if len(roots) > 1:
-        raise robot.error(f"link {roots[1]!r}", f"the robot has several root links "
-                          f"({', '.join(map(repr, roots))}): links must form one tree")
-    unreached = [n for n in robot.links if n not in seen]
-    if unreached:  # one root, but a cycle not reachable from it
-        raise robot.error(f"joint {parent_joint[unreached[0]]!r}",
-                          "it closes a kinematic loop (not supported)")
-    return roots[0], order, children
-
-
 def _joint_positions(robot, positions, where):
     """Joint values of the reference: the given ones, mimic followers from their leaders."""
     q = {}
     for name, value in positions.items():
         if name not in robot.joints:
             raise CaseError(f"unknown joint {name!r}", file=where[0], element=where[1])
-        if robot.joints[name].type == "fixed":
-            raise CaseError(f"joint {name!r} is fixed: it has no position", file=where[0],
+        if robot.joints[name].type not in ONE_DOF:
+            raise CaseError(f"joint {name!r} is {robot.joints[name].type}: it has no position "
+                            f"(a revolute, continuous or prismatic joint has)", file=where[0],
                             element=where[1])
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             raise CaseError(f"{name} must be a finite number (rad or m), got {value!r}",
@@ -132,12 +102,19 @@ def _joint_positions(robot, positions, where):
             done[name] = q.get(name, 0.0)
             return done[name]
         leader, mult, off = j.mimic
-        if leader not in robot.joints or robot.joints[leader].type == "fixed":
+        if j.type not in ONE_DOF:
+            raise robot.error(f"joint {name!r}", f"<mimic> on a {j.type} joint (a revolute, "
+                              f"continuous or prismatic joint may follow another)")
+        if leader not in robot.joints or robot.joints[leader].type not in ONE_DOF:
             raise robot.error(f"joint {name!r}", f"<mimic> refers to {leader!r}, which is not a "
-                              f"moving joint of the robot")
+                              f"revolute, continuous or prismatic joint of the robot")
         if leader in chain or leader == name:
             raise robot.error(f"joint {name!r}", "<mimic> joints follow each other in a cycle")
-        v = mult * value(leader, (*chain, name)) + off
+        with np.errstate(all="ignore"):
+            v = mult * value(leader, (*chain, name)) + off
+        if not math.isfinite(v):
+            raise robot.error(f"joint {name!r}", f"<mimic> gives a position out of the double "
+                              f"range ({mult!r} × {leader} + {off!r})")
         if name in q and abs(q[name] - v) > 1e-12 * max(1.0, abs(v)):
             raise CaseError(f"{name} = {q[name]!r} contradicts its <mimic> of {leader!r} "
                             f"({v!r}); leave it out", file=where[0], element=where[1])
@@ -145,21 +122,9 @@ def _joint_positions(robot, positions, where):
         return v
 
     for name, j in robot.joints.items():
-        if j.type != "fixed":
+        if j.type in MOVING:
             value(name)
     return done
-
-
-def _massive_below(robot, children, link):
-    """The first link with mass rigidly attached below ``link`` (itself included), or None."""
-    if robot.links[link].mass > 0:
-        return link
-    for j in children.get(link, []):
-        if j.type == "fixed":
-            found = _massive_below(robot, children, j.child)
-            if found:
-                return found
-    return None
 
 
 def _gains(robot, table, key, moving, where):
@@ -174,8 +139,11 @@ def _gains(robot, table, key, moving, where):
                         f"{table!r}", file=where[0], element=where[1])
     for name, v in table.items():
         if name != "default" and name not in moving:
-            raise CaseError(f"{key}: {name!r} is not a moving joint of the robot", file=where[0],
-                            element=where[1])
+            kind = robot.joints[name].type if name in robot.joints else None
+            why = (f"a {kind} joint: a joint spring acts on a revolute, continuous or prismatic "
+                   f"joint (a bushing can hold a {kind} one)" if kind in ("planar", "floating")
+                   else "not a moving joint of the robot")
+            raise CaseError(f"{key}: {name!r} is {why}", file=where[0], element=where[1])
         ok = isinstance(v, str) or (isinstance(v, (int, float)) and not isinstance(v, bool)
                                     and math.isfinite(v) and v >= 0)
         if not ok:
@@ -191,93 +159,89 @@ def _gains(robot, table, key, moving, where):
 
 def urdf_tables(robot: UrdfRobot, *, positions=None, stiffness=None, damping=None,
                 floating: bool = False, where=("", "urdf")) -> dict:
-    """``{"bodies", "joints", "forces"}`` of the 3-D format for a robot (module docstring).
-    ``where`` = (file, element) names the case table that gave the options, for errors."""
-    root, order, children = _tree(robot)
+    """``{"bodies", "joints", "forces", "frames"}`` of the 3-D format for a robot (module
+    docstring).  ``where`` = (file, element) names the case table that gave the options."""
+    root, order, children = tree(robot)
     q = _joint_positions(robot, positions or {}, where)
-    moving = [j.name for j in robot.joints.values() if j.type != "fixed"]
+    moving = [j.name for j in robot.joints.values() if j.type in ONE_DOF]
     k = _gains(robot, stiffness, "stiffness", moving, where)
     c = _gains(robot, damping, "damping", moving, where)
-
-    # forward kinematics: link frames (R, p) and joint frames at the reference
-    frames = {root: (np.eye(3), np.zeros(3))}
-    jframes = {}
-    for j in order:
-        Rp, pp = frames[j.parent]
-        Rj, pj = Rp @ rpy_matrix(j.rpy), pp + Rp @ j.xyz
-        jframes[j.name] = (Rj, pj)
-        if j.type in ("revolute", "continuous"):
-            frames[j.child] = (Rj @ axis_rotation(j.axis, q[j.name]), pj)
-        elif j.type == "prismatic":
-            frames[j.child] = (Rj, pj + Rj @ j.axis * q[j.name])
+    frames, jframes = kinematics(root, order, q)
+    rigid = groups(robot, root, order, children, frames)
+    body_of = {}  # link → its body, or "ground"
+    bodies, joints, forces = [], [], []
+    for top, g in rigid.items():
+        if g.body is None and top == root and not floating:
+            name = "ground"
+        elif g.body is None:
+            raise _no_mass(robot, top, order, floating)
         else:
-            frames[j.child] = (Rj, pj)
-
-    # bodies: every link with mass; massless links merged (module docstring)
-    body_of: dict[str, str] = {}
-    if robot.links[root].mass > 0:
-        body_of[root] = root
-    elif not floating:
-        body_of[root] = "ground"
-    else:
-        body = _massive_below(robot, children, root)
-        if body is None:
-            raise robot.error(f"link {root!r}", "the floating root link has no <inertial> mass "
-                              "and no link with mass is fixed to it")
-        body_of[root] = body
-    joints, forces = [], []
-    if robot.links[root].mass > 0 and not floating:
-        joints.append({"type": "weld", "name": f"{root}_to_ground", "bodies": ["ground", root],
-                       "at": [0.0, 0.0, 0.0]})
+            name = g.body
+            problem = group_problem(robot, g)
+            if problem:
+                raise problem
+            bodies.append(_body(robot, g))
+        body_of.update({link: name for link in g.links})
+    root_body = body_of[root]
+    if root_body != "ground" and not floating:
+        fixed_in = next((j for j in order if j.child == root_body), None)
+        joints.append({"type": "weld", "bodies": ["ground", root_body],
+                       "name": fixed_in.name if fixed_in else f"{root}_to_ground",
+                       "at": _list(jframes[fixed_in.name][1]) if fixed_in else [0.0, 0.0, 0.0]})
     for j in order:
-        b1 = body_of[j.parent]
-        at = _list(jframes[j.name][1])
-        if j.type == "fixed":
-            if j.child in body_of:  # the massive link that a massless parent merged into
-                continue
-            if robot.links[j.child].mass == 0:
-                body_of[j.child] = b1
-                continue
-            body_of[j.child] = j.child
-            joints.append({"type": "weld", "name": j.name, "bodies": [b1, j.child], "at": at})
+        if j.type in ("fixed", "floating"):  # merged; a free child (no joint)
             continue
-        b2 = _massive_below(robot, children, j.child)
-        if b2 is None:
-            raise robot.error(f"link {j.child!r}", f"it has no <inertial> mass (nor a link with "
-                              f"mass fixed to it) but joint {j.name!r} moves it")
-        body_of[j.child] = b2
-        body_of[b2] = b2
+        b1, b2 = body_of[j.parent], body_of[j.child]
+        at = _list(jframes[j.name][1])
         axis = _list(jframes[j.name][0] @ j.axis)
+        if j.type == "planar":
+            joints.append({"type": "planar", "name": j.name, "bodies": [b1, b2], "at": at,
+                           "normal": axis})
+            continue
         joints.append({"type": MOVING[j.type], "name": j.name, "bodies": [b1, b2], "at": at,
                        "axis": axis})
         if j.mimic is not None:
             joints.append({"type": "mimic", "name": f"{j.name}_mimic", "joint": j.name,
                            "leader": j.mimic[0], "multiplier": j.mimic[1]})
         forces += _spring(j, b1, b2, at, axis, k.get(j.name, 0), c.get(j.name, 0))
-    bodies = [_body(robot, name, *frames[name]) for name in robot.links
-              if robot.links[name].mass > 0]
+    named = {b["name"] for b in bodies}
+    links = [{"name": n, "body": b} for n, b in body_of.items() if n not in named]
     names = [e["name"] for e in joints + forces]
     clash = sorted({n for n in names if names.count(n) > 1})
     if clash:
         raise robot.error("robot", f"element name {clash[0]!r} of the expanded case is used "
                           f"twice (a joint of that name exists)")
-    return {"bodies": bodies, "joints": joints, "forces": forces}
+    return {"bodies": bodies, "joints": joints, "forces": forces, "frames": links}
+
+
+def _no_mass(robot, top, order, floating):
+    """The error for a rigid group without mass: moved by a joint, or a floating root."""
+    into = next((j for j in order if j.child == top), None)
+    if into is None:
+        free = [j.name for j in order if j.parent == top and j.type == "floating"]
+        hint = (f"; its joint {free[0]!r} is floating already: leave floating out" if free
+                else "")
+        return robot.error(f"link {top!r}", f"the floating root link has no <inertial> mass "
+                           f"and no link with mass is fixed to it{hint}")
+    return robot.error(f"link {top!r}", f"it has no <inertial> mass (nor a link with mass fixed "
+                       f"to it) but joint {into.name!r} moves it")
 
 
 def _list(v):
     return [float(x) + 0.0 for x in v]
 
 
-def _body(robot, name, R, p):
-    link = robot.links[name]
-    problem = inertia_problem(link.inertia)
-    if problem:
-        raise robot.error(f"link {name!r} <inertia>", problem)
-    Ri = R @ rpy_matrix(link.rpy)
-    I = Ri @ link.inertia @ Ri.T
-    I = 0.5 * (I + I.T)
-    return {"name": name, "mass": link.mass, "com": _list(p + R @ link.xyz),
-            "inertia": [_list(row) for row in I]}
+def _body(robot, g):
+    """The [[bodies]] entry of a rigid group (its merged inertia, urdf_tree); every number in
+    the case's range (README, "Input rules"), else refused naming the link."""
+    entry = {"name": g.body, "mass": g.mass, "com": _list(g.com),
+             "inertia": [_list(row) for row in g.inertia]}
+    for key in ("mass", "com", "inertia"):
+        if not in_range(entry[key]):
+            merged = f" merged with {', '.join(map(repr, g.links[1:]))}" if len(g.links) > 1 else ""
+            raise robot.error(f"link {g.body!r}", f"its {key}{merged} at the reference, "
+                              f"{entry[key]!r}, is out of range: {RANGE_RULE}")
+    return entry
 
 
 def _spring(j, b1, b2, at, axis, k, c):
@@ -330,7 +294,7 @@ def expand_urdf(case: dict, case_path) -> dict:
     tables = urdf_tables(robot, positions=positions, stiffness=table.get("stiffness"),
                          damping=table.get("damping"), floating=floating, where=(file, "urdf"))
     out = {key: value for key, value in case.items() if key != "urdf"}
-    for key in ("bodies", "joints", "forces"):
+    for key in ("bodies", "joints", "forces", "frames"):
         own = case.get(key, [])
         if not isinstance(own, list):
             raise CaseError(f"{key} must be an array of tables", file=file, element=key)
@@ -358,6 +322,26 @@ def import_urdf(urdf_path, out_toml=None, *, positions=None, stiffness=None, dam
     if out_toml is not None:
         Path(out_toml).write_text(to_toml(case), encoding="utf-8")
     return case
+
+
+def read_frames(builder, items):
+    """Reader of the top-level ``[[frames]]`` of a 3-D case (:class:`~mbseig.casefile.spatial.
+    SpatialBuilder`, after its bodies): each ``{name, body}`` names a body's frame, usable
+    wherever a body name is; ``body`` may be ``"ground"`` (a link of a fixed base).  A URDF
+    import lists every link merged into a body here, so cases keep naming it."""
+    if not isinstance(items, list):
+        raise CaseError("frames must be an array of tables {name, body}", element="frames")
+    for k, item in enumerate(items):
+        f = Fields(item, f"frames[{k}]", builder.params)
+        name, body = f.text("name"), f.text("body")
+        f.done()
+        f.label = f"frames[{k}] {name!r}"
+        if name in builder.bodies or name in builder.aliases or name == "ground" or "." in name:
+            raise f.error("the name is a body's or another frame's already, is 'ground' or "
+                          "contains '.'")
+        if body != "ground" and body not in builder.bodies:
+            raise f.error(f"unknown body {body!r}")
+        builder.aliases[name] = body
 
 
 def read_mimic(builder, f, constraints):
