@@ -56,7 +56,7 @@ import numpy as np
 
 from ..errors import CaseError
 from ..model.mimic import MimicConstraint, joint_coordinate
-from .fields import RANGE_RULE, Fields, in_range
+from .fields import MIN_MAGNITUDE, RANGE_RULE, Fields, in_range
 from .urdf_read import (  # noqa: F401
     MOVING,
     Joint,
@@ -193,7 +193,7 @@ def urdf_tables(robot: UrdfRobot, *, positions=None, stiffness=None, damping=Non
             continue
         b1, b2 = body_of[j.parent], body_of[j.child]
         at = _list(jframes[j.name][1])
-        axis = _list(jframes[j.name][0] @ j.axis)
+        axis = _unit_list(jframes[j.name][0] @ j.axis)
         if j.type == "planar":
             joints.append({"type": "planar", "name": j.name, "bodies": [b1, b2], "at": at,
                            "normal": axis})
@@ -206,6 +206,8 @@ def urdf_tables(robot: UrdfRobot, *, positions=None, stiffness=None, damping=Non
         forces += _spring(j, b1, b2, at, axis, k.get(j.name, 0), c.get(j.name, 0))
     named = {b["name"] for b in bodies}
     links = [{"name": n, "body": b} for n, b in body_of.items() if n not in named]
+    for e in joints + forces:
+        _in_range(robot, e)
     names = [e["name"] for e in joints + forces]
     clash = sorted({n for n in names if names.count(n) > 1})
     if clash:
@@ -229,6 +231,27 @@ def _no_mass(robot, top, order, floating):
 
 def _list(v):
     return [float(x) + 0.0 for x in v]
+
+
+def _unit_list(v):
+    """A unit vector's components, those below 1e-100 (the case number rule's floor) as 0: a
+    turn of the direction below 1e-100 rad, far below its rounding (1.1e-16)."""
+    return [float(x) + 0.0 if abs(x) >= MIN_MAGNITUDE else 0.0 for x in v]
+
+
+def _in_range(robot, element):
+    """Every position of a generated joint or spring in the case number rule, else refused
+    naming the URDF joint (URDF values near 1e-100 or 1e100 combine to smaller or larger
+    ones)."""
+    for key in ("at", "points"):
+        value = element.get(key)
+        if value is None:
+            continue
+        values = [p["at"] for p in value] if key == "points" else [value]
+        if not all(in_range(v) for v in values):
+            name = element.get("joint", element["name"].removesuffix("_spring"))
+            raise robot.error(f"joint {name!r}", f"its position at the reference, {values!r}, "
+                              f"is out of range: {RANGE_RULE}")
 
 
 def _body(robot, g):

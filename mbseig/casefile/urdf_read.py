@@ -101,7 +101,9 @@ def _named(el, tag, seen, path):
     """(name, "tag 'name'") of a <link> or <joint>: named, and not twice."""
     name = el.get("name")
     if not name:
-        raise CaseError(f"a <{tag}> without a name", file=path, element=tag)
+        after = f", after {tag} {list(seen)[-1]!r}" if seen else ""
+        raise CaseError(f"a <{tag}> without a name (the {tag} number {len(seen) + 1} of the "
+                        f"file{after})", file=path, element=tag)
     if name in seen:
         raise CaseError(f"duplicate {tag} name", file=path, element=f"{tag} {name!r}")
     return name, f"{tag} {name!r}"
@@ -138,8 +140,8 @@ def _parse(path, p, referrer):
     try:
         root = ET.fromstring(data)
     except ET.ParseError as exc:
-        if b"xacro" in data:  # an unbound xacro: prefix, or a macro that is not XML yet
-            raise _xacro_error(p, "the xacro namespace") from None
+        if "unbound prefix" in str(exc) and b"<xacro:" in data:  # xacro: undeclared
+            raise _xacro_error(p, "<xacro:...> elements") from None
         raise CaseError(f"malformed XML: {exc}", file=p) from None
     markup = _xacro_markup(root)
     if markup:

@@ -42,6 +42,7 @@ class Group:
     mass: float
     com: np.ndarray = field(repr=False)
     inertia: np.ndarray = field(repr=False)
+    scale: float = 0.0  # Σ of the magnitudes summed into the inertia (its rounding's scale)
 
 
 def tree(robot: UrdfRobot):
@@ -114,26 +115,43 @@ def groups(robot: UrdfRobot, root, order, children, frames) -> dict:
             links = tuple(_members(children, top))
             massive = [n for n in links if robot.links[n].mass > 0]
             m = float(sum(robot.links[n].mass for n in massive))
-            com, I = np.zeros(3), np.zeros((3, 3))
-            if massive:
-                parts = []
-                for n in massive:
-                    link, (R, p) = robot.links[n], frames[n]
-                    Ri = R @ rpy_matrix(link.rpy)
-                    parts.append((link.mass, p + R @ link.xyz, Ri @ link.inertia @ Ri.T))
+            com, I, scale = np.zeros(3), np.zeros((3, 3)), 0.0
+            parts = []
+            for n in massive:
+                link, (R, p) = robot.links[n], frames[n]
+                Ri = R @ rpy_matrix(link.rpy)
+                parts.append((link.mass, p + R @ link.xyz, Ri @ link.inertia @ Ri.T))
+            if len(parts) == 1:  # one link: its own centre and inertia, exactly
+                _, com, I = parts[0]
+                scale = float(np.max(np.abs(I)))
+            elif parts:
                 com = sum(mi * ci for mi, ci, _ in parts) / m
                 for mi, ci, Ii in parts:
                     d = ci - com
                     I = I + Ii + mi * (float(d @ d) * np.eye(3) - np.outer(d, d))
-                I = 0.5 * (I + I.T)
-            out[top] = Group(top, links, massive[0] if massive else None, m, com, I)
+                    r = float(np.linalg.norm(d))  # d carries the rounding of ci and com
+                    scale += float(np.max(np.abs(Ii))) + 2.0 * mi * r * (
+                        r + float(np.linalg.norm(ci)) + float(np.linalg.norm(com)))
+            I = 0.5 * (I + I.T)
+            out[top] = Group(top, links, massive[0] if massive else None, m, com, I, scale)
     return out
 
 
 def group_problem(robot: UrdfRobot, g: Group):
     """A CaseError when a body's merged inertia is not a rigid body's, naming the body and the
-    links merged into it; None when it is."""
+    links merged into it; None when it is.  A principal moment within the rounding of the
+    merged sum is zero (two point masses on a line have no inertia about it, whatever sign the
+    rounding leaves): (10 + L)·u·scale for L links with mass, a bound on the rounding of each
+    term (R Ī Rᵀ, m(|d|² E − d dᵀ) with d's own rounding, below 10 u of its part of
+    Group.scale) and of the L − 1 additions."""
     problem = inertia_problem(g.inertia)
+    p = np.linalg.eigvalsh(g.inertia)
+    n = sum(1 for x in g.links if robot.links[x].mass > 0)
+    bound = (10 + n) * np.finfo(float).eps * g.scale if n > 1 else 0.0
+    if problem is None and p[0] <= bound:
+        problem = (f"inertia tensor must be positive definite (principal moments "
+                   f"{', '.join(f'{x:.6g}' for x in p)}, the smallest zero within the rounding "
+                   f"of the merged sum, {bound:.2g})")
     if problem is None:
         return None
     massive = [n for n in g.links if robot.links[n].mass > 0]
