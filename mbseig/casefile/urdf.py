@@ -2,12 +2,12 @@
 URDF" and "3-D case format").
 
 The URDF is read with :mod:`xml.etree.ElementTree` as data (no entity, include or macro is
-expanded; xacro files must be expanded beforehand; meshes, collision and visual elements,
-transmissions and ``<gazebo>`` blocks are ignored).  Only the ``<link>`` and ``<joint>``
-children of ``<robot>`` are read.
-
-What a URDF becomes (every ``at``, ``axis``, ``com`` and ``inertia`` in global axes at the
-reference configuration, as the 3-D format wants):
+expanded; a file still holding xacro markup is refused with the command that expands it;
+meshes, collision and visual elements, transmissions and ``<gazebo>`` blocks are ignored).
+Only the ``<link>`` and ``<joint>`` children of ``<robot>`` are read, every number checked
+where it is read (:mod:`.urdf_read`).  The model is the one Pinocchio builds
+(``pin.buildModelFromUrdf``; :mod:`.urdf_tree`), every ``at``, ``axis``, ``com`` and
+``inertia`` in global axes at the reference configuration, as the 3-D format wants:
 
 - reference configuration: the joint values ``positions = {JOINT = value}`` (rad or m; others 0;
   a ``<mimic>`` follower takes multiplier·leader + offset).  Link frames follow by forward
@@ -15,28 +15,35 @@ reference configuration, as the 3-D format wants):
   rpy the fixed-axis roll-pitch-yaw of URDF, R = Rz(yaw) Ry(pitch) Rx(roll), and motion a
   rotation by q about ``<axis>`` (revolute, continuous) or a translation by q along it
   (prismatic);
-- a link with mass → ``[[bodies]]`` (name = the link): ``com`` = link origin + R_link·xyz of
-  ``<inertial><origin>``, ``inertia`` = R I Rᵀ with R = R_link·R(rpy of the inertial origin) and
-  I the tensor of ``<inertia>`` (products included: I = [[ixx, ixy, ixz], [ixy, iyy, iyz],
-  [ixz, iyz, izz]]);
-- ``revolute`` / ``continuous`` → ``revolute`` (``at`` = the joint frame's origin, ``axis`` its
-  ``<axis>`` in global axes), ``prismatic`` → ``prismatic``, ``fixed`` → ``weld``;
-  joint names are element names;
-- massless links (no ``<inertial>``, or mass 0; their inertia is then ignored) are merged into
-  a link with mass rigidly attached to them (through ``fixed`` joints): their parent's body,
-  or, for a link moved by a joint (and a floating root), the first link with mass found below
-  it through fixed joints (document order), which then carries the moving joint.  A massless
-  link with no mass fixed to it that a joint moves is an error (its motion has no inertia);
-  the same for a floating root;
-- ``floating = false``: the root link is welded to the ground (a massless root *is* the
-  ground, and so is everything massless fixed to it); ``true``: the root body is free;
+- bodies: every link on a ``fixed`` joint is merged into its parent, so a body is the root, or a
+  link a joint moves, with all the links fixed to it: its mass, centre of mass and inertia
+  the sums of theirs (parallel-axis theorem; products of inertia included: I = [[ixx, ixy,
+  ixz], [ixy, iyy, iyz], [ixz, iyz, izz]] rotated by R_link·R(rpy of the inertial origin)).
+  A link's own inertia may be zero (a point mass on a fixed joint); only a body's merged
+  inertia must be a rigid body's, else the error names the body and the links merged into it.
+  The body is named after its top link, or, when that has no mass, after the first link with
+  mass fixed below it (document order), which then carries the moving joint; a body with no
+  mass at all that a joint moves is an error, and so is a massless floating root;
+- frames: every merged link is a ``[[frames]]`` entry ``{name = LINK, body = BODY}`` (BODY is
+  ``"ground"`` for the links of a fixed, massless root), so the case can name it wherever a
+  body name is allowed (:func:`read_frames`);
+- joints: ``revolute`` / ``continuous`` → ``revolute`` (``at`` = the joint frame's origin,
+  ``axis`` its ``<axis>`` in global axes), ``prismatic`` → ``prismatic``, ``planar`` →
+  ``planar`` (``normal`` = the axis: the child slides in the plane normal to it and turns about
+  it, as the URDF specification says; Pinocchio 4.1 ignores the axis and always uses the joint
+  frame's z), ``floating`` → nothing (the child body is free), ``fixed`` → merged; joint names
+  are element names;
+- ``floating = false``: the root body is welded to the ground (``ROOT_to_ground``, or the fixed
+  joint that joins it to a massless root); a massless root *is* the ground; ``true``: the root
+  body is free;
 - ``stiffness = {default = k, JOINT = k}`` and ``damping`` (the same, or ``"urdf"``: each
   joint's ``<dynamics damping>``): a ``torsional`` force ``JOINT_spring`` on a revolute joint
   (zero torque at the reference), on a prismatic joint a ``spring`` / ``damper`` /
   ``spring_damper`` ``JOINT_spring`` between ``{body = parent, at = at}`` and ``{body = child,
   at = at + ℓ·axis}`` (free length ℓ = the distance at the reference, so zero force there; the
   prismatic joint keeps the line along the axis, so the force is k·s exactly).  ``default``
-  applies to every moving joint, ``<mimic>`` followers included (``JOINT = 0`` removes one);
+  applies to every revolute, continuous and prismatic joint, ``<mimic>`` followers included
+  (``JOINT = 0`` removes one); a planar or floating joint takes none (a bushing can hold it);
   values may be numbers or expressions of the case's parameters;
 - ``<mimic joint="L" multiplier="r" offset="o">`` on joint F → ``[[joints]] type = "mimic"``,
   ``name = "F_mimic"``, ``joint = "F"``, ``leader = "L"``, ``multiplier = r``: θ_F = r θ_L with
@@ -55,8 +62,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import CaseError
-from ..model.mimic import MimicConstraint, joint_coordinate
-from .fields import MIN_MAGNITUDE, RANGE_RULE, Fields, in_range
+from .fields import MIN_MAGNITUDE, RANGE_RULE, in_range
 from .urdf_read import (  # noqa: F401
     MOVING,
     Joint,
@@ -66,6 +72,7 @@ from .urdf_read import (  # noqa: F401
     read_urdf,
     rpy_matrix,
 )
+from .urdf_entries import read_frames, read_mimic  # noqa: F401 (the 3-D reader's entries)
 from .urdf_tree import group_problem, groups, kinematics, tree
 
 __all__ = ["UrdfRobot", "expand_urdf", "import_urdf", "read_frames", "read_mimic", "read_urdf",
@@ -345,50 +352,3 @@ def import_urdf(urdf_path, out_toml=None, *, positions=None, stiffness=None, dam
     if out_toml is not None:
         Path(out_toml).write_text(to_toml(case), encoding="utf-8")
     return case
-
-
-def read_frames(builder, items):
-    """Reader of the top-level ``[[frames]]`` of a 3-D case (:class:`~mbseig.casefile.spatial.
-    SpatialBuilder`, after its bodies): each ``{name, body}`` names a body's frame, usable
-    wherever a body name is; ``body`` may be ``"ground"`` (a link of a fixed base).  A URDF
-    import lists every link merged into a body here, so cases keep naming it."""
-    if not isinstance(items, list):
-        raise CaseError("frames must be an array of tables {name, body}", element="frames")
-    for k, item in enumerate(items):
-        f = Fields(item, f"frames[{k}]", builder.params)
-        name, body = f.text("name"), f.text("body")
-        f.done()
-        f.label = f"frames[{k}] {name!r}"
-        if name in builder.bodies or name in builder.aliases or name == "ground" or "." in name:
-            raise f.error("the name is a body's or another frame's already, is 'ground' or "
-                          "contains '.'")
-        if body != "ground" and body not in builder.bodies:
-            raise f.error(f"unknown body {body!r}")
-        builder.aliases[name] = body
-
-
-def read_mimic(builder, f, constraints):
-    """Reader entry for ``type = "mimic"`` in the 3-D reader
-    (:class:`mbseig.casefile.spatial.SpatialBuilder`; the case format is in
-    :mod:`mbseig.model.mimic`): both joints are declared before it."""
-    f.text("type")
-    f.text("name", None)
-    coords = []
-    for key in ("joint", "leader"):
-        jname = f.text(key)
-        j = builder.spatial_joints.get(jname)
-        if j is None or j[0] not in ("revolute", "cylindrical", "prismatic"):
-            raise f.error(f"{key} {jname!r} is not a revolute, cylindrical or prismatic joint "
-                          f"declared before")
-        kind, b1, b2, at, axis = j[:5]
-        frames = (builder.frame(f, b1), builder.frame(f, b2))
-        locals_ = (builder.local(b1, at), builder.local(b2, at))
-        coords.append(joint_coordinate(kind, frames, locals_, axis))
-    if f.raw("joint") == f.raw("leader"):
-        raise f.error("a joint cannot follow itself")
-    r = f.num("multiplier", 1.0)
-    o = f.num("offset", 0.0)
-    f.done()
-    units = "N m" if coords[0].kind == "angle" else "N"
-    c = MimicConstraint(f.label, coords[0], coords[1], r, o, units)
-    builder.add_constraint(constraints, c, f)
