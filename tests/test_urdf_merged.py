@@ -233,6 +233,30 @@ def test_floating_joint_is_a_free_base(tmp_path):
         urdf_tables(read_urdf(free), floating=True)
 
 
+def test_link_names_the_case_cannot_hold(tmp_path):
+    """Public robots name links 'ground' (asr_twodof) or 'link_8.0' (Allegro hand): refused in
+    one line naming the link, not left to the case reader."""
+    for name, why in (("ground", "'ground' names the case's fixed frame"),
+                      ("link_8.0", "'.' separates beam stations")):
+        path = write(tmp_path, link("base"), link(name), joint("j", "base", name))
+        with pytest.raises(CaseError, match=rf"r\.urdf: link '{re.escape(name)}': the link's "
+                           rf"name cannot be a name of the case \({why}"):
+            urdf_tables(read_urdf(path))
+
+
+def test_mimic_leader_later_in_the_tree(tmp_path):
+    """A follower whose leader comes later in breadth-first order (TIAGo Pro's gripper): the
+    mimic joints follow every joint, so the case reads."""
+    follower = '<axis xyz="0 0 1"/><mimic joint="late" multiplier="0.5"/>'
+    path = write(tmp_path, link("base"), link("a"), link("b"), link("c"),
+                 joint("early", "base", "a", extra=follower), joint("mid", "base", "b"),
+                 joint("late", "b", "c"))
+    t = urdf_tables(read_urdf(path), stiffness={"default": 10.0})
+    assert [j["name"] for j in t["joints"]][-1] == "early_mimic"
+    case = {"schema_version": 1, "dimension": 3, "gravity": [0.0, 0.0, 0.0], **t}
+    assert mbseig.read_case(case).build().n > 0
+
+
 # ---------------------------------------------------------------------------------------------
 # xacro, and the note after an import without springs
 # ---------------------------------------------------------------------------------------------

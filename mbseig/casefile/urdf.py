@@ -174,9 +174,15 @@ def urdf_tables(robot: UrdfRobot, *, positions=None, stiffness=None, damping=Non
     k = _gains(robot, stiffness, "stiffness", moving, where)
     c = _gains(robot, damping, "damping", moving, where)
     frames, jframes = kinematics(root, order, q)
+    for name in robot.links:
+        if name == "ground" or "." in name:
+            why = ("'ground' names the case's fixed frame" if name == "ground" else
+                   "'.' separates beam stations and body markers in a case ('shaft.disk1')")
+            raise robot.error(f"link {name!r}", f"the link's name cannot be a name of the case "
+                              f"({why}); rename the link in the URDF")
     rigid = groups(robot, root, order, children, frames)
     body_of = {}  # link → its body, or "ground"
-    bodies, joints, forces = [], [], []
+    bodies, joints, forces, mimics = [], [], [], []
     for top, g in rigid.items():
         if g.body is None and top == root and not floating:
             name = "ground"
@@ -207,12 +213,13 @@ def urdf_tables(robot: UrdfRobot, *, positions=None, stiffness=None, damping=Non
             continue
         joints.append({"type": MOVING[j.type], "name": j.name, "bodies": [b1, b2], "at": at,
                        "axis": axis})
-        if j.mimic is not None:
-            joints.append({"type": "mimic", "name": f"{j.name}_mimic", "joint": j.name,
+        if j.mimic is not None:  # after every joint: its leader may come later in the tree
+            mimics.append({"type": "mimic", "name": f"{j.name}_mimic", "joint": j.name,
                            "leader": j.mimic[0], "multiplier": j.mimic[1]})
         forces += _spring(j, b1, b2, at, axis, k.get(j.name, 0), c.get(j.name, 0))
     named = {b["name"] for b in bodies}
     links = [{"name": n, "body": b} for n, b in body_of.items() if n not in named]
+    joints += mimics
     for e in joints + forces:
         _in_range(robot, e)
     names = [e["name"] for e in joints + forces]
