@@ -187,6 +187,9 @@ def test_frame_errors(tmp_path, capsys):
         case = {**arm_case(), "frames": frames}
         with pytest.raises(CaseError, match=message):
             mbseig.read_case(case).build()
+    planar = {"schema_version": 1, "dimension": 2, "frames": [{"name": "x", "body": "b"}]}
+    with pytest.raises(CaseError, match=r"frames: \[\[frames\]\] names frames of 3-D bodies"):
+        mbseig.read_case(planar).build()
     written = tmp_path / "arm.toml"
     code, out, err = cli(capsys, "import-urdf", ARM_URDF, "--out", written, "--stiffness",
                          "default=400")

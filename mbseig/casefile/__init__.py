@@ -168,6 +168,9 @@ def _build(spec, config, overrides, mesh):
     params = _parameters(data.get("parameters", {}), data.get("configurations", {}), config,
                          dict(overrides or {}))
     kind = data.get("kind", "multibody")
+    if "frames" in data and (kind != "multibody" or data.get("dimension") != 3):
+        raise CaseError("[[frames]] names frames of 3-D bodies: it needs dimension = 3",
+                        element="frames")
     description = str(data.get("description", data.get("title", "")))
     expected = data.get("expected", {})
     if not isinstance(expected, dict):
