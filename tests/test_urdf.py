@@ -242,8 +242,8 @@ BAD = {
                  joint("j", "base", "a")),
         r"r\.urdf: link 'a' <inertia>: .* violate the triangle inequality"),
     "unknown joint type": (
-        lambda: (link("base"), link("a"), joint("j", "base", "a", "planar")),
-        r"r\.urdf: joint 'j': unsupported joint type 'planar'"),
+        lambda: (link("base"), link("a"), joint("j", "base", "a", "screw")),
+        r"r\.urdf: joint 'j': unsupported joint type 'screw'"),
     "two parents": (
         lambda: (link("base"), link("a"), link("b"), joint("j", "base", "a"),
                  joint("k", "b", "a")),

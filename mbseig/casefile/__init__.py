@@ -40,7 +40,7 @@ _TOP_KEYS = {
     "schema_version", "title", "description", "source", "kind", "dimension", "gravity",
     "parameters", "points", "masses", "bodies", "joints", "forces", "matrices", "expected",
     "configurations", "report", "beams", "fe_bodies", "refinement", "inputs", "outputs",
-    "urdf", "motion",
+    "urdf", "motion", "frames",
 }
 
 
@@ -168,6 +168,9 @@ def _build(spec, config, overrides, mesh):
     params = _parameters(data.get("parameters", {}), data.get("configurations", {}), config,
                          dict(overrides or {}))
     kind = data.get("kind", "multibody")
+    if "frames" in data and (kind != "multibody" or data.get("dimension") != 3):
+        raise CaseError("[[frames]] names frames of 3-D bodies: it needs dimension = 3",
+                        element="frames")
     description = str(data.get("description", data.get("title", "")))
     expected = data.get("expected", {})
     if not isinstance(expected, dict):

@@ -74,6 +74,7 @@ class SpatialBuilder(SpatialElementReaders, Builder):
         self.station_origin: dict[str, np.ndarray] = {}  # beam station "BEAM.NAME" → its node
         self.inline: dict[tuple, tuple] = {}  # (element, key) → (body, map, at its station?)
         self.pending_ends: dict[str, list] = {}  # element → its ends, named in _finish
+        self.aliases: dict[str, str] = {}  # [[frames]]: a name → its body or "ground" (urdf)
         self._bound = False
 
     # -- the build ---------------------------------------------------------------------------
@@ -81,6 +82,10 @@ class SpatialBuilder(SpatialElementReaders, Builder):
         for item, label, names in expand("bodies", self.data.get("bodies", []), self.params,
                                          self._bodies):
             self._read_body(Fields(item, label, names))
+        if "frames" in self.data:  # names of bodies' frames (links merged by a URDF import)
+            from .urdf import read_frames
+
+            read_frames(self, self.data["frames"])
         data = self.data
         self.data = {k: v for k, v in data.items() if k != "bodies"}
         try:
@@ -273,7 +278,9 @@ class SpatialBuilder(SpatialElementReaders, Builder):
     def body(self, f, bname):
         if bname in self.station_origin:
             return bname
-        return super().body(f, bname)
+        if self.aliases.get(bname) == "ground":
+            raise f.error(f"{bname!r} is a frame of the ground (frames), not a body")
+        return super().body(f, self.aliases.get(bname, bname))
 
     def _bushing(self, f, forces, g_const):
         """A bushing's ``at`` defaults to the beam station it acts on (DESIGN §8)."""
@@ -290,12 +297,13 @@ class SpatialBuilder(SpatialElementReaders, Builder):
     def frame(self, f, bname):
         """The frame map of a body, or of the ground."""
         self.bind()
-        if bname == "ground":
+        if self.aliases.get(bname, bname) == "ground":
             return GROUND
         return self.frames[self.body(f, bname)]
 
     def local(self, bname, x):
         """Local coordinates of the reference-global point x in a body (or the ground)."""
+        bname = self.aliases.get(bname, bname)
         if bname in self.station_origin:
             return np.asarray(x, float) - self.station_origin[bname]
         return np.asarray(x, float) - (0.0 if bname == "ground" else self.bodies[bname]["origin"])
@@ -319,6 +327,7 @@ class SpatialBuilder(SpatialElementReaders, Builder):
         if isinstance(ref, dict):
             sub = Fields(ref, f"{f.label}.{key}", f.names)
             bname = sub.text("body")
+            bname = self.aliases.get(bname, bname)
             at = sub.vec("at", 3)
             sub.done()
             aff = frame_point(self.frame(f, bname), self.local(bname, at))
@@ -335,8 +344,8 @@ class SpatialBuilder(SpatialElementReaders, Builder):
         raise f.error(f"{key} must be a point name or a table {{body, at}}")
 
     def _two_bodies(self, f):
-        b1, b2 = two_names(f, "bodies", 'bodies must be [body1, body2]; use "ground" for the '
-                           'fixed frame')
+        b1, b2 = (self.aliases.get(b, b) for b in two_names(
+            f, "bodies", 'bodies must be [body1, body2]; use "ground" for the fixed frame'))
         for b in (b1, b2):
             if b != "ground":
                 self.body(f, b)

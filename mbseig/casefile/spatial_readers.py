@@ -38,7 +38,7 @@ FORCE_TYPES = ("spring", "damper", "spring_damper", "force", "torque", "torsiona
 JOINT_TYPES = (*JOINT_ROWS, "distance", "fixed", "slider", "angle_driver", "rolling", "contact",
                "mimic")
 AXIS_KEY = {"revolute": "axis", "cylindrical": "axis", "prismatic": "axis",
-             "point_on_line": "axis", "point_on_plane": "normal"}
+             "point_on_line": "axis", "point_on_plane": "normal", "planar": "normal"}
 
 
 class SpatialElementReaders:

@@ -2,12 +2,12 @@
 URDF" and "3-D case format").
 
 The URDF is read with :mod:`xml.etree.ElementTree` as data (no entity, include or macro is
-expanded; xacro files must be expanded beforehand; meshes, collision and visual elements,
-transmissions and ``<gazebo>`` blocks are ignored).  Only the ``<link>`` and ``<joint>``
-children of ``<robot>`` are read.
-
-What a URDF becomes (every ``at``, ``axis``, ``com`` and ``inertia`` in global axes at the
-reference configuration, as the 3-D format wants):
+expanded; a file still holding xacro markup is refused with the command that expands it;
+meshes, collision and visual elements, transmissions and ``<gazebo>`` blocks are ignored).
+Only the ``<link>`` and ``<joint>`` children of ``<robot>`` are read, every number checked
+where it is read (:mod:`.urdf_read`).  The model is the one Pinocchio builds
+(``pin.buildModelFromUrdf``; :mod:`.urdf_tree`), every ``at``, ``axis``, ``com`` and
+``inertia`` in global axes at the reference configuration, as the 3-D format wants:
 
 - reference configuration: the joint values ``positions = {JOINT = value}`` (rad or m; others 0;
   a ``<mimic>`` follower takes multiplier·leader + offset).  Link frames follow by forward
@@ -15,28 +15,35 @@ reference configuration, as the 3-D format wants):
   rpy the fixed-axis roll-pitch-yaw of URDF, R = Rz(yaw) Ry(pitch) Rx(roll), and motion a
   rotation by q about ``<axis>`` (revolute, continuous) or a translation by q along it
   (prismatic);
-- a link with mass → ``[[bodies]]`` (name = the link): ``com`` = link origin + R_link·xyz of
-  ``<inertial><origin>``, ``inertia`` = R I Rᵀ with R = R_link·R(rpy of the inertial origin) and
-  I the tensor of ``<inertia>`` (products included: I = [[ixx, ixy, ixz], [ixy, iyy, iyz],
-  [ixz, iyz, izz]]);
-- ``revolute`` / ``continuous`` → ``revolute`` (``at`` = the joint frame's origin, ``axis`` its
-  ``<axis>`` in global axes), ``prismatic`` → ``prismatic``, ``fixed`` → ``weld``;
-  joint names are element names;
-- massless links (no ``<inertial>``, or mass 0; their inertia is then ignored) are merged into
-  a link with mass rigidly attached to them (through ``fixed`` joints): their parent's body,
-  or, for a link moved by a joint (and a floating root), the first link with mass found below
-  it through fixed joints (document order), which then carries the moving joint.  A massless
-  link with no mass fixed to it that a joint moves is an error (its motion has no inertia);
-  the same for a floating root;
-- ``floating = false``: the root link is welded to the ground (a massless root *is* the
-  ground, and so is everything massless fixed to it); ``true``: the root body is free;
+- bodies: every link on a ``fixed`` joint is merged into its parent, so a body is the root, or a
+  link a joint moves, with all the links fixed to it: its mass, centre of mass and inertia
+  the sums of theirs (parallel-axis theorem; products of inertia included: I = [[ixx, ixy,
+  ixz], [ixy, iyy, iyz], [ixz, iyz, izz]] rotated by R_link·R(rpy of the inertial origin)).
+  A link's own inertia may be zero (a point mass on a fixed joint); only a body's merged
+  inertia must be a rigid body's, else the error names the body and the links merged into it.
+  The body is named after its top link, or, when that has no mass, after the first link with
+  mass fixed below it (document order), which then carries the moving joint; a body with no
+  mass at all that a joint moves is an error, and so is a massless floating root;
+- frames: every merged link is a ``[[frames]]`` entry ``{name = LINK, body = BODY}`` (BODY is
+  ``"ground"`` for the links of a fixed, massless root), so the case can name it wherever a
+  body name is allowed (:func:`read_frames`);
+- joints: ``revolute`` / ``continuous`` → ``revolute`` (``at`` = the joint frame's origin,
+  ``axis`` its ``<axis>`` in global axes), ``prismatic`` → ``prismatic``, ``planar`` →
+  ``planar`` (``normal`` = the axis: the child slides in the plane normal to it and turns about
+  it, as the URDF specification says; Pinocchio 4.1 ignores the axis and always uses the joint
+  frame's z), ``floating`` → nothing (the child body is free), ``fixed`` → merged; joint names
+  are element names;
+- ``floating = false``: the root body is welded to the ground (``ROOT_to_ground``, or the fixed
+  joint that joins it to a massless root); a massless root *is* the ground; ``true``: the root
+  body is free;
 - ``stiffness = {default = k, JOINT = k}`` and ``damping`` (the same, or ``"urdf"``: each
   joint's ``<dynamics damping>``): a ``torsional`` force ``JOINT_spring`` on a revolute joint
   (zero torque at the reference), on a prismatic joint a ``spring`` / ``damper`` /
   ``spring_damper`` ``JOINT_spring`` between ``{body = parent, at = at}`` and ``{body = child,
   at = at + ℓ·axis}`` (free length ℓ = the distance at the reference, so zero force there; the
   prismatic joint keeps the line along the axis, so the force is k·s exactly).  ``default``
-  applies to every moving joint, ``<mimic>`` followers included (``JOINT = 0`` removes one);
+  applies to every revolute, continuous and prismatic joint, ``<mimic>`` followers included
+  (``JOINT = 0`` removes one); a planar or floating joint takes none (a bushing can hold it);
   values may be numbers or expressions of the case's parameters;
 - ``<mimic joint="L" multiplier="r" offset="o">`` on joint F → ``[[joints]] type = "mimic"``,
   ``name = "F_mimic"``, ``joint = "F"``, ``leader = "L"``, ``multiplier = r``: θ_F = r θ_L with
@@ -55,8 +62,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import CaseError
-from ..model.mimic import MimicConstraint, joint_coordinate
-from ..model.spatial_body import inertia_problem
+from .fields import MIN_MAGNITUDE, RANGE_RULE, in_range
 from .urdf_read import (  # noqa: F401
     MOVING,
     Joint,
@@ -66,57 +72,28 @@ from .urdf_read import (  # noqa: F401
     read_urdf,
     rpy_matrix,
 )
+from .urdf_entries import read_frames, read_mimic  # noqa: F401 (the 3-D reader's entries)
+from .urdf_tree import group_problem, groups, kinematics, tree
 
-__all__ = ["UrdfRobot", "expand_urdf", "import_urdf", "read_mimic", "read_urdf", "urdf_tables"]
+__all__ = ["UrdfRobot", "expand_urdf", "import_urdf", "read_frames", "read_mimic", "read_urdf",
+           "urdf_tables"]
 
+ONE_DOF = ("revolute", "continuous", "prismatic")  # the joints with a position and a spring
 _URDF_KEYS = {"file", "positions", "stiffness", "damping", "floating"}
 
 
 # ---------------------------------------------------------------------------------------------
 # URDF → case tables
 # ---------------------------------------------------------------------------------------------
-def _tree(robot: UrdfRobot):
-    """(root, joints in breadth-first order from the root): one root, one parent per link."""
-    parent_joint = {}
-    for j in robot.joints.values():
-        if j.child in parent_joint:
-            raise robot.error(f"joint {j.name!r}", f"link {j.child!r} has two parents (joints "
-                              f"{parent_joint[j.child]!r} and {j.name!r}): kinematic loops are "
-                              f"not supported")
-        if j.child == j.parent:
-            raise robot.error(f"joint {j.name!r}", "parent and child are the same link")
-        parent_joint[j.child] = j.name
-    roots = [n for n in robot.links if n not in parent_joint]
-    if not roots:
-        raise robot.error("robot", "no root link: the joints form a kinematic loop")
-    children: dict[str, list] = {}
-    for j in robot.joints.values():
-        children.setdefault(j.parent, []).append(j)
-    order, queue, seen = [], [roots[0]], {roots[0]}
-    while queue:
-        link = queue.pop(0)
-        for j in children.get(link, []):
-            order.append(j)
-            seen.add(j.child)
-            queue.append(j.child)
-    if len(roots) > 1:
-        raise robot.error(f"link {roots[1]!r}", f"the robot has several root links "
-                          f"({', '.join(map(repr, roots))}): links must form one tree")
-    unreached = [n for n in robot.links if n not in seen]
-    if unreached:  # one root, but a cycle not reachable from it
-        raise robot.error(f"joint {parent_joint[unreached[0]]!r}",
-                          "it closes a kinematic loop (not supported)")
-    return roots[0], order, children
-
-
 def _joint_positions(robot, positions, where):
     """Joint values of the reference: the given ones, mimic followers from their leaders."""
     q = {}
     for name, value in positions.items():
         if name not in robot.joints:
             raise CaseError(f"unknown joint {name!r}", file=where[0], element=where[1])
-        if robot.joints[name].type == "fixed":
-            raise CaseError(f"joint {name!r} is fixed: it has no position", file=where[0],
+        if robot.joints[name].type not in ONE_DOF:
+            raise CaseError(f"joint {name!r} is {robot.joints[name].type}: it has no position "
+                            f"(a revolute, continuous or prismatic joint has)", file=where[0],
                             element=where[1])
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             raise CaseError(f"{name} must be a finite number (rad or m), got {value!r}",
@@ -132,12 +109,19 @@ def _joint_positions(robot, positions, where):
             done[name] = q.get(name, 0.0)
             return done[name]
         leader, mult, off = j.mimic
-        if leader not in robot.joints or robot.joints[leader].type == "fixed":
+        if j.type not in ONE_DOF:
+            raise robot.error(f"joint {name!r}", f"<mimic> on a {j.type} joint (a revolute, "
+                              f"continuous or prismatic joint may follow another)")
+        if leader not in robot.joints or robot.joints[leader].type not in ONE_DOF:
             raise robot.error(f"joint {name!r}", f"<mimic> refers to {leader!r}, which is not a "
-                              f"moving joint of the robot")
+                              f"revolute, continuous or prismatic joint of the robot")
         if leader in chain or leader == name:
             raise robot.error(f"joint {name!r}", "<mimic> joints follow each other in a cycle")
-        v = mult * value(leader, (*chain, name)) + off
+        with np.errstate(all="ignore"):
+            v = mult * value(leader, (*chain, name)) + off
+        if not math.isfinite(v):
+            raise robot.error(f"joint {name!r}", f"<mimic> gives a position out of the double "
+                              f"range ({mult!r} × {leader} + {off!r})")
         if name in q and abs(q[name] - v) > 1e-12 * max(1.0, abs(v)):
             raise CaseError(f"{name} = {q[name]!r} contradicts its <mimic> of {leader!r} "
                             f"({v!r}); leave it out", file=where[0], element=where[1])
@@ -145,21 +129,9 @@ def _joint_positions(robot, positions, where):
         return v
 
     for name, j in robot.joints.items():
-        if j.type != "fixed":
+        if j.type in MOVING:
             value(name)
     return done
-
-
-def _massive_below(robot, children, link):
-    """The first link with mass rigidly attached below ``link`` (itself included), or None."""
-    if robot.links[link].mass > 0:
-        return link
-    for j in children.get(link, []):
-        if j.type == "fixed":
-            found = _massive_below(robot, children, j.child)
-            if found:
-                return found
-    return None
 
 
 def _gains(robot, table, key, moving, where):
@@ -174,8 +146,11 @@ def _gains(robot, table, key, moving, where):
                         f"{table!r}", file=where[0], element=where[1])
     for name, v in table.items():
         if name != "default" and name not in moving:
-            raise CaseError(f"{key}: {name!r} is not a moving joint of the robot", file=where[0],
-                            element=where[1])
+            kind = robot.joints[name].type if name in robot.joints else None
+            why = (f"a {kind} joint: a joint spring acts on a revolute, continuous or prismatic "
+                   f"joint (a bushing can hold a {kind} one)" if kind in ("planar", "floating")
+                   else "not a moving joint of the robot")
+            raise CaseError(f"{key}: {name!r} is {why}", file=where[0], element=where[1])
         ok = isinstance(v, str) or (isinstance(v, (int, float)) and not isinstance(v, bool)
                                     and math.isfinite(v) and v >= 0)
         if not ok:
@@ -191,93 +166,119 @@ def _gains(robot, table, key, moving, where):
 
 def urdf_tables(robot: UrdfRobot, *, positions=None, stiffness=None, damping=None,
                 floating: bool = False, where=("", "urdf")) -> dict:
-    """``{"bodies", "joints", "forces"}`` of the 3-D format for a robot (module docstring).
-    ``where`` = (file, element) names the case table that gave the options, for errors."""
-    root, order, children = _tree(robot)
+    """``{"bodies", "joints", "forces", "frames"}`` of the 3-D format for a robot (module
+    docstring).  ``where`` = (file, element) names the case table that gave the options."""
+    root, order, children = tree(robot)
     q = _joint_positions(robot, positions or {}, where)
-    moving = [j.name for j in robot.joints.values() if j.type != "fixed"]
+    moving = [j.name for j in robot.joints.values() if j.type in ONE_DOF]
     k = _gains(robot, stiffness, "stiffness", moving, where)
     c = _gains(robot, damping, "damping", moving, where)
-
-    # forward kinematics: link frames (R, p) and joint frames at the reference
-    frames = {root: (np.eye(3), np.zeros(3))}
-    jframes = {}
-    for j in order:
-        Rp, pp = frames[j.parent]
-        Rj, pj = Rp @ rpy_matrix(j.rpy), pp + Rp @ j.xyz
-        jframes[j.name] = (Rj, pj)
-        if j.type in ("revolute", "continuous"):
-            frames[j.child] = (Rj @ axis_rotation(j.axis, q[j.name]), pj)
-        elif j.type == "prismatic":
-            frames[j.child] = (Rj, pj + Rj @ j.axis * q[j.name])
+    frames, jframes = kinematics(root, order, q)
+    for name in robot.links:
+        if name == "ground" or "." in name:
+            why = ("'ground' names the case's fixed frame" if name == "ground" else
+                   "'.' separates beam stations and body markers in a case ('shaft.disk1')")
+            raise robot.error(f"link {name!r}", f"the link's name cannot be a name of the case "
+                              f"({why}); rename the link in the URDF")
+    rigid = groups(robot, root, order, children, frames)
+    body_of = {}  # link → its body, or "ground"
+    bodies, joints, forces, mimics = [], [], [], []
+    for top, g in rigid.items():
+        if g.body is None and top == root and not floating:
+            name = "ground"
+        elif g.body is None:
+            raise _no_mass(robot, top, order, floating)
         else:
-            frames[j.child] = (Rj, pj)
-
-    # bodies: every link with mass; massless links merged (module docstring)
-    body_of: dict[str, str] = {}
-    if robot.links[root].mass > 0:
-        body_of[root] = root
-    elif not floating:
-        body_of[root] = "ground"
-    else:
-        body = _massive_below(robot, children, root)
-        if body is None:
-            raise robot.error(f"link {root!r}", "the floating root link has no <inertial> mass "
-                              "and no link with mass is fixed to it")
-        body_of[root] = body
-    joints, forces = [], []
-    if robot.links[root].mass > 0 and not floating:
-        joints.append({"type": "weld", "name": f"{root}_to_ground", "bodies": ["ground", root],
-                       "at": [0.0, 0.0, 0.0]})
+            name = g.body
+            problem = group_problem(robot, g)
+            if problem:
+                raise problem
+            bodies.append(_body(robot, g))
+        body_of.update({link: name for link in g.links})
+    root_body = body_of[root]
+    if root_body != "ground" and not floating:
+        fixed_in = next((j for j in order if j.child == root_body), None)
+        joints.append({"type": "weld", "bodies": ["ground", root_body],
+                       "name": fixed_in.name if fixed_in else f"{root}_to_ground",
+                       "at": _list(jframes[fixed_in.name][1]) if fixed_in else [0.0, 0.0, 0.0]})
     for j in order:
-        b1 = body_of[j.parent]
-        at = _list(jframes[j.name][1])
-        if j.type == "fixed":
-            if j.child in body_of:  # the massive link that a massless parent merged into
-                continue
-            if robot.links[j.child].mass == 0:
-                body_of[j.child] = b1
-                continue
-            body_of[j.child] = j.child
-            joints.append({"type": "weld", "name": j.name, "bodies": [b1, j.child], "at": at})
+        if j.type in ("fixed", "floating"):  # merged; a free child (no joint)
             continue
-        b2 = _massive_below(robot, children, j.child)
-        if b2 is None:
-            raise robot.error(f"link {j.child!r}", f"it has no <inertial> mass (nor a link with "
-                              f"mass fixed to it) but joint {j.name!r} moves it")
-        body_of[j.child] = b2
-        body_of[b2] = b2
-        axis = _list(jframes[j.name][0] @ j.axis)
+        b1, b2 = body_of[j.parent], body_of[j.child]
+        at = _list(jframes[j.name][1])
+        axis = _unit_list(jframes[j.name][0] @ j.axis)
+        if j.type == "planar":
+            joints.append({"type": "planar", "name": j.name, "bodies": [b1, b2], "at": at,
+                           "normal": axis})
+            continue
         joints.append({"type": MOVING[j.type], "name": j.name, "bodies": [b1, b2], "at": at,
                        "axis": axis})
-        if j.mimic is not None:
-            joints.append({"type": "mimic", "name": f"{j.name}_mimic", "joint": j.name,
+        if j.mimic is not None:  # after every joint: its leader may come later in the tree
+            mimics.append({"type": "mimic", "name": f"{j.name}_mimic", "joint": j.name,
                            "leader": j.mimic[0], "multiplier": j.mimic[1]})
         forces += _spring(j, b1, b2, at, axis, k.get(j.name, 0), c.get(j.name, 0))
-    bodies = [_body(robot, name, *frames[name]) for name in robot.links
-              if robot.links[name].mass > 0]
+    named = {b["name"] for b in bodies}
+    links = [{"name": n, "body": b} for n, b in body_of.items() if n not in named]
+    joints += mimics
+    for e in joints + forces:
+        _in_range(robot, e)
     names = [e["name"] for e in joints + forces]
     clash = sorted({n for n in names if names.count(n) > 1})
     if clash:
         raise robot.error("robot", f"element name {clash[0]!r} of the expanded case is used "
                           f"twice (a joint of that name exists)")
-    return {"bodies": bodies, "joints": joints, "forces": forces}
+    return {"bodies": bodies, "joints": joints, "forces": forces, "frames": links}
+
+
+def _no_mass(robot, top, order, floating):
+    """The error for a rigid group without mass: moved by a joint, or a floating root."""
+    into = next((j for j in order if j.child == top), None)
+    if into is None:
+        free = [j.name for j in order if j.parent == top and j.type == "floating"]
+        hint = (f"; its joint {free[0]!r} is floating already: leave floating out" if free
+                else "")
+        return robot.error(f"link {top!r}", f"the floating root link has no <inertial> mass "
+                           f"and no link with mass is fixed to it{hint}")
+    return robot.error(f"link {top!r}", f"it has no <inertial> mass (nor a link with mass fixed "
+                       f"to it) but joint {into.name!r} moves it")
 
 
 def _list(v):
     return [float(x) + 0.0 for x in v]
 
 
-def _body(robot, name, R, p):
-    link = robot.links[name]
-    problem = inertia_problem(link.inertia)
-    if problem:
-        raise robot.error(f"link {name!r} <inertia>", problem)
-    Ri = R @ rpy_matrix(link.rpy)
-    I = Ri @ link.inertia @ Ri.T
-    I = 0.5 * (I + I.T)
-    return {"name": name, "mass": link.mass, "com": _list(p + R @ link.xyz),
-            "inertia": [_list(row) for row in I]}
+def _unit_list(v):
+    """A unit vector's components, those below 1e-100 (the case number rule's floor) as 0: a
+    turn of the direction below 1e-100 rad, far below its rounding (1.1e-16)."""
+    return [float(x) + 0.0 if abs(x) >= MIN_MAGNITUDE else 0.0 for x in v]
+
+
+def _in_range(robot, element):
+    """Every position of a generated joint or spring in the case number rule, else refused
+    naming the URDF joint (URDF values near 1e-100 or 1e100 combine to smaller or larger
+    ones)."""
+    for key in ("at", "points"):
+        value = element.get(key)
+        if value is None:
+            continue
+        values = [p["at"] for p in value] if key == "points" else [value]
+        if not all(in_range(v) for v in values):
+            name = element.get("joint", element["name"].removesuffix("_spring"))
+            raise robot.error(f"joint {name!r}", f"its position at the reference, {values!r}, "
+                              f"is out of range: {RANGE_RULE}")
+
+
+def _body(robot, g):
+    """The [[bodies]] entry of a rigid group (its merged inertia, urdf_tree); every number in
+    the case's range (README, "Input rules"), else refused naming the link."""
+    entry = {"name": g.body, "mass": g.mass, "com": _list(g.com),
+             "inertia": [_list(row) for row in g.inertia]}
+    for key in ("mass", "com", "inertia"):
+        if not in_range(entry[key]):
+            merged = f" merged with {', '.join(map(repr, g.links[1:]))}" if len(g.links) > 1 else ""
+            raise robot.error(f"link {g.body!r}", f"its {key}{merged} at the reference, "
+                              f"{entry[key]!r}, is out of range: {RANGE_RULE}")
+    return entry
 
 
 def _spring(j, b1, b2, at, axis, k, c):
@@ -330,7 +331,7 @@ def expand_urdf(case: dict, case_path) -> dict:
     tables = urdf_tables(robot, positions=positions, stiffness=table.get("stiffness"),
                          damping=table.get("damping"), floating=floating, where=(file, "urdf"))
     out = {key: value for key, value in case.items() if key != "urdf"}
-    for key in ("bodies", "joints", "forces"):
+    for key in ("bodies", "joints", "forces", "frames"):
         own = case.get(key, [])
         if not isinstance(own, list):
             raise CaseError(f"{key} must be an array of tables", file=file, element=key)
@@ -358,30 +359,3 @@ def import_urdf(urdf_path, out_toml=None, *, positions=None, stiffness=None, dam
     if out_toml is not None:
         Path(out_toml).write_text(to_toml(case), encoding="utf-8")
     return case
-
-
-def read_mimic(builder, f, constraints):
-    """Reader entry for ``type = "mimic"`` in the 3-D reader
-    (:class:`mbseig.casefile.spatial.SpatialBuilder`; the case format is in
-    :mod:`mbseig.model.mimic`): both joints are declared before it."""
-    f.text("type")
-    f.text("name", None)
-    coords = []
-    for key in ("joint", "leader"):
-        jname = f.text(key)
-        j = builder.spatial_joints.get(jname)
-        if j is None or j[0] not in ("revolute", "cylindrical", "prismatic"):
-            raise f.error(f"{key} {jname!r} is not a revolute, cylindrical or prismatic joint "
-                          f"declared before")
-        kind, b1, b2, at, axis = j[:5]
-        frames = (builder.frame(f, b1), builder.frame(f, b2))
-        locals_ = (builder.local(b1, at), builder.local(b2, at))
-        coords.append(joint_coordinate(kind, frames, locals_, axis))
-    if f.raw("joint") == f.raw("leader"):
-        raise f.error("a joint cannot follow itself")
-    r = f.num("multiplier", 1.0)
-    o = f.num("offset", 0.0)
-    f.done()
-    units = "N m" if coords[0].kind == "angle" else "N"
-    c = MimicConstraint(f.label, coords[0], coords[1], r, o, units)
-    builder.add_constraint(constraints, c, f)

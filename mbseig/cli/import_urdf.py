@@ -53,4 +53,51 @@ def run(args):
                        gravity=None if args.no_gravity else (0.0, 0.0, -9.81))
     print(f"{args.out}: {len(case.get('bodies', []))} bodies, {len(case.get('joints', []))} "
           f"joints, {len(case.get('forces', []))} forces")
+    if not args.stiffness:
+        print(rest_note(args.out, gravity=not args.no_gravity))
     return 0
+
+
+HOLD = ("for the robot held at its reference posture (servos as joint springs) give "
+        "--stiffness default=K (N m/rad; N/m on prismatic joints) and --damping default=C "
+        "(or --damping urdf)")
+
+
+def rest_note(path, *, gravity=True) -> str:
+    """What the equilibrium of an imported case without joint springs is (solved from its
+    reference posture) and how to get a stable rest position: springs, or the stable rest
+    position that :func:`mbseig.equilibrium` offers as ``eq.stable_alternative``."""
+    import warnings
+
+    from ..casefile import load_case
+    from ..errors import MbseigError
+    from ..statics import StaticInstabilityWarning, equilibrium
+
+    head = "note: no joint springs (--stiffness): nothing holds the joints"
+    if not gravity:
+        return (f"{head} and there is no gravity, so every posture is at rest and every mode "
+                f"is a rigid-body one; {HOLD}")
+    try:
+        with warnings.catch_warnings():  # its text is eq.notes, said below
+            warnings.simplefilter("ignore", StaticInstabilityWarning)
+            eq = equilibrium(load_case(path))
+    except MbseigError as exc:
+        return (f"{head}, so gravity alone sets the rest position, and from the reference "
+                f"posture none was found ({exc.message}); {HOLD}")
+    static = eq.static or {}
+    verdict = static.get("verdict", "not examined")
+    found = f"statically {verdict} ({eq.iterations} Newton iterations from the reference posture)"
+    if verdict == "unstable":
+        found = (f"statically unstable, {static.get('index')} direction(s) of negative "
+                 f"stiffness ({eq.iterations} Newton iterations from the reference posture)")
+        alt = eq.stable_alternative
+        found += (f"; a stable rest position exists ({alt.method}), offered in Python as "
+                  f"mbseig.equilibrium(model).stable_alternative" if alt is not None else
+                  "; the statics' search for a stable rest position from there (load "
+                  "continuation, descent along the unstable direction; "
+                  "eq.stable_alternative) found none: --position JOINT=VALUE starts it from "
+                  "another posture")
+    elif verdict == "neutral":
+        found += (": a direction of zero stiffness remains (a joint that gravity does not "
+                  "load, such as one about the vertical), so no rest position is strictly stable")
+    return f"{head}, so gravity alone sets the rest position; the equilibrium found is {found}; {HOLD}"

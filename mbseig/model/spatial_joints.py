@@ -62,7 +62,7 @@ __all__ = [
 
 #: equations per joint type
 JOINT_ROWS = {"spherical": 3, "revolute": 5, "universal": 4, "cylindrical": 4, "prismatic": 5,
-              "weld": 6, "point_on_line": 2, "point_on_plane": 1}
+              "weld": 6, "point_on_line": 2, "point_on_plane": 1, "planar": 3}
 
 
 @dataclass(frozen=True, eq=False)
@@ -255,6 +255,9 @@ def joint_rows(kind: str, frames, locals_, axes, length: float) -> QuadraticMap:
         rows.dot(P, V2(p)).dot(P, V2(qn))
     elif kind == "point_on_plane":
         rows.dot(P, V2(axes[0]))
+    elif kind == "planar":  # b2 slides in the plane normal to its axis and turns about it
+        p, qn = normal_pair(axes[0])
+        rows.dot(V1(axes[0]), V2(p)).dot(V1(axes[0]), V2(qn)).dot(P, V2(axes[0]))
     return rows.build()
 
 
