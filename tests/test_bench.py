@@ -3,6 +3,8 @@ benchmark itself is never part of the test suite)."""
 
 import json
 
+import pytest
+
 from mbseig.cli import main
 
 
@@ -27,10 +29,10 @@ def test_bench_quick_writes_report(tmp_path, capsys):
     assert f"Load average (1, 5, 15 min): {said} at the start and " in md
 
 
-def test_bench_quick_large_and_startup_sections(tmp_path, capsys):
+def test_bench_quick_large_section(tmp_path, capsys):
     """The large constrained model (general damping against the eigsh floor, each in a fresh
-    process) and the start-up rows: present, verified (η, coverage), ratios formed."""
-    assert main(["bench", "--quick", "--out", str(tmp_path), "--sections", "large", "startup"]) == 0
+    process): present, verified (η, coverage), ratios formed."""
+    assert main(["bench", "--quick", "--out", str(tmp_path), "--sections", "large"]) == 0
     res = json.loads((tmp_path / "benchmarks.json").read_text())
     large = {r["method"]: r for r in res["rows"] if r["section"] == "large"}
     assert {"floor", "partial-companion"} <= set(large)
@@ -40,10 +42,71 @@ def test_bench_quick_large_and_startup_sections(tmp_path, capsys):
     # the general path's lowest |s| and the undamped floor's ω₁ agree to the damping's effect
     # (ζ below 1e-2 on this model: |s₁| = ω₁ to within 1e-3 relative)
     assert abs(general["omega_1"] - large["floor"]["omega_1"]) <= 1e-3 * large["floor"]["omega_1"]
-    startup = [r for r in res["rows"] if r["section"] == "startup"]
-    assert len(startup) == 4 and all(r["time"] > 0 for r in startup)
     md = (tmp_path / "benchmarks.md").read_text()
-    assert "## Large constrained model" in md and "## Start-up" in md
+    assert "## Large constrained model" in md
+
+
+def test_bench_startup_rows_follow_the_method(tmp_path, capsys, monkeypatch):
+    """The start-up rows' method (mbseig.bench.startup_rows.bench_startup), not a time: the
+    process timer is replaced by one that records each call and returns set times, so that
+    what is checked is which commands run, in which order, under which environment, and how
+    the ratios are formed (median over repeats of the pair ratio, its spread, cpu apart)."""
+    from mbseig.bench import startup_rows as su
+
+    monkeypatch.setenv("OPENBLAS_CORETYPE", "Haswell")
+    monkeypatch.setenv("OPENBLAS_L2_SIZE", "1048576")
+    monkeypatch.setenv("PYTHONDONTWRITEBYTECODE", "1")
+    calls = []
+    # floor 1.0 s, 1.1, 0.9 by repeat (after the warm-up round); the command 1.2× its floor in
+    # the first timed repeat, 1.1× in the second and 1.3× in the third: pair median 1.2×
+    floor_t = iter([0.5, 1.0, 1.1, 0.9])
+    modes_t = iter([0.5, 1.2, 1.21, 1.17])
+
+    def fake(cmd, env):
+        calls.append((tuple(cmd), env))
+        if cmd[-1] == "import numpy, scipy.linalg":
+            return next(floor_t), 0.25
+        if cmd[-2] == "modes":
+            return next(modes_t), 0.30
+        return 0.4, 0.2
+
+    monkeypatch.setattr(su, "timed_process", fake)
+    assert main(["bench", "--quick", "--out", str(tmp_path), "--sections", "startup",
+                 "--repeats", "3"]) == 0
+    res = json.loads((tmp_path / "benchmarks.json").read_text())
+    rows = {r["method"]: r for r in res["rows"] if r["section"] == "startup"}
+    floor, modes = rows[su.STARTUP_FLOOR], rows["mbseig modes hand_device"]
+    assert set(rows) == {su.STARTUP_FLOOR, "import numpy, scipy.linalg, prompt exit",
+                         "import mbseig", "mbseig modes hand_device",
+                         "mbseig modes hand_device, normal exit"}
+    assert floor["ratio"] == floor["ratio_min"] == floor["ratio_max"] == 1.0
+    assert modes["ratio"] == pytest.approx(1.2, rel=1e-12)  # median of 1.2, 1.1, 1.3
+    assert (modes["ratio_min"], modes["ratio_max"]) == pytest.approx((1.1, 1.3), rel=1e-12)
+    assert modes["cpu_ratio"] == pytest.approx(1.2, rel=1e-12) and modes["repeats"] == 3
+    assert modes["time"] == 1.2 and floor["time"] == 1.0  # medians of the timed runs only
+    # every command under one environment, with the three variables dropped
+    assert all(not set(su.STARTUP_UNSET) & set(env) for _, env in calls)
+    assert len({id(env) for _, env in calls}) == 1
+    # one warm-up round, then the order alternates between repeats
+    names = [c for c, _ in calls]
+    assert len(names) == 5 * 4 and names[5:10] == names[:5] and names[10:15] == names[4::-1]
+    md = (tmp_path / "benchmarks.md").read_text()
+    assert "## Start-up" in md and "median of pairs" in md and "OPENBLAS_CORETYPE" in md
+    assert "1.20 (1.20 s; pairs 1.10–1.30, cpu 1.20)" in md
+
+
+def test_timed_process_measures_a_real_process():
+    """timed_process: a child's wall and cpu seconds (both > 0; the cpu of a process that
+    sleeps is far below its wall), and a failing command raises."""
+    import subprocess
+    import sys
+
+    from mbseig.bench.startup_rows import startup_env, timed_process
+
+    wall, cpu = timed_process([sys.executable, "-c", "import time; time.sleep(0.3)"], startup_env())
+    assert wall >= 0.3 and 0 < cpu < wall
+    with pytest.raises(subprocess.CalledProcessError):
+        timed_process([sys.executable, "-c", "raise SystemExit(3)"], startup_env())
 
 
 def test_bench_beams_rows_against_the_closed_forms(tmp_path):

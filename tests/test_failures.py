@@ -1,5 +1,6 @@
 """Stability where methods fail: each case names the naive method that gets the verdict wrong
-and checks mbseig's answer against the reference stated in mbseig/failcases.py (closed forms:
+(for the badly scaled chain: the damping, off by more than δ, so that its verdict's sign is
+rounding's and differs between BLAS kernels) and checks mbseig's answer against the reference stated in mbseig/failcases.py (closed forms:
 pendulum ω = √(g/l); Ziegler's flutter load F_cr = (7/2 − √2) c/l; chain ω_j; static
 condensation of a massless point; the dissipation theorem for M, K, C positive definite).
 """

@@ -1,12 +1,9 @@
-"""Whole-pipeline rows of the benchmark: start-up against the import floor, sweeps in points a
-second, assembly of Jacobians, the constraint-force stiffness and the time-domain check."""
+"""Whole-pipeline rows of the benchmark: sweeps in points a second, assembly of Jacobians, the constraint-force stiffness and the time-domain check."""
 
 from __future__ import annotations
 
 import math
 import os
-import subprocess
-import sys
 import time
 import warnings
 from pathlib import Path
@@ -24,43 +21,6 @@ from .cases import case_path
 from .dense_rows import (
     median_times,
 )
-
-
-def bench_startup(repeats, log, case="hand_device"):
-    """Wall time of ``mbseig modes CASE`` against ``python -c "import numpy, scipy.linalg"``,
-    interleaved, medians (the start-up goal's ratio)."""
-    exe = Path(sys.executable).with_name("mbseig")
-    cli = [str(exe)] if exe.exists() else [sys.executable, "-m", "mbseig"]
-    cmds = {"import numpy, scipy.linalg (floor)": [sys.executable, "-c", "import numpy, scipy.linalg"],
-            "import mbseig": [sys.executable, "-c", "import mbseig"],
-            f"mbseig modes {case}": [*cli, "modes", str(case_path(case))],
-            # the same command through main() with Python's normal exit (teardown included):
-            # what the executable's prompt exit saves (mbseig.cli.console)
-            f"mbseig modes {case}, normal exit": [
-                sys.executable, "-c", "import sys; from mbseig.cli import main; "
-                f"sys.exit(main(['modes', {str(case_path(case))!r}]))"]}
-    # as Python runs by default, from cached bytecode: a PYTHONDONTWRITEBYTECODE in the
-    # environment (set on some CI machines) would make every run compile mbseig's modules
-    # anew (≈ 60 ms here) while numpy and scipy load theirs from the install; one untimed
-    # round writes the cache, as the first run after `pip install -e .` does (a plain
-    # `pip install .` compiles at install time)
-    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
-    for c in cmds.values():
-        subprocess.run(c, capture_output=True, check=True, env=env)
-    times = {k: [] for k in cmds}
-    for _ in range(repeats):
-        for k, c in cmds.items():
-            t = time.perf_counter()
-            subprocess.run(c, capture_output=True, check=True, env=env)
-            times[k].append(time.perf_counter() - t)
-    floor = float(np.median(times["import numpy, scipy.linalg (floor)"]))
-    rows = []
-    for k, v in times.items():
-        t = float(np.median(v))
-        rows.append({"section": "startup", "method": k, "n": 0, "time": t, "ratio": t / floor,
-                     "repeats": repeats})
-        log(f"startup {k:38s} {t:.3f} s  ({t / floor:.2f}x floor)")
-    return rows
 
 
 def bench_sweeps(lines, points, log, case="hand_device"):

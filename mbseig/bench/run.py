@@ -63,12 +63,12 @@ from .peer import bench_peer
 from .pipeline_rows import (
     bench_constraint_stiffness,
     bench_jacobians,
-    bench_startup,
     bench_sweeps,
     bench_timedomain,
 )
 from .report import write_report
 from .sparse_rows import bench_large, bench_partial
+from .startup_rows import bench_startup
 
 __all__ = ["run_bench"]
 
@@ -96,7 +96,7 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
         "left_n": 100 if quick else 1000,
         "large_sizes": [2000] if quick else [10_000, 100_000, 1_000_000],
         "slepc_sizes": [2000] if quick else [10_000, 100_000, 1_000_000],
-        "startup_repeats": 1 if quick else 15,
+        "startup_repeats": max(repeats, 1 if quick else 15),
         "peer_sizes": [20] if quick else [50, 200, 500],
         "sweep_grid": (2, 5) if quick else (6, 20),
     }
