@@ -78,14 +78,17 @@ def _contract(capsys, path):
 @pytest.mark.parametrize("name, key, value, words", [
     ("inverted_pendulum_shaken_pivot.toml", "w", 1e308, ["motion.period", "shorter than"]),
     ("asymmetric_rotor_anisotropic_bearings.toml", "Omega", 1e308, ["motion.period"]),
+    ("inverted_pendulum_shaken_pivot.toml", "w", 1e-200, ["motion.period", "longer than"]),
     ("inverted_pendulum_shaken_pivot.toml", "w", 1e100, ["'O'", "second time derivative"]),
+    ("inverted_pendulum_shaken_pivot.toml", "w", 1e72, ["'O'", "second time derivative"]),
     ("pendulum_shaken_pivot.toml", "w", 1e150, ["second time derivative"]),
 ])
 def test_periodic_overflow_is_one_line(tmp_path, capsys, name, key, value, words):
-    """The variants that leaked ``RuntimeWarning: overflow encountered in multiply`` (and 18
-    lines of traceback) from the interpolant of the periodic model before any refusal: the
-    period 2π/w below the shortest the model holds, or a pivot's acceleration A w² whose square
-    leaves the double range; now one line naming the file and the element."""
+    """The variants that leaked a numpy warning and a traceback from the periodic model: the
+    period 2π/w below the shortest the model holds (the interpolant's frequencies overflowed),
+    above the longest (the squared step of its time differences overflowed: "invalid value"), or
+    a pivot's acceleration A w² beyond 3e138 (DOP853's error norm of it overflowed, w = 1e72);
+    now one line naming the file and the element."""
     code, err = _contract(capsys, _variant(tmp_path, name, ("parameters", key), value))
     assert code == 2 and str(tmp_path / name) in err and all(w in err for w in words), err
 

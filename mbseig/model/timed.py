@@ -35,7 +35,7 @@ from ..errors import CaseError
 from ..numerics import DOUBLE_RANGE
 from .trig_series import TrigSeries, in_range as _in_range
 
-__all__ = ["TimedModel", "TrigSeries", "sample_time", "TIME_STEP", "PERIOD_MIN"]
+__all__ = ["TimedModel", "TrigSeries", "sample_time", "TIME_STEP", "PERIOD_MIN", "PERIOD_MAX"]
 
 TIME_STEP = 1e-2  # step along the Taylor curve of the numbers, as a fraction of the period
 _DRIFTING = {"angle_target"}  # element numbers that may advance by whole turns per period
@@ -48,6 +48,8 @@ _MAX_SAMPLES = 512
 # 2π (N/2) / T, squared in a second time derivative, stays a double at N = _MAX_SAMPLES (and so
 # does 1/(TIME_STEP T)² of the differences)
 PERIOD_MIN = 2 * math.pi * (_MAX_SAMPLES // 2) / math.sqrt(np.finfo(float).max)
+# the longest: the differences' 12 h² (h = TIME_STEP T) stays a double
+PERIOD_MAX = math.sqrt(np.finfo(float).max / 12) / TIME_STEP
 
 
 @dataclass(frozen=True)
@@ -295,6 +297,11 @@ def sample_time(build_at, period, *, samples=16, check=3):
         raise CaseError(f"period {T:.6g} s is shorter than {PERIOD_MIN:.3g} s: the second time "
                         f"derivatives of the motion (frequencies up to 2π·{_MAX_SAMPLES // 2}/T) "
                         f"would leave {DOUBLE_RANGE}", element="motion.period")
+    if not T <= PERIOD_MAX:
+        raise CaseError(f"period {T:.6g} s is longer than {PERIOD_MAX:.3g} s: the squared step "
+                        f"(T/{1 / TIME_STEP:g})² of its time differences would leave "
+                        f"{DOUBLE_RANGE}",
+                        element="motion.period")
     base = build_at(0.0)
     end = build_at(T)
     leaves_at = {}

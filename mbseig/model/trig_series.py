@@ -64,20 +64,22 @@ class TrigSeries:
 
 
 # the largest second time derivative a model holds: the integrators of the periodic motion
-# form norms (sums of squares) of the accelerations, which must stay doubles
-DERIVATIVE_MAX = math.sqrt(np.finfo(float).max)
+# divide the accelerations by their absolute tolerance, never below ε times the state's scale
+# (≥ 1), and square the quotient in a norm, which must stay a double: ε √(max double) = 3e138
+DERIVATIVE_MAX = float(np.finfo(float).eps) * math.sqrt(np.finfo(float).max)
 
 
 def in_range(series, name):
     """``series``, or a one-line refusal naming the element when the bound of its second time
-    derivative Σ_k w_k (2πk/T)² |c_k| (≥ |f''(t)| at every t) exceeds DERIVATIVE_MAX = 1.3e154
-    (so no evaluation can overflow, nor a norm of it)."""
+    derivative Σ_k w_k (2πk/T)² |c_k| (≥ |f''(t)| at every t) exceeds DERIVATIVE_MAX = 3e138
+    (so no evaluation can overflow, nor an integrator's error norm of it)."""
     re, im, k, weight = series._real
     with np.errstate(over="ignore", invalid="ignore"):  # an infinite bound is the answer
         bound = (weight * (2 * math.pi * k / series.period) ** 2) @ np.hypot(re, im)
     if not np.all(bound <= DERIVATIVE_MAX):
         big = float(np.max(np.nan_to_num(bound, nan=np.inf)))
         raise CaseError(f"its motion's second time derivative reaches {big:.3g} (period "
-                        f"{series.period:.6g} s), beyond {DERIVATIVE_MAX:.3g}: its square (in "
-                        f"a norm) would leave {DOUBLE_RANGE}", element=name)
+                        f"{series.period:.6g} s), beyond {DERIVATIVE_MAX:.3g}: an "
+                        f"integrator's error norm of it would leave {DOUBLE_RANGE}",
+                        element=name)
     return series
