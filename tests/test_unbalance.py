@@ -194,6 +194,12 @@ def test_report_rotor_section_from_the_command_line(tmp_path, capsys):
     md = (out / "report.md").read_text()
     assert "Campbell diagram and critical speeds" in md
     assert "m·e = 0.0002 kg m" in md and (out / "rigid_rotor_rotor_Omega" / "unbalance.csv").exists()
+    # Ω = 0 (no force: exactly 0) and 400 rad/s = √(2kz/m) (undamped critical speed, driven: a
+    # resonance, blank and flagged) are on the grid; tests/test_resonance.py checks the values
+    assert "Resonance at Omega = 400 rad/s" in md
+    rows = (out / "rigid_rotor_rotor_Omega" / "unbalance.csv").read_text().splitlines()
+    assert all(r.endswith(",true") == r.startswith("400.0,") for r in rows[1:])
+    assert all(r.split(",")[3] == "0.0" for r in rows[1:] if r.startswith("0.0,"))
     capsys.readouterr()
     for bad, option in ((["--speeds", "Omega=0:800"], "--speeds"),
                         (["--unbalance", "rotor:-1"], "--unbalance")):

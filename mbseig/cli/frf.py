@@ -74,6 +74,12 @@ def run(args, spec) -> int:
         for z in vals:
             wn = abs(z)
             print(f"  {z.real:>14.6g} {z.imag:+14.6g}j   |s|/2pi = {wn / (2 * math.pi):.6g} Hz")
+    for item in r.singular:
+        f = item["freq_hz"]
+        print(f"pole on the grid at {f:.6g} Hz: the response is unbounded (null in the JSON)"
+              if item["status"] == "pole" else
+              f"pole on the grid at {f:.6g} Hz that the input does not drive or the output "
+              f"does not see: the response there is the transfer function's limit")
     if args.out:
         print(f"wrote {args.out}/frf.csv and {args.out}/bode.png")
     return 0

@@ -80,6 +80,10 @@ def run(args, spec) -> int:
           f"x1 along e1 = ({vec(f'{x:.4g}' for x in d.get('e1', ()))}), x2 along e2 = "
           f"({vec(f'{x:.4g}' for x in d.get('e2', ()))}); x(t) = |X| cos(Omega t + phase)")
     print(res.listing(unit))
+    hits = res.resonance_values()
+    if hits:
+        print(f"resonance at {name} = {', '.join(f'{v:g}' for v in hits)}: the unbalance drives "
+              f"an undamped mode at its own frequency, no steady response (null in the JSON)")
     if paths:
         print("wrote " + ", ".join(str(p) for p in paths))
     return 0

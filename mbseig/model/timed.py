@@ -26,15 +26,16 @@ constraint velocity and acceleration terms of a rheonomic constraint follow from
 from __future__ import annotations
 
 import dataclasses
-import functools
 import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..errors import CaseError
+from ..numerics import DOUBLE_RANGE
+from .trig_series import TrigSeries, in_range as _in_range
 
-__all__ = ["TimedModel", "TrigSeries", "sample_time", "TIME_STEP"]
+__all__ = ["TimedModel", "TrigSeries", "sample_time", "TIME_STEP", "PERIOD_MIN", "PERIOD_MAX"]
 
 TIME_STEP = 1e-2  # step along the Taylor curve of the numbers, as a fraction of the period
 _DRIFTING = {"angle_target"}  # element numbers that may advance by whole turns per period
@@ -43,53 +44,12 @@ _DRIFTING = {"angle_target"}  # element numbers that may advance by whole turns 
 # vary with kinks, which no interpolant of the period meets to 1e-12)
 _MEASURES = {"length_scale"}
 _MAX_SAMPLES = 512
-
-
-@dataclass(frozen=True)
-class TrigSeries:
-    """f(t) = s t / T + Σ_|k|<N/2 c_k exp(2πi k t / T) from N samples of one period (values of
-    any shape stacked on the first axis): exact for trigonometric polynomials of degree below
-    N/2, spectrally accurate for smooth periodic f; ``offset`` is the first sample's instant."""
-
-    coeffs: np.ndarray  # rfft / N, shape (N//2 + 1, *value shape)
-    samples: int
-    period: float
-    drift: np.ndarray | float = 0.0  # f(T) − f(0): whole turns of a driver angle, else 0
-
-    @classmethod
-    def fit(cls, values, period, *, offset=0.0, drift=0.0):
-        values = np.asarray(values, dtype=float)
-        N = values.shape[0]
-        times = offset + np.arange(N) * period / N
-        shape = (-1,) + (1,) * (values.ndim - 1)
-        periodic = values - np.asarray(drift) * (times / period).reshape(shape)
-        coeffs = np.fft.rfft(periodic, axis=0) / N
-        if offset:
-            k = np.arange(coeffs.shape[0])
-            coeffs = coeffs * np.exp(-2j * math.pi * k * offset / period).reshape(shape)
-        return cls(coeffs, N, float(period), drift)
-
-    @functools.cached_property
-    def _real(self):
-        """(Re c, Im c) as (K, size), k and the weights: two matrix-vector products a value."""
-        flat = self.coeffs.reshape(self.coeffs.shape[0], -1)
-        k = np.arange(flat.shape[0])
-        weight = np.full(k.size, 2.0)
-        weight[0] = 1.0
-        if self.samples % 2 == 0:
-            weight[-1] = 1.0  # the Nyquist cosine; its derivatives are left out (ambiguous)
-        return np.ascontiguousarray(flat.real), np.ascontiguousarray(flat.imag), k, weight
-
-    def __call__(self, t, order=0):
-        """The value (order 0) or its first / second time derivative at t."""
-        re, im, k, weight = self._real
-        w = 2.0 * math.pi / self.period
-        z = weight * (1j * w * k) ** order * np.exp(1j * w * k * t)
-        if order and self.samples % 2 == 0:
-            z[-1] = 0.0
-        value = z.real @ re - z.imag @ im
-        slope = (t, 1.0, 0.0)[order] / self.period  # of the secular part s t / T
-        return value.reshape(self.coeffs.shape[1:]) + np.asarray(self.drift) * slope
+# the shortest period the model holds: the interpolant's highest angular frequency
+# 2π (N/2) / T, squared in a second time derivative, stays a double at N = _MAX_SAMPLES (and so
+# does 1/(TIME_STEP T)² of the differences)
+PERIOD_MIN = 2 * math.pi * (_MAX_SAMPLES // 2) / math.sqrt(np.finfo(float).max)
+# the longest: the differences' 12 h² (h = TIME_STEP T) stays a double
+PERIOD_MAX = math.sqrt(np.finfo(float).max / 12) / TIME_STEP
 
 
 @dataclass(frozen=True)
@@ -333,6 +293,15 @@ def sample_time(build_at, period, *, samples=16, check=3):
     after one period (a driver angle may come back a whole number of turns further) is refused
     in one line naming the element: the motion does not repeat with the stated period."""
     T = float(period)
+    if not T >= PERIOD_MIN:
+        raise CaseError(f"period {T:.6g} s is shorter than {PERIOD_MIN:.3g} s: the second time "
+                        f"derivatives of the motion (frequencies up to 2π·{_MAX_SAMPLES // 2}/T) "
+                        f"would leave {DOUBLE_RANGE}", element="motion.period")
+    if not T <= PERIOD_MAX:
+        raise CaseError(f"period {T:.6g} s is longer than {PERIOD_MAX:.3g} s: the squared step "
+                        f"(T/{1 / TIME_STEP:g})² of its time differences would leave "
+                        f"{DOUBLE_RANGE}",
+                        element="motion.period")
     base = build_at(0.0)
     end = build_at(T)
     leaves_at = {}
@@ -381,7 +350,8 @@ def sample_time(build_at, period, *, samples=16, check=3):
         leaves = []
         for path, (name, drift) in leaves_at.items():
             vals = np.array([np.asarray(_get(m, path), float) for m in models])
-            leaves.append(_Leaf(path, name, TrigSeries.fit(vals, T, drift=drift)))
+            leaves.append(_Leaf(path, name, _in_range(TrigSeries.fit(vals, T, drift=drift),
+                                                      name)))
         err = 0.0
         for j in range(check):
             t = T * (j + 0.5 + 0.123 * j) / (check + 1)

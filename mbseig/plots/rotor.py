@@ -11,7 +11,9 @@ e₁, e₂ [m]), ``major`` (orbit major semi-axis [m]), ``outputs``, ``output_un
 ``unbalance`` [kg m], ``at`` and ``case``.  A station's amplitude is its orbit's major
 semi-axis, its phase that of X₁ (x₁(t) = |X₁| cos(Ωt + ∠X₁)), unwrapped along the speed; an
 output is drawn when its unit is m.  At Ω = 0 there is no unbalance force and no phase: those
-points are left out.
+points are left out.  A resonance (``res.resonance_values()``: the unbalance drives an undamped
+mode at its own frequency, no steady response) breaks the curves and is marked: a red dashed
+line in the Bode diagram, a legend entry in the polar diagram.
 """
 
 from __future__ import annotations
@@ -60,6 +62,20 @@ def _critical_lines(ax, critical):
         ax.axvline(c, color="0.4", lw=0.8, ls=":", label="critical speed" if k == 0 else None)
 
 
+def _resonances(res):
+    """The swept values where the response is a resonance (no steady response)."""
+    return res.resonance_values() if hasattr(res, "resonance_values") else []
+
+
+RESONANCE_LABEL = "resonance: no steady response"
+
+
+def _resonance_lines(ax, values, label=True):
+    for k, v in enumerate(values):
+        ax.axvline(v, color="tab:red", lw=1.0, ls="--",
+                   label=RESONANCE_LABEL if label and k == 0 else None)
+
+
 @styled
 def unbalance_bode(res, *, unit=None, stations=None, critical=()):
     """Amplitude (log scale when it spans two decades) and phase of every drawn station and
@@ -83,6 +99,8 @@ def unbalance_bode(res, *, unit=None, stations=None, critical=()):
         a1.set_yscale("log")
     _critical_lines(a1, critical)
     _critical_lines(a2, critical)
+    _resonance_lines(a1, _resonances(res))
+    _resonance_lines(a2, _resonances(res), label=False)
     a1.set_ylabel("amplitude (orbit major semi-axis) [m]")
     a2.set_ylabel("phase of x₁ [deg]")
     a2.set_xlabel(_x_label(res, unit))
@@ -115,6 +133,9 @@ def unbalance_polar(res, *, unit=None, stations=None):
         k = int(np.nanargmax(np.abs(z))) if np.isfinite(np.abs(z)).any() else 0
         ax.annotate(f"{res.parameter} = {x[k]:.4g}{u}", (z.real[k], z.imag[k]), fontsize=6,
                     xytext=(4, 4), textcoords="offset points", color=c)
+    for v in _resonances(res):  # the curve is broken there: say where and why
+        ax.plot([], [], color="tab:red", ls="--", lw=1.0, label=f"{res.parameter} = {v:.4g}{u}: {RESONANCE_LABEL} "
+                                         f"(curve broken)")
     ax.axhline(0.0, color="0.5", lw=0.6)
     ax.axvline(0.0, color="0.5", lw=0.6)
     ax.set_aspect("equal", adjustable="datalim")

@@ -187,12 +187,22 @@ def _unbalance_blocks(rs, out_dir, title, unit, critical):
     for v, om, st, a, b, big, u in ub.peaks():
         rows.append([st, with_unit(fmt(v, 6), unit), fmt(om, 6), f"{big:.4e} {u or ''}".strip(),
                      "–" if a == 0 else f"{np.degrees(np.angle(a)):.1f}"])
+    hits = ub.resonance_values()
+    if hits:
+        at = ", ".join(with_unit(f"{v:.8g}", unit) for v in hits)
+        blocks.append(("p", f"Resonance at {rs.parameter} = {at}: the unbalance drives an "
+                            f"undamped mode at its own frequency, so no steady response exists "
+                            f"there (it grows without bound): blank in the CSV (column "
+                            f"`resonance`), red dashed lines in the Bode diagram, named in the "
+                            f"polar diagram's legend; the peaks below are over the other "
+                            f"speeds."))
     peak = "peak amplitude per kg m of m·e" if rs.default_unbalance else "peak amplitude"
     blocks.append(("table", ["station / output", f"{rs.parameter} at the peak",
                              "Ω at the peak [rad/s]", peak, "phase of x₁ [deg]"], rows))
     for fig, stem, cap in ((rotor_plots.unbalance_bode(ub, unit=unit, critical=critical),
                             "unbalance_bode", "Bode diagram: amplitude and phase against "
-                            + rs.parameter + " (dotted: critical speeds)"),
+                            + rs.parameter + " (dotted: critical speeds"
+                            + ("; red dashed: resonances)" if hits else ")")),
                            (rotor_plots.unbalance_polar(ub, unit=unit), "unbalance_polar",
                             "polar diagram of x₁")):
         blocks.append(("img", plots.save(fig, out_dir / f"{stem}.png"), f"{title}: {cap}"))

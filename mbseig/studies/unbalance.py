@@ -16,6 +16,15 @@ rotor's ``speed``), so the swept parameter may be any quantity the speed depends
 
 For the Jeffcott rotor (a disk m on an isotropic support k, c at its centre of mass)
 X₁ = m e Ω² e^{iφ} / (k − m Ω² + i c Ω), X₂ = −i X₁ (tests/test_unbalance.py).
+
+At Ω = 0 the force vanishes and the response is exactly 0 (no solve: Z = Q is singular for a
+rotor free to turn).  Elsewhere Z may be singular: at an undamped critical speed on the grid
+(a resonance when the unbalance drives that mode: no steady response, every amplitude NaN,
+``null`` with ``"resonance": true`` in the JSON) or along a mode it does not load (the rigid
+rotor's axial mode at √(kx/m): the finite response).  Both are decided by
+:func:`mbseig.studies.harmonic.solve_harmonic` from the singular values of Z with stated bounds;
+each speed's decision, σ_min/w, backward error and error bound are in ``solves`` (JSON
+``"solve"``).
 """
 
 from __future__ import annotations
@@ -26,12 +35,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..eigen.structure import fro
 from ..errors import CaseError, MbseigError
 from ..linear import linearize
 from ..model.spatial_joints import normal_pair
 from ..model.spatial_whirl import rotors
 from ..numerics import jsonable
 from ..statics import equilibrium, solved
+from .harmonic import Harmonic, accuracy, solve_harmonic, weight
 from .point import as_spec
 
 __all__ = ["UnbalanceResponse", "unbalance_response", "unbalance_point", "require_rotor",
@@ -63,6 +74,19 @@ class UnbalanceResponse:
     Y: np.ndarray = None
     directions: dict = None
     source: str = ""
+    solves: tuple = ()
+
+    @property
+    def resonance(self) -> np.ndarray:
+        """Per speed: a resonance (the unbalance drives an undamped mode at its own frequency:
+        no steady response; every amplitude NaN, null in the JSON)."""
+        return np.array([s is not None and s.resonance for s in self.solves]
+                        if len(self.solves) == len(self.speeds) else [False] * len(self.speeds),
+                        bool)
+
+    def resonance_values(self) -> list:
+        """The swept values where the response is a resonance."""
+        return [float(v) for v, r in zip(self.values, self.resonance) if r]
 
     @property
     def major(self) -> np.ndarray:
@@ -91,6 +115,8 @@ class UnbalanceResponse:
                          "unbalance": {"at": self.at, "m_e": self.unbalance,
                                        "angle": math.degrees(self.angle)},
                          "directions": self.directions or {}, "units": UNITS,
+                         "resonance": [bool(r) for r in self.resonance],
+                         "solve": [None if s is None else s.to_json() for s in self.solves],
                          "stations": rows, "outputs": outs})
 
     def rows(self):
@@ -119,7 +145,8 @@ class UnbalanceResponse:
         head = ["speed [rad/s]"] + [f"{s} [m]" for s in self.stations]
         lines = ["  ".join(f"{h:>16s}" for h in head)]
         for k, w in enumerate(self.speeds):
-            lines.append("  ".join([f"{w:16.6g}"] + [f"{x:16.6e}" for x in self.major[k]]))
+            lines.append("  ".join([f"{w:16.6g}"] + [_amplitude_text(x, 16, ".6e")
+                                                      for x in self.major[k]]))
         return "\n".join(lines)
 
     def listing(self, unit=None) -> str:
@@ -135,10 +162,11 @@ class UnbalanceResponse:
         lines = ["  ".join(head)]
         for v, w, name, a, b, big, u in self.rows():
             second = (["–".rjust(12), "–".rjust(14)] if b is None else
-                      [f"{abs(b):12.5e}", _phase_text(b)])
+                      [_amplitude_text(abs(b), 12), _phase_text(b)])
             lines.append("  ".join([f"{v:14.6g}"] + ([] if same else [f"{w:14.6g}"])
-                                   + [f"{name:<28s}", f"{abs(a):12.5e}", _phase_text(a)]
-                                   + second + [f"{big:12.5e}", u or "–"]))
+                                   + [f"{name:<28s}", _amplitude_text(abs(a), 12),
+                                      _phase_text(a)]
+                                   + second + [_amplitude_text(big, 12), u or "–"]))
         return "\n".join(lines)
 
     def write_csv(self, path):
@@ -148,12 +176,24 @@ class UnbalanceResponse:
         with open(path, "w", newline="") as fh:
             w = csv.writer(fh)
             w.writerow([self.parameter, "Omega_rad_s", "station", "amplitude_1", "phase_1_deg",
-                         "amplitude_2", "phase_2_deg", "major", "unit"])
+                         "amplitude_2", "phase_2_deg", "major", "unit", "resonance"])
+            res = {float(v) for v in self.resonance_values()}
             for v, om, name, a, b, big, u in self.rows():
-                w.writerow([repr(float(v)), repr(float(om)), name, repr(float(abs(a))),
-                            repr(_deg(a)), "" if b is None else repr(float(abs(b))),
-                            "" if b is None else repr(_deg(b)), repr(float(big)), u or ""])
+                w.writerow([repr(float(v)), repr(float(om)), name, _cell(abs(a)), _cell(_deg(a)),
+                            "" if b is None else _cell(abs(b)),
+                            "" if b is None else _cell(_deg(b)), _cell(big), u or "",
+                            "true" if float(v) in res else "false"])
         return path
+
+
+def _cell(x) -> str:
+    """A CSV number; empty where it is not finite (a resonance: no steady response)."""
+    return repr(float(x)) if np.isfinite(x) else ""
+
+
+def _amplitude_text(x, width, spec=".5e") -> str:
+    """An amplitude, or "resonance" where it is not finite (no steady response)."""
+    return format(x, f"{width}{spec}") if np.isfinite(x) else "resonance".rjust(width)
 
 
 def _deg(z) -> float:
@@ -241,7 +281,7 @@ def unbalance_response(case, parameter, values, *, at, unbalance, phase=0.0, con
     the angle ``phase`` [rad] from e₁) over ``parameter`` = ``values`` (module docstring)."""
     spec = as_spec(case)
     values = np.asarray(values, float)
-    speeds, per_speed, Ys = [], [], []
+    speeds, per_speed, Ys, solves = [], [], [], []
     lin = directions = None
     for v in values:
         model = spec.build(config, **{**(fixed or {}), parameter: float(v)})
@@ -251,6 +291,7 @@ def unbalance_response(case, parameter, values, *, at, unbalance, phase=0.0, con
             speeds.append(0.0)
             per_speed.append({})
             Ys.append(None)
+            solves.append(None)
             continue
         try:
             eq = equilibrium(model)
@@ -270,8 +311,9 @@ def unbalance_response(case, parameter, values, *, at, unbalance, phase=0.0, con
         F = unbalance * W**2 * np.exp(1j * phase) * (e1 - 1j * e2)
         g = np.zeros(model.n, complex)
         np.add.at(g, P.idx, P.C.T @ F)
-        Z = lin.Q - W**2 * lin.M + 1j * W * lin.P
-        xr = np.linalg.solve(Z, lin.N.T @ g)
+        sol = _steady(lin, g, W)
+        solves.append(sol)
+        xr = np.full(lin.dof, np.nan, complex) if sol.x is None else sol.x
         x = lin.N @ xr
         Xs = {name: aff.C @ x[aff.idx] for name, aff in station_names(model, rs)}
         speeds.append(W)
@@ -297,4 +339,19 @@ def unbalance_response(case, parameter, values, *, at, unbalance, phase=0.0, con
                              speeds=np.array(speeds), stations=names, X1=X1, X2=X2, unbalance=float(unbalance), at=at,
                              angle=float(phase), outputs=outputs, output_units=units,
                              Y=np.array(Ys).reshape(len(values), len(outputs)),
-                             directions=directions, source=str(spec.source))
+                             directions=directions, source=str(spec.source),
+                             solves=tuple(solves))
+
+
+def _steady(lin, g, W) -> Harmonic:
+    """The reduced response x̂ to the full-coordinate force ``g`` at the speed W: 0 at rest
+    (the force m e Ω² vanishes: no solve), else :func:`~mbseig.studies.harmonic.solve_harmonic`
+    on Z = Q − Ω²M + iΩP (regular, singular and not excited, or a resonance)."""
+    if W == 0:
+        return Harmonic(np.zeros(lin.dof, complex), "rest", 0.0, accuracy(lin.N.shape[0]),
+                        0.0, 0, 0.0)
+    f = lin.N.T @ g
+    M, P, Q = (A.toarray() if hasattr(A, "toarray") else np.asarray(A, float)
+               for A in (lin.M, lin.P, lin.Q))
+    Z = Q - W**2 * M + 1j * W * P
+    return solve_harmonic(Z, f, weight((fro(M), fro(P), fro(Q)), W), n=lin.N.shape[0])
