@@ -8,12 +8,19 @@ import sys
 
 from ..casefile import parse_param_overrides
 from ..casefile.fields import RANGE_RULE, in_range
-from ..errors import CaseError
+from ..errors import CaseError, MbseigError
 from ..numerics import jsonable
 
 __all__ = ["add_case_arguments", "case_kwargs", "print_json", "print_reactions", "number_option",
            "output_notes", "equilibrium_notes", "moving_case", "case_command",
-           "analyzed", "parameter_units_of", "add_progress_options", "show_progress"]
+           "analyzed", "parameter_units_of", "add_progress_options", "show_progress",
+           "add_study_options", "KeptStudy", "resume_dir"]
+
+#: the --jobs help: the rule of mbseig.studies.runners (its module docstring)
+JOBS_HELP = ("local worker processes (default: decided per stage: its first 2 tasks run "
+             "in-process and are timed, and the rest goes to a pool of one process per usable "
+             "CPU only when that is predicted at least 25%% faster, counting the pool's "
+             "start-up and the transfer of each task; else in-process); 1 runs in-process")
 
 
 def add_case_arguments(parser):
@@ -33,6 +40,107 @@ def add_progress_options(parser, what="the progress bar"):
                       help=f"always show {what} on stderr")
     prog.add_argument("--no-progress", dest="progress", action="store_false",
                       help="never show it (default: only when stderr is a terminal)")
+
+
+def add_study_options(parser):
+    """``--jobs N`` and ``--resume DIR`` of a study over a grid (the sweeps)."""
+    parser.add_argument("--jobs", type=_jobs, default=None, metavar="N", help=JOBS_HELP)
+    parser.add_argument("--resume", default=None, metavar="DIR",
+                        help="keep every completed line, point and boundary in DIR as it "
+                             "completes; rerun with the same DIR to compute only the missing "
+                             "ones (the outputs equal those of an uninterrupted sweep).  "
+                             "Without it, Ctrl-C keeps the finished points in OUT-resume "
+                             "next to --out")
+
+
+def _jobs(text):
+    import argparse
+
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text!r}")
+    return n
+
+
+def resume_dir(out_dir) -> str:
+    """Where an interrupted study without --resume keeps its finished points: OUT-resume,
+    next to its output directory OUT."""
+    from pathlib import Path
+
+    out = Path(out_dir)
+    return str(out.with_name(out.name + "-resume"))
+
+
+class KeptStudy:
+    """What an interrupted study keeps, and the one line that says so.
+
+    ``checkpoint`` (give it to the study as ``resume=``): with ``--resume DIR`` every task is
+    written to DIR as it completes; without, the tasks are held in memory and written to
+    ``default_dir`` (next to ``--out``) only when the study is interrupted.  :meth:`say`
+    (on the first Ctrl-C, or from a second one, ``mbseig.cli.ON_SECOND_INTERRUPT``) writes
+    what is held and prints, once::
+
+        mbseig: interrupted after N of M points; rerun with --resume DIR to finish
+    """
+
+    def __init__(self, resume, default_dir, total, *, close=None):
+        from ..studies.resume import Checkpoint
+        from . import ON_SECOND_INTERRUPT
+
+        self.checkpoint = Checkpoint(resume if resume is not None else default_dir,
+                                     deferred=resume is None)
+        self.checkpoint.points[:] = [0, int(total)]
+        self.close = close  # run before the line (a progress bar ends its own line)
+        self.said = False
+        self._hooks = ON_SECOND_INTERRUPT
+        self._hooks.append(self.say)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        if self.say in self._hooks:
+            self._hooks.remove(self.say)
+        return False
+
+    def say(self, exc=None) -> int:
+        """Keep the finished tasks and print the line (once); the exit code 130."""
+        import shlex
+        import signal
+
+        if self.said:
+            return 130
+        self.said = True
+        mask = getattr(signal, "pthread_sigmask", None)
+        blocked = mask(signal.SIG_BLOCK, {signal.SIGINT}) if mask else None
+        try:
+            if self.close is not None:
+                try:
+                    self.close()
+                except Exception:  # (a bar that cannot draw: the line matters more)
+                    pass
+            done, total = self.checkpoint.points
+            stage = getattr(exc, "stage", "") or ""
+            if done == 0 and self.checkpoint.identity is None:  # stopped before the study began
+                print(f"mbseig: interrupted before the first of {total} points", file=sys.stderr)
+                return 130
+            try:
+                where = self.checkpoint.flush()
+            except MbseigError as err:
+                print(f"mbseig: interrupted after {done} of {total} points; they could not be "
+                      f"kept: {' '.join(err.one_line().splitlines())}", file=sys.stderr)
+                return 130
+            more = f" ({stage} done)" if stage and done >= total else ""
+            print(f"mbseig: interrupted after {done} of {total} points; rerun with --resume "
+                  f"{shlex.quote(str(where))} to finish{more}", file=sys.stderr)
+            sys.stderr.flush()
+            return 130
+        finally:
+            if blocked is not None:
+                mask(signal.SIG_SETMASK, blocked)
 
 
 def show_progress(args) -> bool:
