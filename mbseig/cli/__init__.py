@@ -22,6 +22,7 @@ import sys
 import threading
 import warnings
 
+from ..arguments import ArgumentError
 from ..errors import CaseError, MbseigError, ReportedWarning
 
 __all__ = ["main", "console", "SUBCOMMANDS"]
@@ -90,6 +91,9 @@ def main(argv=None) -> int:
     except MbseigError as exc:
         # one line whatever a message quotes (a name with a line break, a library's message)
         print("mbseig: " + " ".join(exc.one_line().splitlines()), file=sys.stderr)
+        return 2
+    except ArgumentError as exc:  # (a value the command line let through to the Python API)
+        print("mbseig: " + " ".join(str(exc).splitlines()), file=sys.stderr)
         return 2
     except BrokenPipeError:
         return 1

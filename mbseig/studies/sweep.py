@@ -45,6 +45,7 @@ import uuid
 
 import numpy as np
 
+from ..arguments import check
 from ..errors import CaseError
 from ..model.assembly import UNITS
 from .boundaries import (
@@ -114,6 +115,7 @@ def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None,
         (:func:`~mbseig.studies.continuation.family_maker`; the same numbers to rounding);
         False builds and resolves every value (the general path, for comparison).
     """
+    check("run_sweep", locals())
     spec = as_spec(case)
     case_arg, case = spec.source, spec
     fixed = dict(fixed or {})
