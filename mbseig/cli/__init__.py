@@ -15,6 +15,7 @@ processes are killed and the process exits with 130, without waiting for anythin
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import os
 import signal
@@ -101,8 +102,23 @@ def main(argv=None) -> int:
         return 130
 
 
-#: callables a second SIGINT runs before the process ends (mbseig.cli.common.interrupt_line)
+#: callables a second SIGINT runs before the process ends (mbseig.cli.common.KeptStudy)
 ON_SECOND_INTERRUPT: list = []
+_HELD = {"depth": 0, "pending": False}
+
+
+@contextlib.contextmanager
+def held():
+    """A section a second SIGINT does not cut (the interrupted study keeping its points and
+    saying so): the signal's handler runs in the main thread whichever thread receives it, so
+    a mask cannot hold it off; it is noted, and the process ends as the section ends."""
+    _HELD["depth"] += 1
+    try:
+        yield
+    finally:
+        _HELD["depth"] -= 1
+        if not _HELD["depth"] and _HELD["pending"]:
+            _end(130)
 
 
 def _first_interrupt(signum, frame):
@@ -111,8 +127,9 @@ def _first_interrupt(signum, frame):
 
 
 def _second_interrupt(signum, frame):
-    if hasattr(signal, "pthread_sigmask"):
-        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    if _HELD["depth"]:
+        _HELD["pending"] = True  # (the held section ends the process)
+        return
     for say in list(ON_SECOND_INTERRUPT):
         try:
             say()

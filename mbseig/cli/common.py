@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import json
+import os
 import sys
 
 from ..casefile import parse_param_overrides
@@ -96,51 +97,59 @@ class KeptStudy:
         self.close = close  # run before the line (a progress bar ends its own line)
         self.said = False
         self._hooks = ON_SECOND_INTERRUPT
-        self._hooks.append(self.say)
+        self._hook = functools.partial(self.say, raw=True)  # (in a signal handler)
+        self._hooks.append(self._hook)
 
     def __enter__(self):
         return self
 
     def __exit__(self, *exc):
-        if self.say in self._hooks:
-            self._hooks.remove(self.say)
+        if self._hook in self._hooks:
+            self._hooks.remove(self._hook)
         return False
 
-    def say(self, exc=None) -> int:
-        """Keep the finished tasks and print the line (once); the exit code 130."""
-        import shlex
-        import signal
+    def say(self, exc=None, *, raw=False) -> int:
+        """Keep the finished tasks and print the line (once); the exit code 130.  ``raw``:
+        written straight to file descriptor 2 (from a signal handler, which may have cut a
+        write to sys.stderr short)."""
+        from . import held
 
         if self.said:
             return 130
         self.said = True
-        mask = getattr(signal, "pthread_sigmask", None)
-        blocked = mask(signal.SIG_BLOCK, {signal.SIGINT}) if mask else None
-        try:
+        with held():
             if self.close is not None:
                 try:
                     self.close()
                 except Exception:  # (a bar that cannot draw: the line matters more)
                     pass
-            done, total = self.checkpoint.points
-            stage = getattr(exc, "stage", "") or ""
-            if done == 0 and self.checkpoint.identity is None:  # stopped before the study began
-                print(f"mbseig: interrupted before the first of {total} points", file=sys.stderr)
-                return 130
-            try:
-                where = self.checkpoint.flush()
-            except MbseigError as err:
-                print(f"mbseig: interrupted after {done} of {total} points; they could not be "
-                      f"kept: {' '.join(err.one_line().splitlines())}", file=sys.stderr)
-                return 130
-            more = f" ({stage} done)" if stage and done >= total else ""
-            print(f"mbseig: interrupted after {done} of {total} points; rerun with --resume "
-                  f"{shlex.quote(str(where))} to finish{more}", file=sys.stderr)
-            sys.stderr.flush()
-            return 130
-        finally:
-            if blocked is not None:
-                mask(signal.SIG_SETMASK, blocked)
+            text = self._line(exc)
+            if raw:
+                try:
+                    sys.stderr.flush()
+                except Exception:  # (a write cut short by the signal)
+                    pass
+                os.write(2, (text + "\n").encode())
+            else:
+                print(text, file=sys.stderr)
+                sys.stderr.flush()
+        return 130
+
+    def _line(self, exc) -> str:
+        import shlex
+
+        done, total = self.checkpoint.points
+        if done == 0 and self.checkpoint.identity is None:  # stopped before the study began
+            return f"mbseig: interrupted before the first of {total} points"
+        try:
+            where = self.checkpoint.flush()
+        except MbseigError as err:
+            return (f"mbseig: interrupted after {done} of {total} points; they could not be "
+                    f"kept: {' '.join(err.one_line().splitlines())}")
+        stage = getattr(exc, "stage", "") or ""
+        more = f" ({stage} done)" if stage and done >= total else ""
+        return (f"mbseig: interrupted after {done} of {total} points; rerun with --resume "
+                f"{shlex.quote(str(where))} to finish{more}")
 
 
 def show_progress(args) -> bool:
