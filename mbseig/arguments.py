@@ -141,17 +141,25 @@ class Entries(Rule):
 PARAMS = Entries("a dict {parameter name: number or expression string}", PARAM)
 
 
+def _array(v, kinds, ndim):
+    """``v`` as a numpy array of ``ndim`` dimensions and a dtype of ``kinds``, else None."""
+    import numpy as np
+
+    try:
+        arr = np.asarray(v)
+    except (TypeError, ValueError):
+        return None
+    return arr if arr.dtype.kind in kinds and arr.ndim == ndim else None
+
+
 def _matrix_problem(v, a, like=None):
     import numpy as np
 
     if _sparse(v):
         shape = v.shape
     else:
-        try:
-            arr = np.asarray(v)
-        except (TypeError, ValueError):
-            return ArgumentTypeError
-        if arr.dtype.kind not in "biufc" or arr.ndim != 2:
+        arr = _array(v, "biufc", 2)
+        if arr is None:
             return ArgumentTypeError
         shape = arr.shape
     if shape[0] != shape[1]:
@@ -216,11 +224,8 @@ def _values(v, least=2):
 
     if isinstance(v, (str, bytes, dict)) or not hasattr(v, "__len__"):
         return ArgumentTypeError
-    try:
-        arr = np.asarray(v)
-    except (TypeError, ValueError):
-        return ArgumentTypeError
-    if arr.dtype.kind not in "biuf" or arr.ndim != 1:
+    arr = _array(v, "biuf", 1)
+    if arr is None:
         return ArgumentTypeError
     return None if arr.size >= least and np.all(np.isfinite(arr)) else ArgumentValueError
 

@@ -26,22 +26,7 @@ import pytest
 from mbseig.cli import main
 from mbseig.studies.workers import pool_pays
 
-# coupled oscillators, a damper c on the first coordinate and a second stiffness k2 (as in
-# tests/test_resume.py): a two-parameter sweep with a boundary on every line
-MAP = """
-schema_version = 1
-kind = "linear"
-description = "coupled 2-DOF with a swept damper c and a second stiffness k2"
-[parameters]
-c = 1.0
-k2 = 9.0
-[matrices]
-M = [[1.0, 0.0], [0.0, 2.0]]
-P = [["c", 0.0], [0.0, 0.3]]
-Q = [[4.0, 1.0], [1.0, "k2"]]
-[expected]
-source = "state-matrix abscissa"
-"""
+from test_resume import MAP  # coupled oscillators: a two-parameter map, a boundary per line
 
 # the tasks of each study kind, slowed by PAUSE seconds, each touching a marker file when done
 SLOW = '''
