@@ -208,22 +208,38 @@ def test_the_pool_rule():
     assert not pool_pays(1, 10.0, 0.0, 2, 0.0)
 
 
-def test_default_jobs_decides_from_the_first_tasks():
+def test_default_jobs_decides_from_the_first_tasks(monkeypatch):
     """Runner(jobs=None) times its first two tasks in-process: 30 tasks of ~0 s stay
-    in-process; 6 tasks that each sleep 0.3 s go to a pool (the decision is asserted, not a
-    time: a sleep takes its time on any machine, loaded or not)."""
+    in-process; 6 tasks that each sleep 0.3 s go to a pool when two CPUs are free, stay
+    in-process when one is (the decision is asserted, not a time: a sleep takes its time on
+    any machine; the free CPUs are set here, as the load average would give them)."""
     import multiprocessing
 
+    import mbseig.studies.runners as runners
     from mbseig.studies.runners import Runner
-    from mbseig.studies.workers import usable_cpus
 
     with Runner() as runner:
         assert runner.map(abs, [((-k,), {}) for k in range(30)], "tiny") == list(range(30))
     assert runner.decisions[0][2] == "serial" and runner.kind == "serial"
-    if usable_cpus() < 2 or multiprocessing.get_start_method() != "fork":
-        pytest.skip("a pool needs two CPUs; the slept tasks are timed for fork's start-up")
+    slept = [((0.3,), {}) for _ in range(6)]
+    monkeypatch.setattr(runners, "free_cpus", lambda own=1: (1, 9.0))
     with Runner() as runner:
-        got = runner.map(time.sleep, [((0.3,), {}) for _ in range(6)], "slept")
-    assert got == [None] * 6
+        assert runner.map(time.sleep, slept, "slept") == [None] * 6
+    assert runner.decisions[0][2] == "serial" and runner.decisions[0][3]["workers"] == 1
+    if multiprocessing.get_start_method() != "fork":
+        pytest.skip("the slept tasks are timed for fork's start-up")
+    monkeypatch.setattr(runners, "free_cpus", lambda own=1: (2, 0.0))
+    with Runner() as runner:
+        assert runner.map(time.sleep, slept, "slept") == [None] * 6
     assert runner.decisions[0][2] == "processes" and runner.kind == "processes"
     assert runner.decisions[0][3]["remaining"] == 4
+
+
+def test_free_cpus_leave_out_other_work(monkeypatch):
+    """free = usable CPUs − round(load − own), at least 1 (mbseig.studies.workers)."""
+    import mbseig.studies.workers as workers
+
+    monkeypatch.setattr(workers, "usable_cpus", lambda: 2)
+    for load, own, free in ((0.2, 1, 2), (1.1, 1, 2), (1.8, 1, 1), (3.2, 3, 2), (11.7, 1, 1)):
+        monkeypatch.setattr(workers.os, "getloadavg", lambda load=load: (load, load, load))
+        assert workers.free_cpus(own) == (free, load)

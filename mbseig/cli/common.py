@@ -19,9 +19,10 @@ __all__ = ["add_case_arguments", "case_kwargs", "print_json", "print_reactions",
 
 #: the --jobs help: the rule of mbseig.studies.runners (its module docstring)
 JOBS_HELP = ("local worker processes (default: decided per stage: its first 2 tasks run "
-             "in-process and are timed, and the rest goes to a pool of one process per usable "
-             "CPU only when that is predicted at least 25%% faster, counting the pool's "
-             "start-up and the transfer of each task; else in-process); 1 runs in-process")
+             "in-process and are timed, and the rest goes to a pool of one process per free "
+             "CPU (those the load average leaves) only when that is predicted at least 25%% "
+             "faster, counting the pool's start-up and the transfer of each task; else "
+             "in-process); 1 runs in-process")
 
 
 def add_case_arguments(parser):

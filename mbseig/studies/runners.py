@@ -32,6 +32,7 @@ from .workers import (
     POOL_START,
     PROBE,
     capped,
+    free_cpus,
     interned,
     pool_pays,
     release,
@@ -42,7 +43,8 @@ from .workers import (
     worker_init,
 )
 
-__all__ = ["Runner", "Interrupted", "progress_bar", "blas_threads", "pool_pays", "usable_cpus",
+__all__ = ["Runner", "Interrupted", "progress_bar", "blas_threads", "pool_pays", "free_cpus",
+           "usable_cpus",
            "POOL_START", "MARGIN", "PROBE"]
 
 
@@ -216,19 +218,21 @@ class Runner:
                 value, seconds, transfer = timed(fn, self.blas, *calls[i])
                 times.append((seconds, transfer))
                 arrived(i, value)
-            workers = min(usable_cpus(), len(todo))
+            own = 1 + (self._pool._max_workers if self._pool is not None else 0)
+            free, load = free_cpus(own)
+            workers = min(free, len(todo))
             start = 0.0 if self._pool is not None else POOL_START.get(start_method(), 1.5)
             per_task, transfer = times[-1] if times else (0.0, 0.0)
             use = len(times) == PROBE and pool_pays(len(todo), per_task, transfer, workers, start)
             self.decisions.append((label, total, "processes" if use else "serial",
                                    {"per_task": per_task, "transfer": transfer,
-                                    "workers": workers, "start": start,
+                                    "workers": workers, "start": start, "load": load,
                                     "remaining": len(todo)}))
             if not use:
                 for i in todo:
                     arrived(i, capped(fn, self.blas, *calls[i]))
                 return results
-            pool = self._workers(usable_cpus())
+            pool = self._workers(workers)
         elif self.jobs <= 1:
             for i in todo:
                 a, kw = calls[i]
