@@ -39,10 +39,12 @@ __all__ = ["PROBE", "POOL_START", "MARGIN", "usable_cpus", "free_cpus", "pool_pa
 
 #: tasks a stage runs in-process and times before it decides on a pool (jobs=None)
 PROBE = 2
-#: seconds from creating a pool to its workers' first results, by start method, measured on a
-#: 2-core machine with numpy, scipy and the sweep modules loaded (benchmarks/runner_bench.py):
-#: fork 2 workers ≈ 0.03 s; spawn and forkserver import numpy, scipy and mbseig in each
-#: worker, ≈ 1.0 s on 2 cores
+#: seconds from creating a pool to its workers' first results, by start method: measured on a
+#: 2-core machine at load 5 (a ProcessPoolExecutor of 2 workers started from a process with
+#: numpy, scipy and the sweep modules loaded, until both return a trivial task; 7 runs):
+#: fork median 0.037 s (0.029–0.046); spawn 0.76 s (0.75–1.07) and forkserver 0.77 s
+#: (0.72–1.23), which import numpy, scipy and mbseig in each worker.  Taken with a margin
+#: (a larger parent forks more page tables; the first real task imports more modules).
 POOL_START = {"fork": 0.1, "spawn": 1.5, "forkserver": 1.5}
 #: the pool must be predicted this much faster than in-process: the estimate of one task from
 #: one timed task and the start-up above are not exact, and a machine shared with other work
