@@ -45,6 +45,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
+from .arguments import check
 from .errors import CaseError
 from .model.linear_case import LinearCase
 from .model.signals import input_forces, output_rows
@@ -181,6 +182,7 @@ def linearize(model, eq: Equilibrium, *, rank_tol: float | None = None,
     Raises :class:`~mbseig.errors.NumericalError` when the equilibrium or the result is not
     finite, or the arithmetic overflowed on the way (module docstring).
     """
+    check("linearize", locals())
     require_finite("linearization", "the equilibrium is not finite", q0=eq.q, lam0=eq.lam)
     cause = LINEAR_CASE_CAUSE if isinstance(model, LinearCase) else CAUSE
     with watched("linearization", cause):

@@ -26,6 +26,7 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..arguments import check
 from ..errors import CaseError, MbseigError
 from ..numerics import DOUBLE_RANGE, watched
 from .builder import Builder
@@ -119,6 +120,7 @@ def read_case(path) -> CaseSpec:
     """Read and parse a case file (one line naming the file on any problem), or take a case
     given as a Python dict with the structure of the TOML (validated when built, with the same
     messages; exceptions instead of exit codes)."""
+    check("read_case", locals())
     if isinstance(path, dict):
         title = path.get("title")
         name = title if isinstance(title, str) and title else "case"
@@ -154,6 +156,7 @@ def load_case(path, config: str | None = None, **params):
     ``config`` selects a named entry of its ``[configurations]`` table (a set of parameter
     values).  Raises :class:`CaseError` naming the file and element on any problem.
     """
+    check("load_case", locals())
     return read_case(path).build(config, **params)
 
 

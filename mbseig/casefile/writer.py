@@ -23,6 +23,8 @@ import math
 import re
 from pathlib import Path
 
+from ..arguments import check
+
 __all__ = ["CaseBuilder", "point_ref", "to_toml"]
 
 _BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
@@ -172,6 +174,7 @@ class CaseBuilder:
     def __init__(self, *, dimension: int, title: str | None = None, gravity=None,
                  description: str | None = None, source: str | None = None,
                  schema_version: int = 1, kind: str | None = None):
+        check("CaseBuilder", locals())
         if dimension not in (1, 2, 3):
             raise ValueError(f"dimension must be 1, 2 or 3, got {dimension!r}")
         self.dimension = dimension

@@ -102,6 +102,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..arguments import check
 from ..errors import CaseError, SimulationError
 from ..model.linear_case import LinearCase
 from ..statics import solved
@@ -177,6 +178,7 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
         mode and once after the last (the CLI's progress bar: a stiff model's mode takes tens
         of seconds).
     """
+    check("check_modes", locals())
     t_start = time.perf_counter()
     for nm, val in (("amplitude", amplitude), ("periods", periods), ("efolds", efolds),
                     ("delta_rtol", delta_rtol), ("omega_rtol", omega_rtol),

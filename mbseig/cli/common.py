@@ -4,16 +4,25 @@ from __future__ import annotations
 
 import functools
 import json
+import os
 import sys
 
 from ..casefile import parse_param_overrides
 from ..casefile.fields import RANGE_RULE, in_range
-from ..errors import CaseError
+from ..errors import CaseError, MbseigError
 from ..numerics import jsonable
 
 __all__ = ["add_case_arguments", "case_kwargs", "print_json", "print_reactions", "number_option",
            "output_notes", "equilibrium_notes", "moving_case", "case_command",
-           "analyzed", "parameter_units_of", "add_progress_options", "show_progress"]
+           "analyzed", "parameter_units_of", "add_progress_options", "show_progress",
+           "add_study_options", "KeptStudy", "resume_dir"]
+
+#: the --jobs help: the rule of mbseig.studies.runners (its module docstring)
+JOBS_HELP = ("local worker processes (default: decided per stage: its first 2 tasks run "
+             "in-process and are timed, and the rest goes to a pool of one process per free "
+             "CPU (those the load average leaves) only when that is predicted at least 25%% "
+             "faster, counting the pool's start-up and the transfer of each task; else "
+             "in-process); 1 runs in-process")
 
 
 def add_case_arguments(parser):
@@ -33,6 +42,115 @@ def add_progress_options(parser, what="the progress bar"):
                       help=f"always show {what} on stderr")
     prog.add_argument("--no-progress", dest="progress", action="store_false",
                       help="never show it (default: only when stderr is a terminal)")
+
+
+def add_study_options(parser):
+    """``--jobs N`` and ``--resume DIR`` of a study over a grid (the sweeps)."""
+    parser.add_argument("--jobs", type=_jobs, default=None, metavar="N", help=JOBS_HELP)
+    parser.add_argument("--resume", default=None, metavar="DIR",
+                        help="keep every completed line, point and boundary in DIR as it "
+                             "completes; rerun with the same DIR to compute only the missing "
+                             "ones (the outputs equal those of an uninterrupted sweep).  "
+                             "Without it, Ctrl-C keeps the finished points in OUT-resume "
+                             "next to --out")
+
+
+def _jobs(text):
+    import argparse
+
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text!r}")
+    return n
+
+
+def resume_dir(out_dir) -> str:
+    """Where an interrupted study without --resume keeps its finished points: OUT-resume,
+    next to its output directory OUT."""
+    from pathlib import Path
+
+    out = Path(out_dir)
+    return str(out.with_name(out.name + "-resume"))
+
+
+class KeptStudy:
+    """What an interrupted study keeps, and the one line that says so.
+
+    ``checkpoint`` (give it to the study as ``resume=``): with ``--resume DIR`` every task is
+    written to DIR as it completes; without, the tasks are held in memory and written to
+    ``default_dir`` (next to ``--out``) only when the study is interrupted.  :meth:`say`
+    (on the first Ctrl-C, or from a second one, ``mbseig.cli.ON_SECOND_INTERRUPT``) writes
+    what is held and prints, once::
+
+        mbseig: interrupted after N of M points; rerun with --resume DIR to finish
+    """
+
+    def __init__(self, resume, default_dir, total, *, close=None):
+        from ..studies.resume import Checkpoint
+        from . import ON_SECOND_INTERRUPT
+
+        self.checkpoint = Checkpoint(resume if resume is not None else default_dir,
+                                     deferred=resume is None)
+        self.checkpoint.points[:] = [0, int(total)]
+        self.close = close  # run before the line (a progress bar ends its own line)
+        self.said = False
+        self._hooks = ON_SECOND_INTERRUPT
+        self._hook = functools.partial(self.say, raw=True)  # (in a signal handler)
+        self._hooks.append(self._hook)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        if self._hook in self._hooks:
+            self._hooks.remove(self._hook)
+        return False
+
+    def say(self, exc=None, *, raw=False) -> int:
+        """Keep the finished tasks and print the line (once); the exit code 130.  ``raw``:
+        written straight to file descriptor 2 (from a signal handler, which may have cut a
+        write to sys.stderr short)."""
+        from . import held
+
+        if self.said:
+            return 130
+        self.said = True
+        with held():
+            if self.close is not None:
+                try:
+                    self.close()
+                except Exception:  # (a bar that cannot draw: the line matters more)
+                    pass
+            text = self._line(exc)
+            if raw:
+                try:
+                    sys.stderr.flush()
+                except Exception:  # (a write cut short by the signal)
+                    pass
+                os.write(2, (text + "\n").encode())
+            else:
+                print(text, file=sys.stderr)
+                sys.stderr.flush()
+        return 130
+
+    def _line(self, exc) -> str:
+        import shlex
+
+        done, total = self.checkpoint.points
+        if done == 0 and self.checkpoint.identity is None:  # stopped before the study began
+            return f"mbseig: interrupted before the first of {total} points"
+        try:
+            where = self.checkpoint.flush()
+        except MbseigError as err:
+            return (f"mbseig: interrupted after {done} of {total} points; they could not be "
+                    f"kept: {' '.join(err.one_line().splitlines())}")
+        stage = getattr(exc, "stage", "") or ""
+        more = f" ({stage} done)" if stage and done >= total else ""
+        return (f"mbseig: interrupted after {done} of {total} points; rerun with --resume "
+                f"{shlex.quote(str(where))} to finish{more}")
 
 
 def show_progress(args) -> bool:

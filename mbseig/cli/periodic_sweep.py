@@ -19,7 +19,7 @@ from ..errors import CaseError
 from ..numerics import jsonable
 from ..studies.periodic_sweep import periodic_sweep
 from ..studies.tracking import parse_range
-from .common import print_json, show_progress
+from .common import KeptStudy, print_json, resume_dir, show_progress
 
 
 def run(args, spec) -> int:
@@ -36,16 +36,38 @@ def run(args, spec) -> int:
         raise CaseError(f"the two ranges sweep the same parameter {ranges[0][0]!r}",
                         element="--param", file=spec.source)
     show = show_progress(args)
+    open_line = []  # a progress line not ended yet
 
     def progress(done, total):
         print(f"\rpoint {done}/{total}", end="" if done < total else "\n", file=sys.stderr)
+        open_line[:] = [True] if done < total else []
 
-    if len(ranges) == 2:
-        return _chart(args, spec, ranges, fixed, progress if show else None)
+    def end_line():
+        if open_line:
+            print(file=sys.stderr)
+            open_line.clear()
+
+    total = 1
+    for _, values in ranges:
+        total *= len(values)
+    stem = spec.name + (f"-{args.config}" if args.config else "")
+    folder = args.out or f"sweep-{stem}"
+    # Ctrl-C: the finished points kept (--resume DIR, else OUT-resume) and said in one line
+    with KeptStudy(getattr(args, "resume", None), resume_dir(folder), total,
+                   close=end_line) as kept:
+        study = {"progress": progress if show else None, "jobs": getattr(args, "jobs", None),
+                 "resume": kept.checkpoint}
+        try:
+            if len(ranges) == 2:
+                return _chart(args, spec, ranges, fixed, study)
+            return _sweep(args, spec, ranges, fixed, study)
+        except KeyboardInterrupt as exc:
+            return kept.say(exc)
+
+
+def _sweep(args, spec, ranges, fixed, study) -> int:
     (name, values), = ranges
-
-    sweep = periodic_sweep(spec, name, values, config=args.config, fixed=fixed,
-                           progress=progress if show else None)
+    sweep = periodic_sweep(spec, name, values, config=args.config, fixed=fixed, **study)
     out = sweep.to_dict()
     if args.out:
         folder = Path(args.out)
@@ -65,13 +87,12 @@ def run(args, spec) -> int:
     return 0
 
 
-def _chart(args, spec, ranges, fixed, progress) -> int:
+def _chart(args, spec, ranges, fixed, study) -> int:
     from ..plots import save
     from ..studies.floquet_sweep import chart_figure
     from ..studies.periodic_sweep import periodic_chart
 
-    res = periodic_chart(spec, ranges[0], ranges[1], config=args.config, fixed=fixed,
-                         progress=progress)
+    res = periodic_chart(spec, ranges[0], ranges[1], config=args.config, fixed=fixed, **study)
     out = res.to_dict()
     stem = spec.name + (f"-{args.config}" if args.config else "")
     folder = Path(args.out or f"sweep-{stem}")

@@ -10,12 +10,13 @@ from pathlib import Path
 from ..casefile import parse_param_overrides
 from ..errors import CaseError
 from ..numerics import jsonable
-from .common import print_json
+from .common import KeptStudy, print_json, resume_dir, show_progress
 
 __all__ = ["run"]
 
 
 def run(args, spec) -> int:
+    from ..studies.runners import progress_bar
     from ..studies.steady_sweep import steady_sweep
     from ..studies.tracking import parse_range
 
@@ -27,11 +28,28 @@ def run(args, spec) -> int:
     name, values = ranges[0]
     span = abs(values[-1] - values[0])
     xtol = float(getattr(args, "xtol_rel", 1e-10) or 1e-10) * span
-    res = steady_sweep(spec, name, values, config=args.config, fixed=fixed,
-                       xtol=min(xtol, 1e-11 * max(1.0, abs(values[-1]))))
-    out = {"case": spec.name, **res.as_dict()}
     folder = Path(args.out) if args.out else Path(f"sweep-{spec.name}"
                                                   + (f"-{args.config}" if args.config else ""))
+    bar = progress_bar() if show_progress(args) else None
+    # Ctrl-C: the finished points kept (--resume DIR, else OUT-resume) and said in one line
+    with KeptStudy(getattr(args, "resume", None), resume_dir(folder), len(values),
+                   close=bar.close if bar is not None else None) as kept:
+        try:
+            try:
+                res = steady_sweep(spec, name, values, config=args.config, fixed=fixed,
+                                   xtol=min(xtol, 1e-11 * max(1.0, abs(values[-1]))),
+                                   jobs=getattr(args, "jobs", None), progress=bar,
+                                   resume=kept.checkpoint)
+            finally:
+                if bar is not None:
+                    bar.close()
+            return _write(args, spec, res, name, values, folder)
+        except KeyboardInterrupt as exc:
+            return kept.say(exc)
+
+
+def _write(args, spec, res, name, values, folder) -> int:
+    out = {"case": spec.name, **res.as_dict()}
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "sweep.json").write_text(json.dumps(jsonable(out), indent=1, allow_nan=False))
     out["outputs"] = [str(folder / "sweep.json")]

@@ -8,11 +8,14 @@ from pathlib import Path
 from ..casefile import parse_param_overrides
 from ..errors import CaseError
 from .common import (
+    KeptStudy,
     add_case_arguments,
     add_progress_options,
+    add_study_options,
     case_command,
     parameter_units_of,
     print_json,
+    resume_dir,
     show_progress,
 )
 
@@ -27,14 +30,9 @@ def register(sub):
     add_case_arguments(p)
     p.add_argument("--out", default=None, metavar="DIR",
                    help="output directory (default: sweep-CASE[-CONFIG])")
-    p.add_argument("--jobs", type=int, default=None, metavar="N",
-                   help="local worker processes (default: CPU count; 1 runs in-process)")
+    add_study_options(p)
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="run the points on a Dask distributed scheduler (pip install 'mbseig[dask]')")
-    p.add_argument("--resume", default=None, metavar="DIR",
-                   help="keep every completed line, point and boundary in DIR as it completes; "
-                        "rerun with the same DIR to compute only the missing ones (the outputs "
-                        "equal those of an uninterrupted sweep)")
     p.add_argument("--xtol-rel", type=float, default=1e-10, metavar="X",
                    help="boundary tolerance relative to the first axis' span (default 1e-10)")
     p.add_argument("--no-continuation", dest="continuation", action="store_false",
@@ -51,23 +49,41 @@ def register(sub):
 
 @case_command("sweep")
 def run(args, spec) -> int:
-    from ..studies.sweep import parse_range, progress_bar, run_sweep, write_outputs
+    from ..studies.sweep import parse_range, progress_bar
 
     ranges = [parse_range(item) for item in args.param if ":" in item]
     fixed = parse_param_overrides([item for item in args.param if ":" not in item])
     if not ranges:
         raise CaseError("give at least one --param NAME=START:STOP:COUNT", element="--param")
+    stem = Path(args.case).stem + (f"-{args.config}" if args.config else "")
+    out_dir = args.out or f"sweep-{stem}"
     bar = progress_bar() if show_progress(args) else None
+    total = 1
+    for _, values in ranges:
+        total *= len(values)
+    # Ctrl-C: the finished points are kept (in --resume DIR, else in OUT-resume) and one line
+    # says where (KeptStudy); every output is written from the result, so a stop while they
+    # are written keeps every point too
+    with KeptStudy(args.resume, resume_dir(out_dir), total,
+                   close=bar.close if bar is not None else None) as kept:
+        try:
+            return _sweep(args, spec, ranges, fixed, stem, out_dir, bar, kept)
+        except KeyboardInterrupt as exc:
+            return kept.say(exc)
+
+
+def _sweep(args, spec, ranges, fixed, stem, out_dir, bar, kept) -> int:
+    from ..studies.sweep import run_sweep, write_outputs
+
     try:
         res = run_sweep(spec, ranges, config=args.config, fixed=fixed, jobs=args.jobs,
                         scheduler=args.scheduler, progress=bar, xtol_rel=args.xtol_rel,
                         continuation=args.continuation, curves=args.curves,
-                        diagram=args.diagram, resume=args.resume)
+                        diagram=args.diagram, resume=kept.checkpoint)
     finally:  # (an error's line below the bars, not glued to them)
         if bar is not None:
             bar.close()
-    stem = Path(args.case).stem + (f"-{args.config}" if args.config else "")
-    out_dir = args.out or f"sweep-{stem}"
+    kept.checkpoint.points[0] = kept.checkpoint.points[1]  # (every point finished)
     units = parameter_units_of(spec)
     paths = write_outputs(res, out_dir, units=units)
     camp = _campbell(args, spec, ranges, fixed, out_dir, paths, units)

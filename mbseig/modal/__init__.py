@@ -53,6 +53,7 @@ import dataclasses
 import numpy as np
 import scipy.sparse as sp
 
+from ..arguments import check
 from ..eigen import Problem, Request, SingularPencilError, solve
 from ..eigen.small import small_problem
 from ..errors import SolverError
@@ -107,6 +108,7 @@ def modes(M, P=None, Q=None, *, solver: str = "auto", N=None, coordinate_names=N
     :func:`mbseig.eigen.solve_qep` (``sym_tol``, ``rayleigh_tol``, ``scale``, ``left``,
     ``companion_cond``) or of :func:`mbseig.eigen.solve_partial`.
     """
+    check("modes", locals())
     if isinstance(M, LinearModel):
         lin = M
         M, P, Q, N, coordinate_names = lin.M, lin.P, lin.Q, lin.N, lin.coordinate_names

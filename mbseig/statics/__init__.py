@@ -22,6 +22,7 @@ stages work on it (:func:`solved`).
 
 from __future__ import annotations
 
+from ..arguments import check
 from ..errors import MbseigError
 from .examine import examine
 from .failures import (
@@ -67,6 +68,7 @@ def equilibrium(model, *, tol: float = 1e-12, max_iter: int = 50, rank_tol: floa
         them as they are).
     Errors name the case file and the constraint or coordinates (docs/design.md, "Equilibrium").
     """
+    check("equilibrium", locals())
     from .linalg import blas_threads
 
     with blas_threads(blas):

@@ -50,21 +50,46 @@ class PeriodicSweep:
         }
 
 
+def _floquet_point(spec, config, params):
+    """The Floquet result of one grid point (a pure task for the runners)."""
+    return periodic_analysis(spec, config=config, params=params).floquet
+
+
+def _chart_point(spec, config, params, rtols):
+    """The two monodromy estimates of one chart point (a pure task for the runners)."""
+    system = periodic_linearization(spec, config=config, params=params).system.system
+    return floquet(chebyshev_system(system)[0], rtols=rtols)
+
+
+def _runner(jobs, progress, resume, spec, kind, points, **inputs):
+    """The runner of a periodic study's grid: ``progress(done, total)`` of its points, its
+    checkpoint (``resume``: None, a directory or a Checkpoint) named by the study's inputs."""
+    from .runners import Runner
+    from .steady_sweep import _checkpoint
+
+    shown = None if not progress else (
+        lambda label, done, total: progress(done, total) if label == "points" else None)
+    return Runner(jobs=jobs, progress=shown, points=points,
+                  checkpoint=_checkpoint(resume, spec, kind, **inputs))
+
+
 def periodic_sweep(spec, name, values, *, config=None, fixed=None, rel_tol=1e-8,
-                   progress=None) -> PeriodicSweep:
+                   progress=None, jobs=None, resume=None) -> PeriodicSweep:
     """Floquet verdicts of a periodic case over ``values`` of parameter ``name`` and the
-    parameter values where the verdict changes, located to ``rel_tol``."""
+    parameter values where the verdict changes, located to ``rel_tol``.  The grid points run
+    on a :class:`~mbseig.studies.runners.Runner` (``jobs``, ``resume`` as for
+    :func:`mbseig.studies.sweep.run_sweep`; Ctrl-C raises
+    :class:`~mbseig.studies.runners.Interrupted`); the boundaries are located in-process."""
     fixed = dict(fixed or {})
     values = np.sort(np.asarray(values, dtype=float))
 
     def params(p):
         return {**fixed, name: repr(float(p))}
 
-    results = []
-    for k, p in enumerate(values):
-        results.append(periodic_analysis(spec, config=config, params=params(p)).floquet)
-        if progress:
-            progress(k + 1, len(values))
+    with _runner(jobs, progress, resume, spec, "periodic", len(values), config=config,
+                 parameter=name, values=values, fixed=fixed, rel_tol=rel_tol) as runner:
+        results = runner.map(_floquet_point, [((spec, config, params(p)), {}) for p in values],
+                             "points", points=1)
 
     def build(p):
         system = periodic_linearization(spec, config=config, params=params(p)).system.system
@@ -129,37 +154,42 @@ def _edge(name, other, value, ra, rb, a, b):
 
 
 def periodic_chart(spec, first, second, *, config=None, fixed=None, rtols=CHART_RTOLS,
-                   progress=None, rel_tol=1e-8) -> PeriodicChart:
+                   progress=None, rel_tol=1e-8, jobs=None, resume=None) -> PeriodicChart:
     """The Floquet verdict of a periodic case over the grid ``first`` × ``second`` (each a
     (name, values) pair), two monodromy estimates at ``rtols`` per point.  Each grid bracket
     along ``first`` where the verdict changes is located to ``rel_tol`` (relative) at its value
     of ``second``, as :func:`periodic_sweep` locates one (Brent on the characteristic
     function of the kind, each monodromy at rtol 1e-12; the kind and the verdicts at the ends
-    from the chart's points); ``rel_tol=None`` keeps the brackets."""
+    from the chart's points); ``rel_tol=None`` keeps the brackets.  The points and the
+    located brackets run on a :class:`~mbseig.studies.runners.Runner` (``jobs``, ``resume``
+    as for :func:`periodic_sweep`)."""
     (n1, v1), (n2, v2) = first, second
     fixed = dict(fixed or {})
     v1, v2 = np.asarray(v1, dtype=float), np.asarray(v2, dtype=float)
     verdicts = np.empty((v1.size, v2.size), dtype=object)
     rho, bounds = np.empty(verdicts.shape), np.empty(verdicts.shape)
     results = np.empty(verdicts.shape, dtype=object)
-    total, done = v1.size * v2.size, 0
-    for i, a in enumerate(v1):
-        for j, b in enumerate(v2):
-            params = {**fixed, n1: repr(float(a)), n2: repr(float(b))}
-            system = periodic_linearization(spec, config=config, params=params).system.system
-            res = floquet(chebyshev_system(system)[0], rtols=rtols)
+    calls = [((spec, config, {**fixed, n1: repr(float(a)), n2: repr(float(b))}, tuple(rtols)), {})
+             for a in v1 for b in v2]
+    with _runner(jobs, progress, resume, spec, "periodic chart", len(calls), config=config,
+                 first=(n1, v1), second=(n2, v2), fixed=fixed, rtols=tuple(rtols),
+                 rel_tol=rel_tol) as runner:
+        flat = runner.map(_chart_point, calls, "points", points=1)
+        for k, res in enumerate(flat):
+            i, j = divmod(k, v2.size)
             results[i, j], verdicts[i, j] = res, res.verdict
             rho[i, j], bounds[i, j] = res.spectral_radius, res.decided_by[2]
-            done += 1
-            if progress:
-                progress(done, total)
-    edges = tuple(_edge(n1, n2, v2[j], results[i, j], results[i + 1, j], v1[i], v1[i + 1])
-                  for j in range(v2.size) for i in range(v1.size - 1)
-                  if results[i, j].verdict != results[i + 1, j].verdict)
-    if rel_tol is not None:
-        ends = {(float(v1[i]), float(v2[j])): results[i, j] for i in range(v1.size)
-                for j in range(v2.size)}
-        edges = tuple(_located(spec, config, fixed, n1, n2, e, rel_tol, ends) for e in edges)
+        edges = tuple(_edge(n1, n2, v2[j], results[i, j], results[i + 1, j], v1[i], v1[i + 1])
+                      for j in range(v2.size) for i in range(v1.size - 1)
+                      if results[i, j].verdict != results[i + 1, j].verdict)
+        if rel_tol is not None:
+            ends = {(float(v1[i]), float(v2[j])): results[i, j] for i in range(v1.size)
+                    for j in range(v2.size)}
+            calls = [((spec, config, fixed, n1, n2, e, rel_tol,
+                       {k: ends[k] for k in ((e["bracket"][0], e["at"][n2]),
+                                             (e["bracket"][1], e["at"][n2]))}), {})
+                     for e in edges]
+            edges = tuple(runner.map(_located, calls, "boundaries"))
     chart = StabilityChart(v1, v2, verdicts, rho, (n1, n2))
     return PeriodicChart(spec.name, chart, bounds, edges, tuple(rtols), fixed, rel_tol)
 

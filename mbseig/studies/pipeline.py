@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 
+from ..arguments import check
 from ..numerics import jsonable
 from .point import Analysis, analyze_model, as_spec
 
@@ -29,6 +30,7 @@ def analyze(case=None, *, config=None, params=None, solver="auto", constraint_st
         ``elements = "auto"`` beams for those modes (:mod:`mbseig.studies.refine`); a case's own
         ``[refinement]`` table does the same.
     """
+    check("analyze", locals())
     opts = {"solver": solver, "constraint_stiffness": constraint_stiffness,
             "modes_options": modes_options}
     if model is not None:

@@ -11,6 +11,14 @@ and Windows).  Results are pickled: loaded, they are bit for bit what the task r
 outputs of a resumed study equal those of an uninterrupted one byte for byte.  A checkpoint
 directory is trusted as the Python that wrote it (pickles can hold code): resume only from
 directories mbseig wrote.
+
+A *deferred* checkpoint (``Checkpoint(directory, deferred=True)``) keeps the results in memory
+and writes nothing until :meth:`Checkpoint.flush`: ``mbseig sweep`` without ``--resume`` holds
+one, and when the sweep is interrupted (Ctrl-C) it writes the finished tasks to the directory
+next to ``--out`` that its last line names.  Its tasks go to one file per stage,
+``batch-{stage}-{n:03d}.pkl`` (a dict index → result, written and renamed as above: one fsync,
+not one per task, so that an interruption after thousands of points still ends at once); a
+rerun with ``--resume`` reads them as it reads the single files.
 """
 
 from __future__ import annotations
@@ -59,19 +67,47 @@ class Checkpoint:
 
     ``get(stage, i)`` returns (True, result) for a task held, (False, None) otherwise;
     ``put(stage, i, result)`` writes it atomically.  ``loaded`` and ``written`` list the
-    (stage, index) pairs read and written in this run (a task is never written twice).
+    (stage, index) pairs read and written in this run (a task is never written twice), and
+    ``held(stage)`` counts the tasks of a stage held now (read or written).
+
+    identity : what the study is (:func:`study_identity`); it may be given later by
+        :meth:`bind` (the study that receives the checkpoint knows its inputs).
+    deferred : hold the results in memory and write nothing before :meth:`flush`.
     """
 
-    def __init__(self, directory, identity: dict):
-        self.dir = Path(directory)
+    def __init__(self, directory, identity: dict | None = None, *, deferred: bool = False):
+        self.dir = None if directory is None else Path(directory)
+        self.deferred = bool(deferred)
+        self.identity = None
         self.loaded, self.written = [], []
+        self._memory: dict = {}  # (stage, index) -> result of a deferred checkpoint
+        self._done: set = set()  # (stage, index) written in this run
+        self._batches: dict = {}  # stage -> {index: result} read from the batch files
+        self.flushed = False
+        # grid points held (read or finished) and the study's total, kept up by the runner
+        # (mbseig.studies.runners.Runner) for the line an interruption prints
+        self.points = [0, 0]
+        if identity is not None:
+            self.bind(identity)
+
+    def bind(self, identity: dict):
+        """Set what the study is; a directory already written must hold the same study."""
+        if self.identity is not None and self.identity != identity:
+            raise MbseigError("one checkpoint given to two different studies", element="--resume")
+        self.identity = identity
+        if not self.deferred:
+            self._open()
+        return self
+
+    def _open(self):
+        """Create the directory and its manifest, or check the manifest it holds."""
         try:
             self.dir.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise MbseigError(f"cannot create the resume directory {str(self.dir)!r}: "
                               f"{exc.strerror or exc}", element="--resume") from None
         manifest = self.dir / MANIFEST
-        text = json.dumps(identity, indent=1, sort_keys=True) + "\n"
+        text = json.dumps(self.identity, indent=1, sort_keys=True) + "\n"
         if manifest.exists():
             try:
                 held = json.loads(manifest.read_text())
@@ -88,25 +124,85 @@ class Checkpoint:
     def _path(self, stage, i):
         return self.dir / f"{stage}-{int(i):06d}.pkl"
 
+    def held(self, stage) -> int:
+        """The tasks of ``stage`` held now: read from the directory or completed in this run."""
+        return len({i for s, i in self.loaded + self.written if s == stage})
+
     def get(self, stage, i):
-        p = self._path(stage, i)
+        if self.deferred:
+            return False, None  # (a deferred checkpoint reads nothing: a new study)
         try:
-            with p.open("rb") as fh:
+            with self._path(stage, i).open("rb") as fh:
                 result = pickle.load(fh)
         except FileNotFoundError:
-            return False, None
+            batch = self._batch(stage)
+            if int(i) not in batch:
+                return False, None
+            result = batch[int(i)]
         except (OSError, EOFError, pickle.UnpicklingError, AttributeError, ImportError,
                 IndexError, TypeError, ValueError):
             return False, None  # unreadable (another mbseig's layout): computed again
         self.loaded.append((stage, int(i)))
         return True, result
 
+    def _batch(self, stage) -> dict:
+        """{index: result} of every batch file of ``stage`` (read once)."""
+        if stage not in self._batches:
+            held = {}
+            for path in sorted(self.dir.glob(f"batch-{stage}-*.pkl")):
+                try:
+                    with path.open("rb") as fh:
+                        part = pickle.load(fh)
+                except (OSError, EOFError, pickle.UnpicklingError, AttributeError,
+                        ImportError, IndexError, TypeError, ValueError):
+                    continue  # unreadable: its tasks are computed again
+                if isinstance(part, dict):
+                    held.update(part)
+            self._batches[stage] = held
+        return self._batches[stage]
+
     def put(self, stage, i, result):
         key = (stage, int(i))
-        if key in self.written:
+        if key in self._done:
             raise MbseigError(f"task {stage} {i} completed twice", element="--resume")
-        self._atomic(self._path(stage, i), pickle.dumps(result, protocol=pickle.HIGHEST_PROTOCOL))
+        self._done.add(key)
+        if self.deferred:
+            self._memory[key] = result
+        else:
+            self._atomic(self._path(stage, i),
+                         pickle.dumps(result, protocol=pickle.HIGHEST_PROTOCOL))
         self.written.append(key)
+
+    def flush(self) -> Path:
+        """Write what a deferred checkpoint holds to its directory, one batch file per stage,
+        and return the directory.  A directory that holds another study is left alone: the
+        tasks go to the first free sibling ``DIR-2``, ``DIR-3``, ... (the caller names the
+        one returned).  A checkpoint written as it went has nothing left to write."""
+        if not self.deferred or self.flushed:
+            return self.dir
+        if self.identity is None:
+            raise MbseigError("a checkpoint written before its study was named", element="--resume")
+        base, n = self.dir, 1
+        while True:
+            try:
+                self._open()
+                break
+            except CaseError:
+                n += 1
+                if n > 100:
+                    raise
+                self.dir = base.with_name(f"{base.name}-{n}")
+        stages: dict = {}
+        for (stage, i), result in self._memory.items():
+            stages.setdefault(stage, {})[i] = result
+        for stage, part in stages.items():
+            k = 0
+            while (self.dir / f"batch-{stage}-{k:03d}.pkl").exists():
+                k += 1
+            self._atomic(self.dir / f"batch-{stage}-{k:03d}.pkl",
+                         pickle.dumps(part, protocol=pickle.HIGHEST_PROTOCOL))
+        self.flushed = True
+        return self.dir
 
     def _atomic(self, path, data: bytes):
         tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")

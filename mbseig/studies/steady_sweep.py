@@ -82,19 +82,38 @@ def _count(a):
     return sum(2 if r["omega_d"] > 0 else 1 for r in _unstable(a))
 
 
-def steady_sweep(spec, name, values, *, config=None, fixed=None, xtol=1e-11):
-    """The sweep of ``name`` over ``values`` (module docstring)."""
+def _steady_point(spec, config, params):
+    """The steady motion and its modes at one grid point (a pure task for the runners)."""
     from .steady_modes import analyze_steady
+
+    return analyze_steady(spec, config=config, params=params)
+
+
+def steady_sweep(spec, name, values, *, config=None, fixed=None, xtol=1e-11, jobs=None,
+                 progress=None, resume=None):
+    """The sweep of ``name`` over ``values`` (module docstring).  The grid points run on a
+    :class:`~mbseig.studies.runners.Runner` (``jobs``, ``progress``, and ``resume``: a
+    directory or :class:`~mbseig.studies.resume.Checkpoint`, as for
+    :func:`mbseig.studies.sweep.run_sweep`; Ctrl-C raises
+    :class:`~mbseig.studies.runners.Interrupted`); the boundaries are refined in-process."""
+    from .runners import Runner
 
     fixed = dict(fixed or {})
 
-    def at(p):
-        return analyze_steady(spec, config=config, params={**fixed, name: repr(float(p))})
+    def params(p):
+        return {**fixed, name: repr(float(p))}
 
-    points, runs = [], []
-    for v in values:
-        a = at(v)
-        runs.append(a)
+    def at(p):
+        return _steady_point(spec, config, params(p))
+
+    checkpoint = _checkpoint(resume, spec, "steady", config=config, parameter=name,
+                             values=np.asarray(values, float), fixed=fixed, xtol=xtol)
+    with Runner(jobs=jobs, progress=progress, checkpoint=checkpoint,
+                points=len(values)) as runner:
+        runs = runner.map(_steady_point, [((spec, config, params(v)), {}) for v in values],
+                          "points", points=1)
+    points = []
+    for v, a in zip(values, runs):
         points.append({"value": float(v), "verdict": a.verdict,
                        "eigenvalues": [[float(s.real), float(s.imag)]
                                        for s in a.solution.eigenvalues],
@@ -116,6 +135,17 @@ def steady_sweep(spec, name, values, *, config=None, fixed=None, xtol=1e-11):
                                "contact": key.split(":", 1)[1], "parameter": name})
     boundaries.sort(key=lambda b: b["value"])
     return SteadySweep(name, np.asarray(values, float), tuple(points), tuple(boundaries))
+
+
+def _checkpoint(resume, spec, kind, **inputs):
+    """The checkpoint of a study's grid (``resume``: None, a directory or a Checkpoint)."""
+    if resume is None:
+        return None
+    from .resume import Checkpoint, study_identity
+
+    identity = study_identity(spec, study=kind, **inputs)
+    return (resume.bind(identity) if isinstance(resume, Checkpoint)
+            else Checkpoint(resume, identity))
 
 
 def _stability_crossing(at, lo, hi, a0, a1, name, xtol):

@@ -45,6 +45,7 @@ import uuid
 
 import numpy as np
 
+from ..arguments import check
 from ..errors import CaseError
 from ..model.assembly import UNITS
 from .boundaries import (
@@ -93,15 +94,20 @@ def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None,
 
     case : a path (read and parsed once, here) or a :class:`~mbseig.casefile.CaseSpec`; the
         lines and boundary searches receive the parsed case, never the path.
-    jobs : local worker processes (default: CPU count; 1 runs in-process).
+    jobs : local worker processes; None (default) decides per stage from its first tasks
+        whether a pool of the usable CPUs is faster than in-process
+        (:mod:`mbseig.studies.runners`); 1 runs in-process.
     scheduler : a Dask scheduler address (or a ``distributed.Client``) to run on.
     xtol_rel : boundary tolerance relative to the first axis' span.
     continuation : follow the branch along each line (default); False solves each point alone.
     curves : with two axes, follow each first-line boundary across the second axis (at
         ``curve_values`` of it, default its grid values; more are inserted where it bends).
-    resume : a directory (:mod:`mbseig.studies.resume`): every line, point, boundary search
-        and curve is written there as it completes, and the ones it already holds are read
+    resume : a directory (:mod:`mbseig.studies.resume`), or a
+        :class:`~mbseig.studies.resume.Checkpoint`: every line, point, boundary search and
+        curve is written there as it completes, and the ones it already holds are read
         instead of computed; the result equals that of an uninterrupted sweep bit for bit.
+        Interrupted (Ctrl-C), the sweep raises :class:`~mbseig.studies.runners.Interrupted`
+        (a KeyboardInterrupt) saying how many grid points finished.
     diagram : the coordinate or named angle of the bifurcation diagram (default: the named angle,
         else the coordinate, that varies most along the branch).
     lean : build the case once per line and update only the force scalars the swept parameter
@@ -109,6 +115,7 @@ def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None,
         (:func:`~mbseig.studies.continuation.family_maker`; the same numbers to rounding);
         False builds and resolves every value (the general path, for comparison).
     """
+    check("run_sweep", locals())
     spec = as_spec(case)
     case_arg, case = spec.source, spec
     fixed = dict(fixed or {})
@@ -125,12 +132,15 @@ def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None,
     if resume is not None:
         from .resume import Checkpoint, study_identity
 
-        checkpoint = Checkpoint(resume, study_identity(
+        identity = study_identity(
             spec, config=config, axes=[(n, np.asarray(v, dtype=float)) for n, v in axes],
             fixed=fixed, xtol_rel=xtol_rel, safety=safety, stability_rtol=stability_rtol,
-            continuation=bool(continuation), curves=bool(curves), curve_values=curve_values))
-    with Runner(jobs=jobs, scheduler=scheduler, progress=progress,
-                checkpoint=checkpoint) as runner:
+            continuation=bool(continuation), curves=bool(curves), curve_values=curve_values)
+        checkpoint = (resume.bind(identity) if isinstance(resume, Checkpoint)
+                      else Checkpoint(resume, identity))
+    # Ctrl-C: the runner raises Interrupted (a KeyboardInterrupt) with the grid points held
+    with Runner(jobs=jobs, scheduler=scheduler, progress=progress, checkpoint=checkpoint,
+                points=len(lines) * n0) as runner:
         if continuation:
             share = uuid.uuid4().hex  # lines that differ only in damping share their statics
             try:
@@ -142,7 +152,7 @@ def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None,
         else:
             calls = [((case, config, {**fixed, **line, axis0: float(v)}), opts)
                      for line in lines for v in values0]
-            flat = runner.map(evaluate_point, calls, "points")
+            flat = runner.map(evaluate_point, calls, "points", points=1)
             points = [flat[l * n0:(l + 1) * n0] for l in range(len(lines))]
             branches, events, records = [[] for _ in lines], [[] for _ in lines], [{} for _ in lines]
         tracks, tols, searches = [], [], []
@@ -179,7 +189,7 @@ def _followed_lines(runner, case, config, fixed, lines, axis0, values0, opts):
     """Every line followed by continuation (:func:`sweep_line`): (points, branches, events,
     records) per line; a line whose first point fails is solved point by point instead."""
     results = runner.map(sweep_line, [((case, config, {**fixed, **line}, axis0, values0), opts)
-                                      for line in lines], "lines")
+                                      for line in lines], "lines", points=len(values0))
     opts = {k: v for k, v in opts.items() if k not in ("lean", "share")}
     points, branches, events, records = [], [], [], []
     for line, r in zip(lines, results):
