@@ -32,9 +32,48 @@ def styled(fn):
 
 
 def figure(**kw):
+    """A Figure without pyplot.  mbseig's figures pass ``layout="constrained"`` (titles,
+    labels and legends outside the axes get their room; a figure legend goes at
+    ``loc="outside ..."``), so nothing is clipped once :func:`fit` has widened the figure where
+    a text is wider than it."""
     from matplotlib.figure import Figure
 
     return Figure(**kw)
+
+
+def renderer(fig):
+    """The renderer of ``fig`` (an Agg canvas attached when it has none: a Figure made without
+    pyplot has only the base canvas)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    if not isinstance(fig.canvas, FigureCanvasAgg):
+        FigureCanvasAgg(fig)
+    return fig.canvas.get_renderer()
+
+
+def overflow(fig):
+    """How far (inches: left, bottom, right, top, each ≥ 0) the drawn artists of ``fig``
+    extend beyond it: all zero when nothing is clipped."""
+    r = renderer(fig)
+    fig.draw_without_rendering()  # the layout engine places the artists at this size
+    bb = fig.get_tightbbox(r)
+    w, h = fig.get_size_inches()
+    return (max(0.0, -bb.x0), max(0.0, -bb.y0), max(0.0, bb.x1 - w), max(0.0, bb.y1 - h))
+
+
+def fit(fig, *, pad=0.1, rounds=6):
+    """Grow ``fig`` until every artist (titles, suptitle, legends, tick and axis labels) lies
+    inside it; returns it.  A figure with a layout engine (constrained) lays itself out again
+    at the new size, so the text keeps its size and the axes take the rest."""
+    for _ in range(rounds):
+        left, bottom, right, top = overflow(fig)
+        dx, dy = max(left, right), max(bottom, top)
+        if dx <= 1e-3 and dy <= 1e-3:
+            break
+        w, h = fig.get_size_inches()
+        fig.set_size_inches(w + 2 * dx + (pad if dx > 1e-3 else 0.0),
+                            h + 2 * dy + (pad if dy > 1e-3 else 0.0), forward=False)
+    return fig
 
 
 def colormap(name):
@@ -44,8 +83,10 @@ def colormap(name):
 
 
 def save(fig, path, *, dpi=DPI, element="figure"):
-    """Write ``fig`` as a PNG (no metadata) to ``path``; returns the path."""
+    """Write ``fig`` as a PNG (no metadata) to ``path``, grown first so that no text is clipped
+    (:func:`fit`); returns the path."""
     path = Path(path)
+    fit(fig)
     try:
         fig.savefig(path, dpi=dpi, metadata={"Software": None})
     except OSError as exc:

@@ -54,7 +54,7 @@ def pole_map(eigenvalues, *, title="pole map", stability=None, labels=None):
     """Eigenvalues (both halves of each pair) in the s-plane over a grid of constant damping
     ratio ζ and natural frequency ω_n; numbered as the mode tables (1, 2, ...); colour by
     stability, legend outside the axes."""
-    fig = figure(figsize=(7.5, 4.8))
+    fig = figure(layout="constrained", figsize=(7.5, 4.8))
     ax = fig.subplots()
     s = np.asarray(eigenvalues, dtype=complex)
     radius = float(np.max(np.abs(s), initial=0.0)) * 1.08 or 1.0
@@ -84,7 +84,6 @@ def pole_map(eigenvalues, *, title="pole map", stability=None, labels=None):
         names += list(labels)
     ax.legend(handles, names, fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0),
               borderaxespad=0.0, title="numbers = mode", title_fontsize=7)
-    fig.tight_layout()
     return fig
 
 
@@ -102,7 +101,7 @@ def plot_check(result, directory) -> list:
     for m in result.modes:
         if m.skipped or m.t.size == 0:
             continue
-        fig = figure(figsize=(8, 6), constrained_layout=True)
+        fig = figure(layout="constrained", figsize=(8, 6))
         ax1, ax2 = fig.subplots(2, 1, sharex=True)
         t = m.t
         a0 = abs(m.eta[0])
@@ -134,7 +133,7 @@ def plot_check(result, directory) -> list:
 @styled
 def speed_accuracy(res):
     """Error against wall time, one line per method of a :func:`mbseig.bench.run_bench` result."""
-    fig = figure(figsize=(9, 6))
+    fig = figure(layout="constrained", figsize=(9, 6))
     ax = fig.subplots()
     markers = "os^vD<>pPX*h"
     rows = [r for r in res["rows"] if r["section"] in ("dense", "structured", "partial", "jacobians")
@@ -161,5 +160,4 @@ def speed_accuracy(res):
     ax.grid(True, which="both", alpha=0.3)
     if methods:
         ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
-    fig.tight_layout()
     return fig
