@@ -115,7 +115,7 @@ def mode_figure(model, q0, qs, *, title=""):
     if spatial:
         layout = spatial_layout(model)
         views = motion_views(model, layout, q0, qs)
-        fig = figure(layout="constrained", figsize=(3.6 * (1 + len(views)), 4.0))
+        fig = figure(layout="constrained", figsize=(3.2 * (1 + len(views)), 3.6))
         fig.get_layout_engine().set(wspace=0.12)  # the 3-D view's z label needs room
         centre, half = view_limits(all_points(model, layout, [q0, *qs]), 0.2 * L)
         ax3 = fig.add_subplot(1, 1 + len(views), 1, projection="3d")

@@ -52,27 +52,26 @@ def renderer(fig):
 
 
 def overflow(fig):
-    """How far (inches: left, bottom, right, top, each ≥ 0) the drawn artists of ``fig``
-    extend beyond it: all zero when nothing is clipped."""
+    """How much wider (inches, ≥ 0) ``fig`` must be for its figure-level texts (suptitle,
+    figure legends and texts) to fit: the layout engine keeps every axes' own artists (titles,
+    labels, tick labels, legends) inside the figure, but it cannot make a figure wider than a
+    centred title or legend; measured without laying the figure out (a text's size does not
+    depend on where it goes)."""
     r = renderer(fig)
-    fig.draw_without_rendering()  # the layout engine places the artists at this size
-    bb = fig.get_tightbbox(r)
-    w, h = fig.get_size_inches()
-    return (max(0.0, -bb.x0), max(0.0, -bb.y0), max(0.0, bb.x1 - w), max(0.0, bb.y1 - h))
+    items = [fig._suptitle, fig._supxlabel, *fig.legends, *fig.texts]
+    need = max((a.get_window_extent(r).width for a in items
+                if a is not None and a.get_visible()), default=0.0) / fig.dpi
+    return max(0.0, need - float(fig.get_size_inches()[0]))
 
 
-def fit(fig, *, pad=0.1, rounds=6):
-    """Grow ``fig`` until every artist (titles, suptitle, legends, tick and axis labels) lies
-    inside it; returns it.  A figure with a layout engine (constrained) lays itself out again
-    at the new size, so the text keeps its size and the axes take the rest."""
-    for _ in range(rounds):
-        left, bottom, right, top = overflow(fig)
-        dx, dy = max(left, right), max(bottom, top)
-        if dx <= 1e-3 and dy <= 1e-3:
-            break
+def fit(fig, *, pad=0.2):
+    """Widen ``fig`` so that its suptitle and figure legends fit (:func:`overflow`; ``pad``
+    inches of margin); returns it.  mbseig's figures use constrained layout, which lays them
+    out again at the new size and keeps everything else inside: nothing is clipped."""
+    dx = overflow(fig)
+    if dx > 0:
         w, h = fig.get_size_inches()
-        fig.set_size_inches(w + 2 * dx + (pad if dx > 1e-3 else 0.0),
-                            h + 2 * dy + (pad if dy > 1e-3 else 0.0), forward=False)
+        fig.set_size_inches(w + dx + pad, h, forward=False)
     return fig
 
 

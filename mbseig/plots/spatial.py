@@ -350,7 +350,7 @@ def spatial_modes(model, q0, shapes, labels, *, amplitude=0.15, title="",
 
     with matplotlib.rc_context(SPATIAL_STYLE):
         n = max(len(labels), 1)
-        fig = figure(layout="constrained", figsize=(12.4, 3.1 * n + 0.5))
+        fig = figure(figsize=(12.4, 3.1 * n + 0.5))  # laid out below (faster than constrained)
         gs = fig.add_gridspec(n, 4, width_ratios=[1.5, 1, 1, 1])
         L = float(getattr(model, "length_scale", 1.0))
         q0 = np.asarray(q0, float)
@@ -399,8 +399,12 @@ def spatial_modes(model, q0, shapes, labels, *, amplitude=0.15, title="",
                                   ms=6, label="bearing / spring station"))
         if layout["discs"]:
             handles.append(Line2D([], [], color="0.3", lw=0.8, label="rotor disc"))
-        fig.legend(handles=handles, loc="outside lower center", ncol=min(len(handles), 6),
-                   fontsize=7, frameon=False)
+        fig.legend(handles=handles, loc="lower center", ncol=len(handles), fontsize=7,
+                   frameon=False)
         if title:
             fig.suptitle(title)
+        # plots.save widens the figure when the legend's row or the title is wider than it
+        fig.subplots_adjust(left=0.03, right=0.99, bottom=0.35 / (3.1 * n + 0.5) + 0.06,
+                            top=1 - (0.75 if title else 0.35) / (3.1 * n + 0.5), wspace=0.3,
+                            hspace=0.45)
         return fig

@@ -93,8 +93,8 @@ def mode_label(k, listing):
     mode, or rigid-body; numbers as read (zero rule)."""
     v = read(listing, k)
     kind = listing.kind[k]
-    if listing.rigid_body[k]:
-        return f"mode {k + 1}: rigid-body by construction ({listing.rigid_body[k]})"
+    if listing.rigid_body[k]:  # (the table names its direction)
+        return f"mode {k + 1}: rigid-body by construction, not counted"
     if kind in ("overdamped", "divergence") and v["re"] != 0:
         what = "overdamped, decays" if kind == "overdamped" else "DIVERGENCE, grows"
         return f"mode {k + 1}: {what}, τ = 1/|s| = {1e3 / abs(v['re']):.4g} ms"

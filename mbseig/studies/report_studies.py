@@ -341,6 +341,12 @@ def least_mode_sensitivities(case, summary: ConfigurationStudy, *, top=3):
     if summary["least"] is None:
         return None
     config = None if summary["config"] == "base" else summary["config"]
+    analysis = summary.get("analysis")
+    if getattr(analysis, "refinement", None):
+        # eigen_sensitivities differences the model as the case builds it, not the refined
+        # mesh the modes come from (elements = "auto"): their sizes differ, so none is given
+        return ("the mesh was refined (elements = \"auto\"); the sensitivities are "
+                "computed on the case's own mesh only")
     import inspect
 
     try:
