@@ -13,6 +13,7 @@ anti-aliasing allowed); a GIF's text height in pixels is its point size × dpi /
 import json
 import re
 
+import numpy as np
 import pytest
 from conftest import CASES
 
@@ -310,3 +311,39 @@ def test_gif_text_is_legible_and_a_rotor_shows_both_lateral_directions(case):
     if case == "rigid_rotor":
         views = [(ax.get_xlabel(), ax.get_ylabel()) for ax in axes[1:]]
         assert views[0] == ("y [m]", "z [m]") and views[1][0] == "x [m]"
+
+
+def test_check_figure_reads_zero_and_names_no_internal_coordinate(tmp_path, monkeypatch):
+    """mbseig check --plot: a predicted δ within its bound and a measured one within what the
+    run resolves read 0 in the legend; a unit-vector component is not named on the axis."""
+    from types import SimpleNamespace
+
+    import mbseig.plots.poles as poles
+    from mbseig.check import ModeCheck
+
+    figs = []
+    real_save = poles.save
+    monkeypatch.setattr(poles, "save", lambda fig, path, **kw: figs.append(fig)
+                        or real_save(fig, path, **kw))
+    t = np.linspace(0.0, 1.0, 200)
+    m = ModeCheck(index=3, kind="oscillatory", eigenvalue=complex(-2e-14, 316.2),
+                  predicted_delta=2e-14, predicted_omega=316.2, measured_delta=8.7e-10,
+                  measured_omega=316.2, rel_error_delta=8.7e-4, rel_error_omega=5.8e-11,
+                  passed=True, fit_amplitude=1e-4, coordinate="rotor.u.y", t=t,
+                  eta=1e-4 * np.exp(316.2j * t), response=1e-4 * np.cos(316.2 * t),
+                  bound_delta=3.2e-10, bound_omega=3.2e-9, resolution_delta=2e-9,
+                  resolution_omega=1e-8)
+    (path,) = poles.plot_check(SimpleNamespace(name="rotor", modes=[m]), tmp_path)
+    assert path.stat().st_size > 1000 and len(figs) == 1
+    ax1, ax2 = figs[0].axes
+    legend = [tx.get_text() for tx in ax1.get_legend().get_texts()]
+    assert "fitted envelope, δ = 0 1/s" in legend and "predicted envelope, δ = 0 1/s" in legend
+    assert not INTERNAL.search(ax2.get_ylabel()) and not TINY.search(ax1.get_title())
+    # and a name the user wrote stays (a body's point)
+    m2 = ModeCheck(**{**{f: getattr(m, f) for f in ("index", "kind", "eigenvalue",
+                                                     "predicted_delta", "predicted_omega",
+                                                     "measured_delta", "measured_omega",
+                                                     "passed", "fit_amplitude", "t", "eta",
+                                                     "response")}, "coordinate": "rotor.y"})
+    poles.plot_check(SimpleNamespace(name="rotor", modes=[m2]), tmp_path)
+    assert figs[1].axes[1].get_ylabel() == "rotor.y − equilibrium"
