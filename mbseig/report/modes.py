@@ -54,7 +54,7 @@ def mode_table(listing):
                      "–" if rb else format(v["delta"] - float(listing.tolerance[k]), ".4g"),
                      listing.stability[k] + (" (not counted)" if rb else ""),
                      listing.kind[k] + (" by construction" if rb else ""),
-                     rb or ", ".join(listing.dominant[k][:3])])
+                     rb or ", ".join(listing.dominant[k][:3]) or "–"])
     return ("table", ["mode", "Re s [1/s]", "Im s [rad/s]", "ω_n/2π [Hz] (undamped)",
                       "ω_d/2π [Hz] (damped)", "ζ [–]", "δ [1/s]", "margin δ − tol [1/s]",
                       "stability", "kind", "dominant coordinates"], rows)
