@@ -53,9 +53,12 @@ def test_periodic_report(tmp_path, capsys):
     d = fl["decided_by"]
     assert f"**Verdict: {fl['verdict']}**" in md and fl["verdict"] == "unstable"
     assert f"|μ| = {d['modulus']:.10f} ± {d['bound']:.1e}" in md
-    # every multiplier with its bound in the table
+    # every multiplier with its bound in the table; a part within its bound of 0 reads 0 (the
+    # zero rule: here Im μ of the two real multipliers of the flip tongue)
     for m, b in zip(fl["multipliers"], fl["error_bounds"]):
-        assert f"| {m[0]:+.10f} | {m[1]:+.10f} | {abs(complex(*m)):.10f} | {b:.1e} |" in md
+        parts = ["0" if abs(x) <= b else f"{x:+.10f}" for x in m]
+        assert f"| {parts[0]} | {parts[1]} | {abs(complex(*m)):.10f} | {b:.1e} |" in md
+    assert "+0.0000000000" not in md
     # the frozen-time eigenvalues beside them, marked as not a criterion (here: wrong)
     assert "Frozen-time eigenvalues (not a criterion)" in md
     assert "which would say critical" in md and "Not a stability criterion" in md
@@ -80,7 +83,9 @@ def test_periodic_report_no_check_no_studies(tmp_path, capsys):
     out = tmp_path / "rep"
     assert main(["report", str(CASE), "--out", str(out), "--no-check", "--no-studies"]) == 0
     md = (out / "report.md").read_text()
-    assert "Time-domain check" not in md and "## Study" not in md
+    # the same page as every motion: the section stays, saying the check was not run
+    assert "Time-domain check not run (report built with --no-check)." in md
+    assert "**passed**" not in md and "## Study" not in md
     assert "Floquet multipliers" in md
     capsys.readouterr()
     assert main(["report", str(CASE), "--all-configs", "--out", str(out)]) == 2

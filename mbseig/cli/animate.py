@@ -63,12 +63,13 @@ def run(args, spec) -> int:
                         f"{'s' if n > 1 else ''} (1 to {n}, as listed by mbseig modes)",
                         file=str(args.case), element="--mode")
     from ..plots.animation import oscillates, write_mode_gif
-    from ..report.sections import mode_label
+    from ..report.modes import mode_label
+    from ..studies.report_studies import listing_of_modes
 
     k = args.mode - 1
     model = a.eq.model if a.eq.model is not None else a.model
     out = out or Path(f"{spec.name}_mode{args.mode}.gif")
-    write_mode_gif(model, a.eq.q, md.shapes[:, k], out, label=mode_label(k, md),
+    write_mode_gif(model, a.eq.q, md.shapes[:, k], out, label=mode_label(k, listing_of_modes(md)),
                    oscillatory=oscillates(md.kind[k], md.eigenvalues[k]), frames=args.frames,
                    fps=args.fps, amplitude=args.amplitude)
     print(f"wrote {out} ({args.frames} frames, one period, looping)")

@@ -9,9 +9,12 @@ A real mode (overdamped, divergent, rigid-body) does not oscillate; it is shown 
 shape moving to and fro, q₀ + a·L·sin θ_k · v, and the title says which.  The equilibrium is
 drawn in grey under every frame.  The axes are the same in every frame (the union of all
 frames' points), in true aspect, so the motion is not rescaled from frame to frame.  Planar
-models are drawn like :func:`mbseig.plots.mechanism_modes`, spatial ones in a 3-D view and the
-front projection like :func:`mbseig.plots.spatial.spatial_modes`, with each body's frame
-axes, so a rotation about a body's own line (a rigid-body spin) is seen.
+models are drawn like :func:`mbseig.plots.mechanism_modes`, spatial ones in a 3-D view and two
+projections like :func:`mbseig.plots.spatial.spatial_modes`, with each body's frame axes, so a
+rotation about a body's own line (a rigid-body spin) is seen; the projections show every
+direction (a rotor: the end view along its spin axis, both lateral directions at once, and a
+side view).  Text is set at GIF_FONT points at GIF_DPI (12.5 px high), legible at the GIF's
+own size.
 """
 
 from __future__ import annotations
@@ -22,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import CaseError
-from .common import STYLE, figure
+from .common import STYLE, figure, fit
 from .mechanism import (
     draw_guides,
     draw_mechanism,
@@ -32,14 +35,15 @@ from .mechanism import (
 )
 from .spatial import (
     all_points,
+    draw_spatial,
+    motion_views,
     set_view,
     set_view3d,
-    draw_spatial,
     spatial_layout,
     view_limits,
 )
 
-__all__ = ["mode_frames", "oscillates", "write_mode_gif"]
+__all__ = ["mode_frames", "mode_figure", "oscillates", "write_mode_gif", "GIF_DPI", "MIN_TEXT_PX"]
 
 
 def oscillates(kind, eigenvalue) -> bool:
@@ -91,72 +95,105 @@ def mode_frames(model, q0, shape, *, oscillatory=True, frames=16, amplitude=0.12
     return out
 
 
+#: GIF output: pixels per inch and the point size of its text; 9 pt at 100 dpi is 12.5 px
+#: high, and no text of a GIF is smaller than MIN_TEXT_PX pixels (legible at the GIF's own size)
+GIF_DPI = 100
+GIF_FONT = 9
+MIN_TEXT_PX = 11
+
+
+def mode_figure(model, q0, qs, *, title=""):
+    """The figure of an animation and what draws one frame on it: (fig, axes, draw) with
+    ``draw(q)`` adding the moving drawing of configuration q.  A spatial model is shown in a
+    3-D view and two projections chosen by :func:`mbseig.plots.spatial.motion_views` (a rotor:
+    the end view along its spin axis, both lateral directions, and a side view); a planar one
+    as :func:`mbseig.plots.mechanism_modes` draws it.  The limits are the union of all frames."""
+    q0 = np.asarray(q0, float)
+    spatial = int(getattr(model, "dimension", 2)) == 3
+    L = float(getattr(model, "length_scale", 1.0))
+    small = GIF_FONT - 1  # tick labels: 8 pt at 100 dpi = 11.1 px
+    if spatial:
+        layout = spatial_layout(model)
+        views = motion_views(model, layout, q0, qs)
+        fig = figure(layout="constrained", figsize=(3.2 * (1 + len(views)), 3.6))
+        fig.get_layout_engine().set(wspace=0.12)  # the 3-D view's z label needs room
+        centre, half = view_limits(all_points(model, layout, [q0, *qs]), 0.2 * L)
+        ax3 = fig.add_subplot(1, 1 + len(views), 1, projection="3d")
+        draw_spatial(ax3, model, layout, q0, lambda P: (P[:, 0], P[:, 1], P[:, 2]),
+                     colour="0.7", lw=1.5, symbols=True)
+        set_view3d(ax3, centre, half)
+        ax3.tick_params(labelsize=small)
+        for lab in (ax3.xaxis.label, ax3.yaxis.label, ax3.zaxis.label):
+            lab.set_fontsize(GIF_FONT)
+        axes, planes = [ax3], []
+        for j, (h, v, name) in enumerate(views):
+            ax = fig.add_subplot(1, 1 + len(views), 2 + j)
+
+            def proj(P, h=h, v=v):
+                return P[:, h], P[:, v]
+            draw_spatial(ax, model, layout, q0, proj, colour="0.7", lw=1.5, symbols=True)
+            set_view(ax, centre, half, h, v)
+            ax.set_xlabel("xyz"[h] + " [m]")
+            ax.set_ylabel("xyz"[v] + " [m]")
+            ax.set_title(name, fontsize=GIF_FONT)
+            ax.tick_params(labelsize=small)
+            ax.grid(True, lw=0.3)
+            axes.append(ax)
+            planes.append(proj)
+
+        def draw(q):  # the frame axes show a spin about a body's own line
+            draw_spatial(ax3, model, layout, q, lambda P: (P[:, 0], P[:, 1], P[:, 2]),
+                         colour="tab:red", lw=2.0, triads=0.12 * L)
+            for ax, proj in zip(axes[1:], planes):
+                draw_spatial(ax, model, layout, q, proj, colour="tab:red", lw=2.0,
+                             triads=0.12 * L)
+    else:
+        layout = mechanism_layout(model, q0)
+        pts = np.array([plane_point(model.points[n](q))
+                        for q in [q0, *qs] for n in model.points]) * 1e3
+        centre, half = view_limits(np.pad(pts, ((0, 0), (0, 1))), 0.2 * L * 1e3)
+        fig = figure(layout="constrained", figsize=(4.8, 4.8))
+        ax = fig.subplots()
+        draw_guides(ax, layout, q0, 4 * half)
+        draw_mechanism(ax, model, layout, q0, colour="0.7", lw=1.5, labels=True,
+                       label_size=small)
+        set_view(ax, centre, half, 0, 1)
+        ax.set_xlabel("x [mm]")
+        ax.set_ylabel("y [mm]")
+        ax.tick_params(labelsize=small)
+        ax.grid(True, lw=0.3)
+        axes = [ax]
+
+        def draw(q):
+            draw_mechanism(ax, model, layout, q, colour="tab:red", lw=2.0)
+    if title:
+        fig.suptitle(title, fontsize=GIF_FONT)
+    return fig, axes, draw
+
+
 def write_mode_gif(model, q0, shape, path, *, label="", oscillatory=True, frames=16, fps=12,
-                   amplitude=0.12, dpi=72):
+                   amplitude=0.12, dpi=GIF_DPI):
     """Write the looping GIF of one mode to ``path`` (module docstring); returns the path."""
     import matplotlib
 
     path = Path(path)
     qs = mode_frames(model, q0, shape, oscillatory=oscillatory, frames=frames,
                      amplitude=amplitude)
-    q0 = np.asarray(q0, float)
-    spatial = int(getattr(model, "dimension", 2)) == 3
-    L = float(getattr(model, "length_scale", 1.0))
     title = label + ("" if oscillatory else " (real mode: shape shown to and fro)")
-    with matplotlib.rc_context({**STYLE, "font.size": 8}):
-        if spatial:
-            fig = figure(figsize=(7.6, 3.9))
-            layout = spatial_layout(model)
-            centre, half = view_limits(all_points(model, layout, [q0, *qs]), 0.2 * L)
-            ax3 = fig.add_subplot(1, 2, 1, projection="3d")
-            ax2 = fig.add_subplot(1, 2, 2)
-
-            draw_spatial(ax3, model, layout, q0, lambda P: (P[:, 0], P[:, 1], P[:, 2]),
-                         colour="0.7", lw=1.5, symbols=True)
-            set_view3d(ax3, centre, half)
-            front = (lambda P: (P[:, 0], P[:, 2]))
-            draw_spatial(ax2, model, layout, q0, front, colour="0.7", lw=1.5, symbols=True)
-            set_view(ax2, centre, half, 0, 2)
-            ax2.set_xlabel("x [m]")
-            ax2.set_ylabel("z [m]")
-            ax2.set_title("front (x, z)", fontsize=8)
-            ax2.grid(True, lw=0.3)
-            axes = (ax3, ax2)
-
-            def draw(q):  # the frame axes show a spin about a body's own line
-                draw_spatial(ax3, model, layout, q, lambda P: (P[:, 0], P[:, 1], P[:, 2]),
-                             colour="tab:red", lw=2.0, triads=0.12 * L)
-                draw_spatial(ax2, model, layout, q, front, colour="tab:red", lw=2.0,
-                             triads=0.12 * L)
-        else:
-            layout = mechanism_layout(model, q0)
-            pts = np.array([plane_point(model.points[n](q))
-                            for q in [q0, *qs] for n in model.points]) * 1e3
-            centre, half = view_limits(np.pad(pts, ((0, 0), (0, 1))), 0.2 * L * 1e3)
-            fig = figure(figsize=(4.6, 4.4))
-            ax = fig.subplots()
-
-            draw_guides(ax, layout, q0, 4 * half)
-            draw_mechanism(ax, model, layout, q0, colour="0.7", lw=1.5, labels=True)
-            set_view(ax, centre, half, 0, 1)
-            ax.set_xlabel("x [mm]")
-            ax.set_ylabel("y [mm]")
-            ax.grid(True, lw=0.3)
-            axes = (ax,)
-
-            def draw(q):
-                draw_mechanism(ax, model, layout, q, colour="tab:red", lw=2.0)
-        fig.suptitle(title, fontsize=8)
+    with matplotlib.rc_context({**STYLE, "font.size": GIF_FONT}):
+        fig, axes, draw = mode_figure(model, q0, qs, title=title)
         from matplotlib.backends.backend_agg import FigureCanvasAgg
 
         fig.set_dpi(dpi)
         canvas = FigureCanvasAgg(fig)
+        fit(fig)
         writer = _BlitWriter(fps=fps)
         try:
             with writer.saving(fig, str(path), dpi):
                 for ax in axes:  # the limits are the frames' union: fixed from here on
                     ax.set_autoscale_on(False)
                 canvas.draw()
+                fig.set_layout_engine("none")  # laid out once: frames drawn over it as it is
                 background = canvas.copy_from_bbox(fig.bbox)
                 base = [set(ax.get_children()) for ax in axes]
                 for q in qs:

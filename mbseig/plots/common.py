@@ -32,9 +32,47 @@ def styled(fn):
 
 
 def figure(**kw):
+    """A Figure without pyplot.  mbseig's figures pass ``layout="constrained"`` (titles,
+    labels and legends outside the axes get their room; a figure legend goes at
+    ``loc="outside ..."``), so nothing is clipped once :func:`fit` has widened the figure where
+    a text is wider than it."""
     from matplotlib.figure import Figure
 
     return Figure(**kw)
+
+
+def renderer(fig):
+    """The renderer of ``fig`` (an Agg canvas attached when it has none: a Figure made without
+    pyplot has only the base canvas)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    if not isinstance(fig.canvas, FigureCanvasAgg):
+        FigureCanvasAgg(fig)
+    return fig.canvas.get_renderer()
+
+
+def overflow(fig):
+    """How much wider (inches, ≥ 0) ``fig`` must be for its figure-level texts (suptitle,
+    figure legends and texts) to fit: the layout engine keeps every axes' own artists (titles,
+    labels, tick labels, legends) inside the figure, but it cannot make a figure wider than a
+    centred title or legend; measured without laying the figure out (a text's size does not
+    depend on where it goes)."""
+    r = renderer(fig)
+    items = [fig._suptitle, fig._supxlabel, *fig.legends, *fig.texts]
+    need = max((a.get_window_extent(r).width for a in items
+                if a is not None and a.get_visible()), default=0.0) / fig.dpi
+    return max(0.0, need - float(fig.get_size_inches()[0]))
+
+
+def fit(fig, *, pad=0.2):
+    """Widen ``fig`` so that its suptitle and figure legends fit (:func:`overflow`; ``pad``
+    inches of margin); returns it.  mbseig's figures use constrained layout, which lays them
+    out again at the new size and keeps everything else inside: nothing is clipped."""
+    dx = overflow(fig)
+    if dx > 0:
+        w, h = fig.get_size_inches()
+        fig.set_size_inches(w + dx + pad, h, forward=False)
+    return fig
 
 
 def colormap(name):
@@ -44,8 +82,10 @@ def colormap(name):
 
 
 def save(fig, path, *, dpi=DPI, element="figure"):
-    """Write ``fig`` as a PNG (no metadata) to ``path``; returns the path."""
+    """Write ``fig`` as a PNG (no metadata) to ``path``, grown first so that no text is clipped
+    (:func:`fit`); returns the path."""
     path = Path(path)
+    fit(fig)
     try:
         fig.savefig(path, dpi=dpi, metadata={"Software": None})
     except OSError as exc:

@@ -124,7 +124,12 @@ def _zigzag(p, q, n=8, width=0.06):
     return np.array(xs)
 
 
-def draw_mechanism(ax, model, layout, q, *, colour, lw, alpha=1.0, labels=False, ms=3):
+def draw_mechanism(ax, model, layout, q, *, colour, lw, alpha=1.0, labels=False, ms=3,
+                   label_size=None):
+    """Draw the layout at q; with ``labels``, the elements' and points' names at
+    ``label_size`` points (default 6, fixed points 7)."""
+    small, big = (label_size, label_size) if label_size else (6, 7)
+
     def pt(n):  # a named point in mm
         return plane_point(model.points[n](q)) * 1e3
 
@@ -153,13 +158,13 @@ def draw_mechanism(ax, model, layout, q, *, colour, lw, alpha=1.0, labels=False,
             kind = ("spring-damper" if s["spring"] and s["damper"] else
                     "spring" if s["spring"] else "damper")
             ax.annotate(f"{s['name']} ({kind})", mid, textcoords="offset points", xytext=(6, 0),
-                        fontsize=6, color="0.3")
+                        fontsize=small, color="0.3")
     for g in layout["guides"]:
         r = np.asarray(g["point"](q), float) * 1e3
         ax.plot(r[0], r[1], "s", color=colour, ms=ms + 3, mfc="none", alpha=alpha, zorder=3)
         if labels:
             ax.annotate(f"{g['name']} (slider)", r, textcoords="offset points",
-                        xytext=(6, -8), fontsize=6, color="0.3")
+                        xytext=(6, -8), fontsize=small, color="0.3")
     if labels:
         for t in layout["torsional"]:
             r = pt(t["at"])
@@ -167,18 +172,18 @@ def draw_mechanism(ax, model, layout, q, *, colour, lw, alpha=1.0, labels=False,
         for n in layout["fixed"]:
             r = pt(n)
             ax.plot(r[0], r[1], "ks", ms=5, zorder=4)
-            ax.annotate(n, r, textcoords="offset points", xytext=(-9, 3), fontsize=7)
+            ax.annotate(n, r, textcoords="offset points", xytext=(-9, 3), fontsize=big)
         tors = {t["at"]: t["name"] for t in layout["torsional"]}
         for n, a in model.points.items():
             if a.idx.size and "." not in n:
                 r = pt(n)
                 extra = f" ({tors[n]} spring)" if n in tors else ""
-                ax.annotate(n + extra, r, textcoords="offset points", xytext=(4, -9), fontsize=6,
+                ax.annotate(n + extra, r, textcoords="offset points", xytext=(4, -9), fontsize=small,
                             color="0.25")
         for n in layout["fixed"]:
             if n in tors:
                 ax.annotate(f"{tors[n]} spring", pt(n), textcoords="offset points",
-                            xytext=(-9, -10), fontsize=6, color="0.25")
+                            xytext=(-9, -10), fontsize=small, color="0.25")
 
 
 def draw_guides(ax, layout, q, extent):
@@ -239,7 +244,7 @@ def mechanism_modes(model, q0, shapes, labels, *, amplitude=0.12, title="", eige
     ratio = float(span[0] / max(span[1], 1e-300))  # panel width / height of the drawing
     panel_h = 3.9
     panel_w = min(max(panel_h * ratio, 2.4), 6.0) + 1.0
-    fig = figure(figsize=(panel_w * cols, (panel_h + 0.5) * rows + 0.7))
+    fig = figure(layout="constrained", figsize=(panel_w * cols, (panel_h + 0.5) * rows + 0.7))
     axes = fig.subplots(rows, cols, squeeze=False)
     extent = 2.0 * float(np.max(np.ptp(pts0, axis=0))) + 1.0
     for k in range(rows * cols):
@@ -290,9 +295,8 @@ def mechanism_modes(model, q0, shapes, labels, *, amplitude=0.12, title="", eige
     if layout["torsional"]:
         handles.append(Line2D([], [], ls="none", marker="o", mfc="none", mec="0.5", ms=8,
                               label="torsional spring-damper"))
-    fig.legend(handles=handles, loc="lower center", ncol=min(len(handles), 4), fontsize=7,
-               frameon=False)
+    fig.legend(handles=handles, loc="outside lower center", ncol=min(len(handles), 2 * cols),
+               fontsize=7, frameon=False)
     if title:
         fig.suptitle(title)
-    fig.tight_layout(rect=(0, 0.06 if rows == 1 else 0.03, 1, 1))
     return fig

@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
 
+from ..display import fmt
 from ..errors import CaseError
 from .common import (
     colormap,
@@ -21,6 +23,13 @@ from .sweeps import (
 )
 
 ZETA_GRID = (0.02, 0.05, 0.1, 0.2, 0.4, 0.7, 0.9)
+#: a coordinate name of mbseig's own: a body's unit-vector component, a beam node by index
+INTERNAL_NAME = re.compile(r"\.[uvw]\.|\.n\d+\b")
+
+
+def _bound(m, name):
+    x = float(getattr(m, name, math.nan))
+    return x if math.isfinite(x) else None
 
 
 # where along its ray each ζ label sits (fraction of the radius): small-ζ rays crowd the top
@@ -54,7 +63,7 @@ def pole_map(eigenvalues, *, title="pole map", stability=None, labels=None):
     """Eigenvalues (both halves of each pair) in the s-plane over a grid of constant damping
     ratio ζ and natural frequency ω_n; numbered as the mode tables (1, 2, ...); colour by
     stability, legend outside the axes."""
-    fig = figure(figsize=(7.5, 4.8))
+    fig = figure(layout="constrained", figsize=(7.5, 4.8))
     ax = fig.subplots()
     s = np.asarray(eigenvalues, dtype=complex)
     radius = float(np.max(np.abs(s), initial=0.0)) * 1.08 or 1.0
@@ -84,7 +93,6 @@ def pole_map(eigenvalues, *, title="pole map", stability=None, labels=None):
         names += list(labels)
     ax.legend(handles, names, fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0),
               borderaxespad=0.0, title="numbers = mode", title_fontsize=7)
-    fig.tight_layout()
     return fig
 
 
@@ -102,29 +110,40 @@ def plot_check(result, directory) -> list:
     for m in result.modes:
         if m.skipped or m.t.size == 0:
             continue
-        fig = figure(figsize=(8, 6), constrained_layout=True)
+        fig = figure(layout="constrained", figsize=(8, 6))
         ax1, ax2 = fig.subplots(2, 1, sharex=True)
         t = m.t
         a0 = abs(m.eta[0])
         ax1.plot(t, m.eta.real, lw=0.8, color="C0", label="modal coordinate Re η (simulation)")
         fit = m.fit_amplitude * np.exp(-m.measured_delta * t)
         pred = a0 * np.exp(-m.predicted_delta * t)
+        # numbers as read (the zero rule): predictions within their bounds, measurements
+        # within what the run resolves of them, are 0
+        bd, bw = _bound(m, "bound_delta"), _bound(m, "bound_omega")
+        rd, rw = _bound(m, "resolution_delta"), _bound(m, "resolution_omega")
         for sign in (1, -1):
             ax1.plot(t, sign * fit, color="C1", lw=1.6,
-                     label=f"fitted envelope, δ = {m.measured_delta:.5g}" if sign > 0 else None)
+                     label=f"fitted envelope, δ = {fmt(m.measured_delta, rd, '.5g')} 1/s"
+                     if sign > 0 else None)
             ax1.plot(t, sign * pred, color="k", lw=1.0, ls="--",
-                     label=f"predicted envelope, δ = {m.predicted_delta:.5g}" if sign > 0 else None)
+                     label=f"predicted envelope, δ = {fmt(m.predicted_delta, bd, '.5g')} 1/s"
+                     if sign > 0 else None)
         verdict = "pass" if m.passed else "FAIL"
+        rel_d = "–" if not math.isfinite(m.rel_error_delta) else f"{m.rel_error_delta:.2e}"
         ax1.set_title(f"{result.name}: mode {m.index} ({m.kind}), {verdict}\n"
-                      f"ω pred {m.predicted_omega:.6g}, meas {m.measured_omega:.6g} "
-                      f"(rel. err. {m.rel_error_omega:.2e}); δ rel. err. {m.rel_error_delta:.2e}",
+                      f"ω pred {fmt(m.predicted_omega, bw)}, meas {fmt(m.measured_omega, rw)} "
+                      f"rad/s (rel. err. {m.rel_error_omega:.2e}); δ rel. err. {rel_d}",
                       fontsize=10)
         ax1.set_ylabel("η")
         lo, hi = ax1.get_ylim()
         ax1.set_ylim(lo, hi + 0.6 * (hi - lo))  # room for the legend above the curves
         ax1.legend(fontsize=8, loc="upper right")
         ax2.plot(t, m.response, lw=0.8, color="C2")
-        ax2.set_ylabel(f"{m.coordinate} − equilibrium")
+        # a natural coordinate of mbseig's own (a unit-vector component, a beam node) is not
+        # named: the user wrote no such name
+        named = m.coordinate and not INTERNAL_NAME.search(m.coordinate)
+        ax2.set_ylabel(f"{m.coordinate} − equilibrium" if named else
+                       "largest coordinate − equilibrium")
         ax2.set_xlabel("t [s]")
         paths.append(save(fig, out / f"{slug(result.name)}_mode{m.index}.png", dpi=110,
                           element="--plot"))
@@ -134,7 +153,7 @@ def plot_check(result, directory) -> list:
 @styled
 def speed_accuracy(res):
     """Error against wall time, one line per method of a :func:`mbseig.bench.run_bench` result."""
-    fig = figure(figsize=(9, 6))
+    fig = figure(layout="constrained", figsize=(9, 6))
     ax = fig.subplots()
     markers = "os^vD<>pPX*h"
     rows = [r for r in res["rows"] if r["section"] in ("dense", "structured", "partial", "jacobians")
@@ -161,5 +180,4 @@ def speed_accuracy(res):
     ax.grid(True, which="both", alpha=0.3)
     if methods:
         ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
-    fig.tight_layout()
     return fig

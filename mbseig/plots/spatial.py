@@ -44,7 +44,7 @@ from .rotor import WHIRL_COLOURS, campbell_diagram, campbell_range, speed_unit
 
 __all__ = ["VIEWS", "WHIRL_COLOURS", "campbell_diagram", "campbell_range", "save",
            "spatial_modes", "spatial_layout", "draw_spatial", "view_limits", "speed_unit",
-           "beam_curve", "SEGMENT_POINTS"]
+           "beam_curve", "SEGMENT_POINTS", "motion_views", "spin_axes"]
 
 SEGMENT_POINTS = 8  # points drawn along each beam element (its Hermite interpolation)
 
@@ -255,6 +255,42 @@ def draw_spatial(ax, model, layout, q, project, *, colour, lw, alpha=1.0, symbol
         ax.plot(*project(xyz(layout["fixed"])), "ks", ms=4)
 
 
+def spin_axes(model, layout, q):
+    """Global unit vectors of the spin axes at configuration q: each rotor element's axis
+    (given in its carrier's axes) and each spinning beam's chord."""
+    out = []
+    for d in layout["discs"]:
+        f = np.asarray(d["frame"](q), float)
+        a = d["axis"]
+        out.append(a[0] * f[3:6] + a[1] * f[6:9] + a[2] * f[9:12])
+    records = (getattr(model, "flexible", None) or {}).get("bodies") or {}
+    for beam in layout.get("beams", ()):
+        if (records.get(beam["name"]) or {}).get("spin"):
+            out.append(np.asarray(beam["axis"], float))
+    return [a / max(float(np.linalg.norm(a)), 1e-300) for a in out]
+
+
+def motion_views(model, layout, q0, qs):
+    """The two orthographic views (horizontal axis, vertical axis, title) that show every
+    direction a mode moves in.  A rotor (:func:`spin_axes`; the first one's nearest global
+    axis a): the end view along a, whose two axes are both lateral directions (the whirl
+    orbit), and the side view through a and the lateral axis the frames ``qs`` move more
+    along.  Otherwise top (x, y) and front (x, z), which between them show x, y and z."""
+    axes = spin_axes(model, layout, q0)
+    if not axes:
+        return [VIEWS[0], VIEWS[1]]
+    a = int(np.argmax(np.abs(axes[0])))
+    lat = [k for k in range(3) if k != a]
+    ref = all_points(model, layout, [q0])
+    move = np.zeros(3)
+    for q in qs:
+        move = np.maximum(move, np.max(np.abs(all_points(model, layout, [q]) - ref), axis=0))
+    side = max(lat, key=lambda k: (move[k], -k))
+    x = "xyz"
+    return [(lat[0], lat[1], f"end ({x[lat[0]]}, {x[lat[1]]}): along the spin axis"),
+            (a, side, f"side ({x[a]}, {x[side]})")]
+
+
 def all_points(model, layout, qs):
     pts = []
     for q in qs:
@@ -304,16 +340,17 @@ def _real_shape(v):
     return vr / max(np.max(np.abs(vr)), 1e-300)
 
 
-def spatial_modes(model, q0, shapes, labels, *, amplitude=0.15, title=""):
+def spatial_modes(model, q0, shapes, labels, *, amplitude=0.15, title="",
+                  reference_label="equilibrium"):
     """One row a mode: a true-aspect 3-D view and the three orthographic views of the model at
-    equilibrium (black) and displaced by ± the mode shape (red/blue), bodies drawn rigid
-    (module docstring)."""
+    its reference (``reference_label``: the equilibrium, a steady motion; black) and displaced
+    by ± the mode shape (red/blue), bodies drawn rigid (module docstring)."""
     import matplotlib
     from matplotlib.lines import Line2D
 
     with matplotlib.rc_context(SPATIAL_STYLE):
         n = max(len(labels), 1)
-        fig = figure(figsize=(12.4, 3.1 * n + 0.5))
+        fig = figure(figsize=(12.4, 3.1 * n + 0.5))  # laid out below (faster than constrained)
         gs = fig.add_gridspec(n, 4, width_ratios=[1.5, 1, 1, 1])
         L = float(getattr(model, "length_scale", 1.0))
         q0 = np.asarray(q0, float)
@@ -348,7 +385,7 @@ def spatial_modes(model, q0, shapes, labels, *, amplitude=0.15, title=""):
                 ax.set_ylabel("xyz"[v] + " [m]")
                 ax.set_title(name, fontsize=8)
                 ax.grid(True, lw=0.3)
-        handles = [Line2D([], [], color="k", lw=2, label="equilibrium"),
+        handles = [Line2D([], [], color="k", lw=2, label=reference_label),
                    Line2D([], [], color="tab:red", lw=1, label="+ mode"),
                    Line2D([], [], color="tab:blue", lw=1, label="− mode (half a period later)"),
                    Line2D([], [], ls="none", marker="o", mfc="none", mec="k", ms=6,
@@ -366,6 +403,7 @@ def spatial_modes(model, q0, shapes, labels, *, amplitude=0.15, title=""):
                    frameon=False)
         if title:
             fig.suptitle(title)
+        # plots.save widens the figure when the legend's row or the title is wider than it
         fig.subplots_adjust(left=0.03, right=0.99, bottom=0.35 / (3.1 * n + 0.5) + 0.06,
                             top=1 - (0.75 if title else 0.35) / (3.1 * n + 0.5), wspace=0.3,
                             hspace=0.45)

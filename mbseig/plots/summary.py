@@ -19,7 +19,7 @@ def summary_poles(poles, boundaries, *, title="least-damped mode of every config
     not stable) with their conjugates; ``boundaries``: [{"label", "s"}] the eigenvalue of the
     crossing mode at each boundary found (on the imaginary axis), drawn as crosses.  Lines of
     constant ζ and circles of constant ω_n under them; legend outside the axes."""
-    fig = figure(figsize=(8.2, 4.8))
+    fig = figure(layout="constrained", figsize=(8.2, 4.8))
     ax = fig.subplots()
     s_all = [complex(p["s"]) for p in poles] + [complex(b["s"]) for b in boundaries]
     radius = max((abs(s) for s in s_all), default=0.0) * 1.12 or 1.0
@@ -49,7 +49,6 @@ def summary_poles(poles, boundaries, *, title="least-damped mode of every config
     ax.set_title(title)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0,
               title="filled: stable", title_fontsize=7)
-    fig.tight_layout()
     return fig
 
 
@@ -63,7 +62,7 @@ def tornado(panels, *, change_pct=10.0):
     cols = min(n, 3)
     grid_rows = -(-n // cols)
     bars = max((len(p["rows"]) for p in panels), default=1) or 1
-    fig = figure(figsize=(4.6 * cols if cols > 1 else 6.0,
+    fig = figure(layout="constrained", figsize=(4.6 * cols if cols > 1 else 6.0,
                           grid_rows * (0.38 * bars + 1.3) + 0.5))
     axes = list(np.ravel(fig.subplots(grid_rows, cols, squeeze=False)))
     for ax in axes[len(panels):]:
@@ -88,6 +87,5 @@ def tornado(panels, *, change_pct=10.0):
                         Patch(color="0.3", alpha=0.35, label=f"−{change_pct:g} %"),
                         Patch(color="tab:blue", label="adds damping"),
                         Patch(color="tab:red", label="takes damping away")],
-               loc="lower center", ncol=4, fontsize=7, frameon=False)
-    fig.tight_layout(rect=(0, 0.5 / fig.get_figheight(), 1, 1))
+               loc="outside lower center", ncol=4, fontsize=7, frameon=False)
     return fig

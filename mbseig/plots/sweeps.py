@@ -78,7 +78,7 @@ def root_locus(res):
     the axes."""
     from matplotlib.lines import Line2D
 
-    fig = figure(figsize=(8.5, 5))
+    fig = figure(layout="constrained", figsize=(8.5, 5))
     ax = fig.subplots()
     modes_seen = {}
     re_all, s_max, band = [], 0.0, 0.0
@@ -118,7 +118,6 @@ def root_locus(res):
                label=f"{res.axis} = {res.values[0]:g}"),
         Line2D([], [], ls="none", marker="x", color="k", ms=7, label="stability boundary"),
         Line2D([], [], color="0.75", lw=4, label=f"|Re s| ≤ tol (≤ {band:.1g} 1/s): drawn as 0")])
-    fig.tight_layout()
     return fig
 
 
@@ -129,7 +128,7 @@ def modes_vs_parameter(res):
     axes); legend outside the axes; log scales where the values span decades."""
     from matplotlib.lines import Line2D
 
-    fig = figure(figsize=(8.5, 6))
+    fig = figure(layout="constrained", figsize=(8.5, 6))
     a1, a2 = fig.subplots(2, 1, sharex=True)
     x = np.asarray(res.values, float)
     modes_seen = {}
@@ -150,7 +149,6 @@ def modes_vs_parameter(res):
     a1.set_title("modes tracked by MAC; red dashed: stability boundaries")
     _mode_legend(a1, res, modes_seen, [
         Line2D([], [], color="r", ls="--", lw=0.8, label="stability boundary")])
-    fig.tight_layout()
     return fig
 
 
@@ -158,7 +156,7 @@ def modes_vs_parameter(res):
 def stability_map(res):
     """Two-parameter map: spectral abscissa max Re s (colour), the α = 0 contour and the located
     boundaries (points)."""
-    fig = figure(figsize=(7.5, 5.4))
+    fig = figure(layout="constrained", figsize=(7.5, 5.4))
     ax = fig.subplots()
     x, y = res.axes[0][1], res.axes[1][1]
     A = res.abscissa_grid()  # (len(x), len(y))
@@ -196,8 +194,8 @@ def stability_map(res):
     if getattr(res, "curves", None):
         handles.append(Line2D([], [], color="tab:green", lw=1.5, label="boundary followed across "
                               + res.axes[1][0]))
-    fig.legend(handles=handles, loc="lower center", ncol=len(handles), fontsize=7, frameon=False)
-    fig.tight_layout(rect=(0, 0.06, 1, 1))
+    fig.legend(handles=handles, loc="outside lower center", ncol=len(handles), fontsize=7,
+               frameon=False)
     return fig
 
 
@@ -210,7 +208,7 @@ def bifurcation_diagram(res):
     """The followed branches: the swept parameter against the diagram variable (a named angle or
     a coordinate), solid where stable (blue) or critical (orange), dashed red where unstable;
     folds (triangles), branch points (squares) and jumps (dotted) marked."""
-    fig = figure(figsize=(8.5, 5))
+    fig = figure(layout="constrained", figsize=(8.5, 5))
     ax = fig.subplots()
     var = res.diagram.get("variable", "")
     seen = set()
@@ -263,7 +261,6 @@ def bifurcation_diagram(res):
         seen.add("lines")
     if seen:
         ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
-    fig.tight_layout()
     return fig
 
 
@@ -272,7 +269,7 @@ def stability_chart(res):
     """Stability chart from the followed boundary curves: the first axis' critical value against
     the second parameter (one line per curve, its tolerance band as a band), the side where the
     first grid point was stable shaded."""
-    fig = figure(figsize=(7, 5.4))
+    fig = figure(layout="constrained", figsize=(7, 5.4))
     ax = fig.subplots()
     cmap = colormap("tab10")
     along = res.curves[0]["along"] if res.curves else ""
@@ -295,7 +292,6 @@ def stability_chart(res):
     if res.curves:
         ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2,
                   frameon=False)
-    fig.tight_layout()
     return fig
 
 

@@ -10,12 +10,13 @@ import math
 import numpy as np
 
 from .. import plots
-from ..modal import tolerance_rule
+from .modes import check_table, least_text, mode_label, mode_table, read, scope_blocks
 from .text import fmt
 from .units import with_unit
 
 __all__ = ["configuration_blocks", "check_blocks", "mode_label", "statics_text", "describe",
-           "animation_blocks", "MAX_DRAWN_MODES"]
+           "animation_blocks", "parameter_blocks", "modes_blocks", "pole_blocks",
+           "MAX_DRAWN_MODES"]
 
 #: modes drawn (shape figure, animations) at most, per dimension: the lowest, as the table
 #: lists them; a beam model lists hundreds (the table has them all), and a 3-D mode takes a row
@@ -41,20 +42,7 @@ def configuration_blocks(case, study, out_dir, *, run_check, stem, units, animat
         ["equilibrium residual", f"{eq.residual:.1e} ({eq.iterations} Newton iterations)"],
         ["eigensolver", f"{md.solver} ({md.solver_reason})"],
     ]))
-    raw = getattr(case, "parameters", {}) or {}
-    prow, derived = [], []
-    for k, v in model.parameters.items():
-        u = units.get(k)
-        unit = "–" if u == "1" else (u or "not given in the case")
-        if isinstance(raw.get(k), str):
-            derived.append(f"{k} = {with_unit(fmt(v, 6), u) if u else fmt(v, 6)} "
-                           f"(`{raw[k]}`" + ("" if u else ", unit not given in the case") + ")")
-        else:
-            prow.append([k, fmt(v, 6), unit])
-    if prow:
-        blocks.append(("table", ["parameter", "value", "unit"], prow))
-    if derived:
-        blocks.append(("p", "Derived parameters: " + "; ".join(derived) + "."))
+    blocks += parameter_blocks(case, model, units)
     linear_case, rep = study.linear_case, study.reactions
     if not linear_case:
         blocks.append(("h3", "Equilibrium"))
@@ -86,8 +74,8 @@ def configuration_blocks(case, study, out_dir, *, run_check, stem, units, animat
                         for r in rep["actuator"]]))
     zero = float(getattr(study, "reaction_zero", 0.0) or 0.0)
 
-    def rfmt(x, digits):  # a reaction below its error bound is rounding residue: 0
-        return "0" if x is not None and abs(float(x)) <= zero else fmt(x, digits)
+    def rfmt(x, digits):  # a reaction within its error bound is rounding residue: 0
+        return fmt(x, digits, bound=zero)
     if rep["pins"]:
         blocks.append(("table", ["pin (force on the outboard bodies)", "point", "Fx [N]", "Fy [N]", "|F| [N]"],
                        [[p["name"], p["point"], rfmt(p["force"][0], 5), rfmt(p["force"][1], 5),
@@ -123,26 +111,10 @@ def configuration_blocks(case, study, out_dir, *, run_check, stem, units, animat
                             f"tolerance times the largest reaction) are rounding residue and "
                             f"printed as 0."))
 
-    blocks.append(("h3", f"Modes — verdict: {md.verdict}"))
-    rows = []
-    for k in range(len(md)):
-        s = md.eigenvalues[k]
-        margin = md.delta[k] - md.tolerance[k]
-        rows.append([str(k + 1), f"{s.real:.6g}", f"{s.imag:.6g}",
-                     fmt(md.omega_n[k] / (2 * math.pi), 6), fmt(abs(s.imag) / (2 * math.pi), 6),
-                     fmt(md.zeta[k], 4), fmt(md.delta[k], 5), f"{margin:.4g}", md.stability[k],
-                     md.kind[k], ", ".join(n for n, _ in md.dominant[k][:3])])
-    blocks.append(("table", ["mode", "Re s [1/s]", "Im s [rad/s]", "ω_n/2π [Hz] (undamped)",
-                             "ω_d/2π [Hz] (damped)", "ζ [–]", "δ [1/s]", "margin δ − tol [1/s]",
-                             "stability", "kind", "dominant coordinates"], rows))
-    least = study.least
-    min_margin = float(np.min(md.delta - md.tolerance)) if len(md) else math.nan
-    if least is not None:
-        blocks.append(("p", f"Stability margin: the least-damped mode is mode {least + 1} with "
-                            f"δ = {float(md.delta[least]):.5g} 1/s (ζ = {float(md.zeta[least]):.4g}); "
-                            f"δ − tol = {min_margin:.4g} 1/s (tol per mode: {tolerance_rule(md.tolerances)})."))
+    listing = study.listing
+    blocks += modes_blocks(listing, study.least)
     drawn = min(len(md), MAX_DRAWN_MODES.get(getattr(model, "dimension", 2), 12))
-    labels = [mode_label(k, md) for k in range(drawn)]
+    labels = [mode_label(k, listing) for k in range(drawn)]
     if not linear_case and drawn < len(md):
         blocks.append(("p", f"The figures below draw the lowest {drawn} of the {len(md)} modes "
                             f"(the table lists them all)."))
@@ -163,24 +135,61 @@ def configuration_blocks(case, study, out_dir, *, run_check, stem, units, animat
                                    f"rigid; a real (overdamped) mode is drawn as its decay"))
         if animations:
             blocks += animation_blocks(eq.model if eq.model is not None else model, eq.q, md,
-                                       out_dir, f"{stem}_{tag}", count=drawn)
-    img = plots.save(plots.pole_map(md.eigenvalues, title=f"{tag}: pole map",
-                                    stability=md.stability), out_dir / f"{stem}_{tag}_poles.png")
-    blocks.append(("img", img, f"{tag}: pole map over lines of constant ζ and circles of constant "
-                               f"ω_n; numbers are the modes of the table"))
-    blocks += check_blocks(study.check, run_check)
+                                       out_dir, f"{stem}_{tag}", count=drawn, listing=listing)
+    blocks += pole_blocks(listing, tag, out_dir / f"{stem}_{tag}_poles.png")
+    blocks += check_blocks(study.check, run_check, listing)
     return blocks
 
 
-def animation_blocks(model, q0, md, out_dir, prefix, *, frames=12, fps=10, count=None):
+def parameter_blocks(case, model, units):
+    """The parameters with their units (a table), and the derived ones with their expressions."""
+    raw = getattr(case, "parameters", {}) or {}
+    prow, derived = [], []
+    for k, v in model.parameters.items():
+        u = units.get(k)
+        unit = "–" if u == "1" else (u or "not given in the case")
+        if isinstance(raw.get(k), str):
+            derived.append(f"{k} = {with_unit(fmt(v, 6), u) if u else fmt(v, 6)} "
+                           f"(`{raw[k]}`" + ("" if u else ", unit not given in the case") + ")")
+        else:
+            prow.append([k, fmt(v, 6), unit])
+    blocks = []
+    if prow:
+        blocks.append(("table", ["parameter", "value", "unit"], prow))
+    if derived:
+        blocks.append(("p", "Derived parameters: " + "; ".join(derived) + "."))
+    return blocks
+
+
+def modes_blocks(listing, least):
+    """The modes subsection's text: heading with the verdict, the mode table with units, the
+    verdict's scope, the zero rule's note and the stability margin."""
+    return ([("h3", f"Modes — verdict: {listing.verdict}"), mode_table(listing)]
+            + scope_blocks(listing) + [("p", least_text(listing, least))])
+
+
+def pole_blocks(listing, tag, path):
+    """The pole map of the listing (values as read: the zero rule), numbered as the table."""
+    s = np.array([complex(read(listing, k)["re"], read(listing, k)["im"])
+                  for k in range(len(listing))], complex)
+    img = plots.save(plots.pole_map(s, title=f"{tag}: pole map", stability=listing.stability),
+                     path)
+    return [("img", img, f"{tag}: pole map over lines of constant ζ and circles of constant "
+                         f"ω_n; numbers are the modes of the table")]
+
+
+def animation_blocks(model, q0, md, out_dir, prefix, *, frames=12, fps=10, count=None,
+                     listing=None):
     """One looping GIF a listed mode (the lowest ``count``;
     :func:`mbseig.plots.animation.write_mode_gif`), shown side by side."""
     from ..plots.animation import oscillates, write_mode_gif
+    from ..studies.report_studies import listing_of_modes
 
+    listing = listing if listing is not None else listing_of_modes(md)
     items = []
     for k in range(len(md) if count is None else min(len(md), count)):
         path = write_mode_gif(model, q0, md.shapes[:, k], out_dir / f"{prefix}_mode{k + 1}.gif",
-                              label=mode_label(k, md),
+                              label=mode_label(k, listing),
                               oscillatory=oscillates(md.kind[k], md.eigenvalues[k]),
                               frames=frames, fps=fps)
         items.append((path, f"mode {k + 1}, animated: one period"))
@@ -188,20 +197,6 @@ def animation_blocks(model, q0, md, out_dir, prefix, *, frames=12, fps=10, count
         return []
     return [("p", "Animated mode shapes (one period each, looping; bodies kept rigid, the "
                   "equilibrium in grey):"), ("gallery", items)]
-
-
-def mode_label(k, md):
-    """Panel title of mode k by its kind: damped frequency and ζ, the time constant of a real
-    mode, or rigid-body."""
-    s = complex(md.eigenvalues[k])
-    kind = md.kind[k]
-    if kind in ("overdamped", "divergence") and s.real != 0:
-        what = "overdamped, decays" if kind == "overdamped" else "DIVERGENCE, grows"
-        return f"mode {k + 1}: {what}, τ = 1/|s| = {1e3 / abs(s.real):.4g} ms"
-    if kind == "rigid-body":
-        return f"mode {k + 1}: rigid-body (s ≈ 0 within its tolerance)"
-    return (f"mode {k + 1}: ω_d/2π = {abs(s.imag) / (2 * math.pi):.4g} Hz, "
-            f"ζ = {float(md.zeta[k]):.3g}" + (" (FLUTTER)" if kind == "flutter" else ""))
 
 
 def spatial_draw():
@@ -244,29 +239,17 @@ def describe(case, config):
     return str(case.configurations.get(config, {}).get("description", ""))
 
 
-def check_blocks(res, run_check):
+def check_blocks(res, run_check, listing):
     blocks = [("h3", "Time-domain check")]
     if not run_check:
         blocks.append(("p", "Time-domain check not run (report built with --no-check)."))
         return blocks
-    rows = []
-    for m in res.modes:
-        if m.skipped:
-            rows.append([str(m.index), m.kind, fmt(m.predicted_delta), "–", "–",
-                         fmt(m.predicted_omega), "–", "–", f"skipped ({m.skipped})"])
-            continue
-        rows.append([str(m.index), m.kind, fmt(m.predicted_delta), fmt(m.measured_delta),
-                     f"{m.rel_error_delta:.1e}", fmt(m.predicted_omega, 8),
-                     fmt(m.measured_omega, 8), f"{m.rel_error_omega:.1e}",
-                     "pass" if m.passed else "**FAIL**"])
     tol = res.tolerances
     blocks.append(("p", f"Each mode is excited alone in the nonlinear model ({res.integrator}, "
                         f"rtol {tol['ode_rtol']:g}) and its modal coordinate fitted; tolerances: δ "
                         f"{tol['delta_rtol']:g} relative, ω {tol['omega_rtol']:g} relative. "
                         f"Result: {'all passed' if res.passed else 'FAILED for ' + str(res.failed)}."))
-    blocks.append(("table", ["mode", "kind", "δ predicted [1/s]", "δ measured [1/s]",
-                             "δ rel. err. [–]", "ω predicted [rad/s]", "ω measured [rad/s]",
-                             "ω rel. err. [–]", "result"], rows))
+    blocks.append(check_table(res, listing))
     return blocks
 
 

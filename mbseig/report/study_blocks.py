@@ -13,6 +13,7 @@ import math
 import numpy as np
 
 from .. import plots
+from ..display import fmt_complex
 from ..errors import CaseError
 from ..plots import rotor as rotor_plots
 from ..studies import write_outputs
@@ -115,11 +116,12 @@ def study_section(case, study, out_dir, stem, jobs, units, *, unbalance=None, la
 
 def compare_blocks(cmp):
     pairs = cmp.pairs
+    bounds = cmp.bounds or [((None, None), (None, None))] * len(pairs)
     rows = []
-    for k, (a, b) in enumerate(pairs):
+    for k, ((a, b), (ba, bb)) in enumerate(zip(pairs, bounds)):
         rel = abs(a - b) / abs(a) if a is not None and b is not None and abs(a) > 0 else None
-        rows.append([str(k + 1), "–" if a is None else f"{a.real:.6g} {a.imag:+.6g}i",
-                     "–" if b is None else f"{b.real:.6g} {b.imag:+.6g}i",
+        rows.append([str(k + 1), "–" if a is None else fmt_complex(a, *ba),
+                     "–" if b is None else fmt_complex(b, *bb),
                      "–" if rel is None else f"{rel:.3g}"])
     return [("p", f"Eigenvalues of {cmp.config} with the constraint-force stiffness Σ λ ∇²Φ (correct) "
                   f"and without it (the common omission); largest multiplier |λ| = {cmp.lam_max:.4g}. "

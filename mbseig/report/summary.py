@@ -6,15 +6,18 @@ comparison of the configurations with what the studies found."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from .. import plots
+from ..display import shown
 from ..studies.report_studies import least_mode_sensitivities
+from .modes import read
 from .text import fmt
 from .units import with_unit
 
 __all__ = ["summary_blocks", "comparison_blocks", "margin_text", "findings",
-           "sensitivity_blocks"]
+           "sensitivity_blocks", "least_mode_text", "verdict_cell", "scope_sentences"]
 
 
 def margin_text(name, current, crit, unit, kind, *, verdict="stable"):
@@ -40,15 +43,7 @@ def summary_blocks(case, summaries, study_sums, units, sensitivities=True, *, ou
     move the least-damped mode."""
     rows = []
     for s in summaries:
-        lm = s["least_mode"]
-        if lm is None:
-            least = "–"
-        elif lm["fd"] > 0:
-            least = (f"mode {lm['mode']} ({lm['kind']}): ω_n/2π = {lm['fn']:.4g} Hz, "
-                     f"ω_d/2π = {lm['fd']:.4g} Hz, ζ = {lm['zeta']:.3g}, δ = {lm['delta']:.4g} 1/s")
-        else:
-            least = (f"mode {lm['mode']} ({lm['kind']}): ω_n/2π = {lm['fn']:.4g} Hz, "
-                     f"δ = {lm['delta']:.4g} 1/s")
+        least = least_mode_text(s["least_mode"])
         margins = []
         for st in study_sums:
             if st.get("config") != s["config"] or "critical" not in st:
@@ -72,19 +67,52 @@ def summary_blocks(case, summaries, study_sums, units, sensitivities=True, *, ou
                     margins.append(f"{c['rom']['joint']} leaves its range of motion at {name} = "
                                    + with_unit(fmt(c["rom"]["value"], 6), unit))
         rom = ("inside" if not s["out_of_range"] else "OUTSIDE for " + ", ".join(s["out_of_range"]))
-        rows.append([s["config"], f"**{s['verdict']}**" if s["verdict"] != "stable" else s["verdict"],
-                     least, rom, "; ".join(margins) or "no boundary study"])
+        rows.append([s["config"], verdict_cell(s["verdict"]), least, rom,
+                     "; ".join(margins) or "no boundary study"])
     blocks = [("h2", "Summary")]
     if out_dir is not None:
         blocks += _summary_figure(summaries, study_sums, units, out_dir, stem)
     blocks.append(("table", ["configuration", "verdict", "least-damped mode", "range of motion",
                              "margins to the boundaries found (where the present value lies, how "
                              "far the boundary is)"], rows))
+    blocks += scope_sentences([(s["config"], s["verdict"]) for s in summaries])
     if sensitivities:
         blocks += sensitivity_blocks(case, summaries, units, out_dir=out_dir, stem=stem)
     else:
         blocks.append(("p", "Eigenvalue sensitivities not computed (--no-sensitivities)."))
     return blocks
+
+
+def verdict_cell(verdict):
+    """The verdict word of a summary table, bold unless stable."""
+    word = getattr(verdict, "word", str(verdict))
+    return word if word == "stable" else f"**{word}**"
+
+
+def scope_sentences(pairs):
+    """'Verdict of CONFIG: what it leaves out' for every (configuration, Verdict) with a scope."""
+    out = []
+    for config, v in pairs:
+        scope = getattr(v, "full_scope", "")
+        if scope:
+            out.append(("p", f"Verdict of {config}: {getattr(v, 'word', v)}; {scope}."))
+    return out
+
+
+def least_mode_text(lm):
+    """The least-damped counted mode of a summary (:func:`mbseig.studies.report_studies.
+    least_mode_record`) as read: the zero rule on δ, ζ and the frequencies."""
+    if lm is None:
+        return "– (no counted mode: every mode is rigid-body by construction)"
+    bre, bim = lm.get("bound_re"), lm.get("bound_im")
+    fb = None if bim is None else bim / (2 * math.pi)
+    delta = shown(lm["delta"], bre)
+    fn = shown(lm["fn"], fb)
+    zeta = delta / (2 * math.pi * fn) + 0.0 if fn > 0 else 0.0
+    head = f"mode {lm['mode']} ({lm['kind']}): ω_n/2π = {fmt(lm['fn'], 4, fb)} Hz, "
+    if shown(lm["fd"], fb) > 0:
+        head += f"ω_d/2π = {fmt(lm['fd'], 4, fb)} Hz, ζ = {fmt(zeta, 3)}, "
+    return head + f"δ = {fmt(lm['delta'], 4, bre)} 1/s"
 
 
 def _own_lines(s, st):
@@ -100,7 +128,7 @@ def _summary_figure(summaries, study_sums, units, out_dir, stem):
     """The least-damped pole of every configuration and the crossing eigenvalue of every
     boundary found at the configuration's own line, on one ζ/ω_n grid."""
     poles = [{"label": f"{s['config']}: mode {s['least_mode']['mode']} ({s['verdict']})",
-              "s": complex(*s["least_mode"]["eigenvalue"]), "stable": s["verdict"] == "stable"}
+              "s": _shown_pole(s["least_mode"]), "stable": s["verdict"] == "stable"}
              for s in summaries if s["least_mode"] is not None and "eigenvalue" in s["least_mode"]]
     if not poles:
         return []
@@ -125,11 +153,17 @@ def _summary_figure(summaries, study_sums, units, out_dir, stem):
                          "found, labelled with the critical value")]
 
 
+def _shown_pole(lm):
+    re, im = lm["eigenvalue"]
+    return complex(shown(re, lm.get("bound_re")), shown(im, lm.get("bound_im")))
+
+
 def sensitivity_blocks(case, summaries, units, *, out_dir=None, stem="case", top=6):
     """The table of the parameters that move the least-damped mode most per relative change
     (:func:`mbseig.studies.report_studies.least_mode_sensitivities`), with units, and their
     tornado chart (when ``out_dir`` is given)."""
     rows, panels, notes = [], [], []
+    unbounded = False
     for s in summaries:
         ranked = least_mode_sensitivities(case, s, top=top)
         if isinstance(ranked, str):
@@ -138,23 +172,38 @@ def sensitivity_blocks(case, summaries, units, *, out_dir=None, stem="case", top
         if not ranked:
             continue
         k = s["least"]
-        for p, d, value, per_pct in ranked:
+        bars = []
+        for r in ranked:
+            p, d, b = r["parameter"], r["derivative"], r["bound"]
+            unbounded |= not math.isfinite(b)
             unit = units.get(p)
             per = f"1/s per {unit}" if unit and unit != "1" else "1/s"
-            rows.append([s["config"], f"{k + 1}", p, with_unit(fmt(value, 5), unit),
-                         f"{d.real:.4g} {per}", f"{-per_pct:+.3g}",
-                         "takes damping away" if d.real > 0 else "adds damping"])
-        delta = s["least_mode"]["delta"]
-        panels.append({"title": f"{s['config']}: mode {k + 1}, δ = {delta:.4g} 1/s",
-                       "rows": [(p, -per_pct) for p, _, _, per_pct in ranked]})
+            change = -shown(r["per_pct"], r["per_pct_bound"])  # of δ = −Re s, for +1 %
+            effect = ("no change beyond its error bound" if change == 0 else
+                      "adds damping" if change > 0 else "takes damping away")
+            rows.append([s["config"], f"{k + 1}", p, with_unit(fmt(r["value"], 5), unit),
+                         f"{fmt(d.real, 4, b)} {per}", "0" if change == 0 else f"{change:+.3g}",
+                         effect])
+            bars.append((p, change))
+        lm = s["least_mode"]
+        title = f"{s['config']}: mode {k + 1}, δ = {fmt(lm['delta'], 4, lm.get('bound_re'))} 1/s"
+        if any(c != 0 for _, c in bars):
+            panels.append({"title": title, "rows": bars})
+        else:
+            notes.append(f"{s['config']}: no parameter moves δ of mode {k + 1} beyond the error "
+                         f"bound of its sensitivity (every ∂Re s/∂p is 0 as read); no chart.")
     blocks = []
     if rows:
         blocks.append(("p", "The parameters that move the least-damped mode most, per relative "
                             "change (first-order eigenvalue sensitivities; parameters at 0 left "
-                            "out), largest first:"))
+                            "out), largest first; a derivative within its error bound (propagated "
+                            "from the eigenvalue's) is 0:"))
         blocks.append(("table", ["configuration", "mode", "parameter", "present value",
                                  "∂Re s/∂p", "change of δ for +1 % [1/s]", "increasing it"], rows))
-        if out_dir is not None:
+        if unbounded:
+            blocks.append(("p", "These sensitivities come without an error bound: they are "
+                                "printed as computed."))
+        if out_dir is not None and panels:
             img = plots.save(plots.tornado(panels),
                              Path(out_dir) / f"{stem}_sensitivity_tornado.png")
             blocks.append(("img", img, "tornado chart: first-order change of the least-damped "
@@ -176,8 +225,14 @@ def comparison_blocks(summaries, study_sums, units):
                     val = ("none in range" if c["critical"] is None else
                            with_unit(f"{c['critical']:.6g}", units.get(st["parameter"])))
                     crit.append(f"{st['parameter']}* = {val}" + (f" ({where})" if where else ""))
-        rows.append([s["config"], str(s["dof"]), s["verdict"], fmt(s["least_delta"], 5),
-                     fmt(s["least_zeta"], 4), ", ".join(f"{f:.4g}" for f in s["freqs"]),
+        lm = s["least_mode"] or {}
+        listing = s.get("listing")
+        freqs = ([read(listing, k)["fd"] for k in range(len(listing))] if listing is not None
+                 else s["freqs"])
+        delta = shown(s["least_delta"], lm.get("bound_re")) if lm else s["least_delta"]
+        zeta = delta / (2 * math.pi * lm["fn"]) if lm and lm["fn"] > 0 else s["least_zeta"]
+        rows.append([s["config"], str(s["dof"]), str(s["verdict"]), fmt(delta, 5),
+                     fmt(zeta, 4), ", ".join(fmt(f, 4) for f in freqs),
                      ", ".join(f"{k} {v:.2f}" for k, v in s["posture"].items()),
                      ", ".join(s["out_of_range"]) or "none",
                      ", ".join(f"{t:.4g}" for t in s["actuator"]) or "–",

@@ -10,12 +10,16 @@ import math
 
 import numpy as np
 
+from ..display import fmt as display_fmt
 from ..numerics import user_names
 
 __all__ = ["fmt", "clean"]
 
 
-def fmt(x, digits=6):
+def fmt(x, digits=6, bound=None):
+    """A value of a table or a sentence: "–" for none or a non-finite value, yes/no for a flag,
+    else ``digits`` significant digits under the zero rule (:func:`mbseig.display.fmt`: 0 when
+    within ``bound`` of 0)."""
     if x is None:
         return "–"
     if isinstance(x, str):
@@ -25,9 +29,7 @@ def fmt(x, digits=6):
     x = float(x)
     if not math.isfinite(x):
         return "–"
-    if x == 0:
-        return "0"
-    return f"{x:.{digits}g}"
+    return display_fmt(x, bound, f".{digits}g")
 
 
 def clean(blocks):

@@ -36,11 +36,17 @@ _FIELD_UNITS = {
     ("forces", "follower"): {"magnitude": "N"},
     ("forces", "force"): {"magnitude": "N"},
     ("forces", "rotor"): {"speed": "rad/s", "polar_inertia": "kg m^2"},
-    ("bodies", None): {"mass": "kg", "inertia": "kg m^2", "length": "m"},
+    ("bodies", None): {"mass": "kg", "inertia": "kg m^2", "length": "m", "com": "m"},
     ("masses", None): {"mass": "kg"},
+    ("points", None): {"position": "m"},
     ("joints", "angle_driver"): {"angle": "rad"},
+    ("joints", "rolling"): {"radius": "m"},
+    ("joints", None): {"at": "m"},
     ("beams", None): {"spin": "rad/s", "E": "Pa", "G": "Pa", "rho": "kg/m^3"},
 }
+# top-level fields and the [motion] table (a moving case: DESIGN §8)
+_TOP_UNITS = {"gravity": "m/s^2"}
+_MOTION_UNITS = {"speed": "m/s", "yaw_rate": "rad/s", "period": "s"}
 
 
 def _is_unit_token(tok: str) -> bool:
@@ -92,6 +98,20 @@ def _elements(data):
         for el in data.get(table, []) or []:
             if isinstance(el, dict) and (kind is None or el.get("type") == kind):
                 yield _FIELD_UNITS[(table, kind)], el
+    yield _TOP_UNITS, data
+    if isinstance(data.get("motion"), dict):
+        yield _MOTION_UNITS, data["motion"]
+
+
+def _leaves(value):
+    """The expression strings of a field: itself, or every entry of a vector or matrix; a
+    leading sign dropped (``"-zB"`` has the unit of zB)."""
+    if isinstance(value, str):
+        e = value.replace(" ", "")
+        yield e[1:] if re.fullmatch(r"[+-]\w+", e) else e
+    elif isinstance(value, list):
+        for v in value:
+            yield from _leaves(v)
 
 
 def parameter_units(spec) -> dict:
@@ -107,16 +127,26 @@ def parameter_units(spec) -> dict:
     products = []
     for fields, el in _elements(data):
         for key, unit in fields.items():
-            expr = el.get(key)
-            if not isinstance(expr, str):
-                continue
-            e = expr.replace(" ", "")
-            if e in params:
-                units.setdefault(e, unit)
-            elif (m := re.fullmatch(r"deg\((\w+)\)", e)) and m.group(1) in params and unit == "rad":
-                units.setdefault(m.group(1), "deg")
-            elif (m := re.fullmatch(r"(\w+)\*(\w+)", e)) and {m.group(1), m.group(2)} <= set(params):
-                products.append((m.group(1), m.group(2), unit))
+            for e in _leaves(el.get(key)):
+                _field_rule(e, unit, params, units, products)
+    if isinstance(data.get("motion"), dict) and "period" in data["motion"]:
+        units["t"] = "s"  # the time of a periodic case (its fields' t; 0 at the reference)
+        params = params + ["t"]
+    return _derived_rules(spec, data, params, units, products)
+
+
+def _field_rule(e, unit, params, units, products):
+    """Rule 2 (and the products of rule 3) for one expression ``e`` of a field of ``unit``."""
+    if e in params:
+        units.setdefault(e, unit)
+    elif (m := re.fullmatch(r"deg\((\w+)\)", e)) and m.group(1) in params and unit == "rad":
+        units.setdefault(m.group(1), "deg")
+    elif (m := re.fullmatch(r"(\w+)\*(\w+)", e)) and {m.group(1), m.group(2)} <= set(params):
+        products.append((m.group(1), m.group(2), unit))
+
+
+def _derived_rules(spec, data, params, units, products):
+    """Rules 3 over the units found so far; returns {parameter: unit or None}."""
     aliases = []
     for cfg in (data.get("configurations") or {}).values():
         for k, v in (cfg or {}).items():

@@ -14,6 +14,7 @@ counterpart for a periodic motion: it is listed as not applicable, not run.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -60,6 +61,12 @@ class PeriodicReport:
     frozen_eigenvalues: np.ndarray = field(repr=False)
     check: object = None
     studies: tuple = ()
+    #: per multiplier, the bound of its exponent s = ln(μ)/T propagated from the multiplier's
+    #: (first order: |δs| ≤ b/(|μ| T)), for the zero rule
+    exponent_bounds: tuple = ()
+    #: the zero bound of the frozen-time eigenvalues: the tolerance of their would-be verdict
+    #: (1e-9 max(1, max |λ|), :func:`mbseig.studies.periodic.frozen_summary`)
+    frozen_bound: float = 0.0
 
 
 def _study(spec, config, st) -> PeriodicStudy:
@@ -101,6 +108,11 @@ def periodic_report_data(spec, *, config=None, run_check=True, studies=True) -> 
         runs = tuple(_study(spec, st.get("config", config), st) for st in declared
                      if st.get("config") in (None, config))
     model = a.timed.base
+    fl = floquet_json(a)
+    T = float(fl["period"])
+    ebounds = tuple(float(b) / (abs(complex(*m)) * T) if abs(complex(*m)) > 0 else math.inf
+                    for m, b in zip(fl["multipliers"], fl["error_bounds"]))
+    fbound = 1e-9 * max(1.0, float(np.abs(lam).max()) if lam.size else 1.0)
     return PeriodicReport(spec.name, str(spec.data.get("title", "")),
-                          getattr(model, "description", "") or "", config, a, floquet_json(a),
-                          frozen_summary(a), times, lam, chk, runs)
+                          getattr(model, "description", "") or "", config, a, fl,
+                          frozen_summary(a), times, lam, chk, runs, ebounds, fbound)

@@ -40,7 +40,7 @@ import numpy as np
 from ..errors import CaseError
 
 __all__ = ["SAFETY", "INVARIANT_TOL", "SteadyAnalysis", "analyze_steady", "cyclic_directions",
-           "mode_rows", "steady_json"]
+           "mode_rows", "steady_json", "mode_shape"]
 
 SAFETY = 10.0  # τ = SAFETY·κη·max(|s|, 1): mbseig's safety factor on the error bound
 #: a declared direction set is invariant when ‖A S − E S J‖ ≤ INVARIANT_TOL ‖A‖ (rounding level of
@@ -102,9 +102,16 @@ def dominant(display, lin, s, *, count=3) -> list:
     reference)."""
     from ..model.naming import dominant as named
 
-    _, _, Vh = np.linalg.svd(s * lin.E - lin.A)
-    shape = lin.N @ Vh[-1].conj()[:lin.dof]
+    shape = mode_shape(lin, s)
     return [[nm, v] for nm, v in named(display, shape[:, None], count)[0]]
+
+
+def mode_shape(lin, s):
+    """The full-coordinate shape q − q₀(t) = N x of eigenvalue ``s`` (x: the position part of
+    the right null vector of s E − A, the right singular vector of its smallest singular
+    value)."""
+    _, _, Vh = np.linalg.svd(s * lin.E - lin.A)
+    return lin.N @ Vh[-1].conj()[:lin.dof]
 
 
 def verdict_of(rows):
