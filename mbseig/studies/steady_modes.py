@@ -4,7 +4,15 @@ linearized (:func:`~mbseig.studies.steady.linearize_steady`) and solved by the `
 eigensolver family (:mod:`mbseig.eigen.descriptor`) with the same measures as the quadratic
 paths; the classification follows mbseig's rule (docs/design.md, "Modes"):
 
-    tolerance  τ = SAFETY · κ η · max(|s|, 1)      (κη: first-order error bound of s)
+    tolerance  τ = SAFETY · κ max(η, n ε) · max(|s|, 1)   (κη: first-order error bound of s)
+
+η is the backward error of the computed pair against the pencil as formed; n ε (n the model's
+coordinates) is the rounding of forming that pencil, whose entries are sums over the n
+coordinates (|fl(Σ) − Σ| ≤ γ_n Σ|·|, Higham, Accuracy and Stability, Thm 3.5) before the null-
+space projection and the deflation: error the solver's η does not see.  At the bicycle's capsize
+speed the capsize eigenvalue is 0 to the digits of the speed, and three OpenBLAS kernels gave
+Re s = −6.3e-14, +9.5e-14 and +2.2e-13 against a τ of 6.1e-14 from η alone (κ = 27.5,
+48 coordinates): η alone made the verdict depend on the machine.
     stable: δ = −Re s > τ;  unstable: δ < −τ;  critical: |δ| ≤ τ
 
 so a tolerance never turns an eigenvalue whose real part is positive beyond its own error bound
@@ -42,7 +50,7 @@ from ..errors import CaseError
 __all__ = ["SAFETY", "INVARIANT_TOL", "SteadyAnalysis", "analyze_steady", "cyclic_directions",
            "mode_rows", "steady_json", "mode_shape"]
 
-SAFETY = 10.0  # τ = SAFETY·κη·max(|s|, 1): mbseig's safety factor on the error bound
+SAFETY = 10.0  # τ = SAFETY·κ max(η, nε)·max(|s|, 1): mbseig's safety factor on the error bound
 #: a declared direction set is invariant when ‖A S − E S J‖ ≤ INVARIANT_TOL ‖A‖ (rounding level of
 #: forming the pencil, whose entries carry a few ε of their magnitude; 1e-11 leaves 10³ of margin)
 INVARIANT_TOL = 1e-11
@@ -64,14 +72,15 @@ class SteadyAnalysis:
     cyclic: object = None  # the declared rigid-body directions (Cyclic)
 
 
-def mode_rows(sol, *, safety=SAFETY, declared=None) -> list:
+def mode_rows(sol, *, safety=SAFETY, declared=None, formed_in=1) -> list:
     """Mode records as the quadratic paths list them: δ = −Re s, a pair once (Im s > 0), sorted
-    by ω_n then δ, with η, κ and the tolerance τ (module docstring); first the ``declared``
-    rigid-body modes (:class:`Cyclic`), each named in ``rigid_body``."""
+    by ω_n then δ, with η, κ and the tolerance τ (module docstring: ``formed_in`` is n, the
+    number of coordinates the pencil was formed from); first the ``declared`` rigid-body modes
+    (:class:`Cyclic`), each named in ``rigid_body``."""
     rows = [] if declared is None else declared.rows()
-    eps = np.finfo(float).eps
+    floor = max(int(formed_in), 1) * np.finfo(float).eps
     for s, eta, kap in zip(sol.eigenvalues, sol.backward_error, sol.condition):
-        tol = safety * kap * max(eta, eps) * max(abs(s), 1.0)
+        tol = safety * kap * max(eta, floor) * max(abs(s), 1.0)
         if s.imag < -tol:
             continue  # the conjugate of a listed pair
         wd = float(s.imag) if s.imag > tol else 0.0
@@ -274,7 +283,7 @@ def analyze_steady(spec, *, config=None, params=None, naive=False, model=None):
                                 file=file) from None
     notes = tuple(f"wheel {c['name']!r} would pull ({c['force']:.6g} N): the steady motion "
                   f"lifts it off the plane" for c in state.contacts if not c["active"])
-    rows = mode_rows(sol, declared=cyc)
+    rows = mode_rows(sol, declared=cyc, formed_in=len(state.q))
     from ..model.naming import display_map
 
     display = display_map(model, state.q)
@@ -316,6 +325,7 @@ def steady_json(a: SteadyAnalysis) -> dict:
                                   "dropped": [list(x) for x in a.cyclic.dropped]}
         if a.cyclic is not None else None,
         "tolerances": {"safety": SAFETY, "invariant_tol": INVARIANT_TOL,
+                       "formed_in": len(a.state.q),
                        "inf_tol": float(sol.details.get("inf_tol", 0.0)),
                        "rank_tol": float(lin.tolerances.get("rank_tol", 0.0))},
         "modes": [dict(r) for r in a.modes],

@@ -20,7 +20,7 @@ from .report_studies import least_damped, least_mode_record, listing_of_rows
 __all__ = ["SteadyReport", "steady_report_data", "STEADY_RULE"]
 
 #: the rule of a steady mode's tolerance (:mod:`mbseig.studies.steady_modes`)
-STEADY_RULE = "10 κ η max(|s|, 1)"
+STEADY_RULE = "10 κ max(η, n ε) max(|s|, 1)"
 
 
 @dataclass(frozen=True)
