@@ -7,8 +7,13 @@ usually) and finds the boundaries between grid points:
   crossing) when the mode that crosses is oscillatory, ``divergence`` when it is real.  It is
   refined by Brent's method on the largest real part of that kind when that changes sign
   continuously (kept only when it is small at the root: a real pair merging into a complex one
-  makes the maximum jump), else by bisection on the count (a pair that passes through s = 0 and
-  turns imaginary, as the rolling disk's lean at its critical speed);
+  makes the maximum jump); a pair that passes through s = 0 and turns imaginary (the rolling
+  disk's lean at its critical speed: ±σ ↔ ±iω) by Brent's method on Σ s² over the eigenvalues
+  nearest 0 (the pair and the undeclared zeros beside it: 2σ² on one side, −2ω² on the other,
+  smooth through the crossing).  Σ s² is the trace of the square of the operator restricted to
+  that cluster, accurate to the rounding of the pencil even where the individual eigenvalues of a
+  defective zero are not (a count's bisection stops where σ first exceeds its own error bound, up
+  to 2.5e-9 m/s early on the rolling disk); else by bisection on the count;
 - ``lift-off``: the normal force of a wheel changes sign (Brent's method on the force).
 
 ``stability`` is ``loss`` when the motion becomes less stable (or a wheel pulls) as the
@@ -168,6 +173,8 @@ def _stability_crossing(at, lo, hi, a0, a1, name, xtol):
         scale = max(1.0, max(abs(s) for s in at(root).solution.eigenvalues))
         if g is None or abs(g) > ROOT_TOL * scale:
             root = None  # the maximum jumped: fall back on the count
+    if root is None and kind == "divergence":
+        root = _pair_through_zero(at, lo, hi, base + 2, xtol)
     if root is None:
         a, b = lo, hi
         while b - a > xtol * max(1.0, abs(b)):
@@ -185,6 +192,31 @@ def _stability_crossing(at, lo, hi, a0, a1, name, xtol):
         if osc:
             row["frequency"] = float(max(osc, key=lambda r: r["eigenvalue"][0])["omega_d"])
     return [row]
+
+
+def _cluster_square(a, count):
+    """Σ s² over the ``count`` eigenvalues of ``a`` nearest 0 (declared directions are deflated
+    and not among them), and the largest |s| of the spectrum (its scale)."""
+    s = np.asarray(a.solution.eigenvalues)
+    s = s[np.isfinite(s)]
+    if s.size < count:
+        return None, 1.0
+    near = s[np.argsort(np.abs(s), kind="stable")[:count]]
+    return float(np.sum(near * near).real), max(1.0, float(np.abs(s).max()))
+
+
+def _pair_through_zero(at, lo, hi, count, xtol):
+    """The parameter where a real pair ±σ turns into ±iω through s = 0 (module docstring), or
+    None when Σ s² of the ``count`` eigenvalues nearest 0 does not change sign on [lo, hi] or is
+    not small at the root."""
+    f0, _ = _cluster_square(at(lo), count)
+    f1, _ = _cluster_square(at(hi), count)
+    if f0 is None or f1 is None or (f0 < 0) == (f1 < 0):
+        return None
+    root = float(brentq(lambda p: _value(_cluster_square(at(p), count)[0], f0), lo, hi,
+                        xtol=xtol, rtol=4 * np.finfo(float).eps))
+    g, scale = _cluster_square(at(root), count)
+    return root if g is not None and abs(g) <= ROOT_TOL * scale ** 2 else None
 
 
 def _value(v, fallback):
