@@ -208,6 +208,14 @@ def test_report_rotor_section_from_the_command_line(tmp_path, capsys):
         assert len(err) == 1 and option in err[0] and "rigid_rotor.toml" in err[0]
 
 
+def _csv_rows(response, path):
+    import csv
+
+    response.write_csv(path)
+    with open(path) as fh:
+        return list(csv.DictReader(fh))
+
+
 def _rotor_study_case(tmp_path, unbalance, sweep="Omega"):
     text = (CASES / "rigid_rotor.toml").read_text() + (
         f'\n[[report.studies]]\ntitle = "speed"\nsweep = "{sweep}"\n'
@@ -218,25 +226,28 @@ def _rotor_study_case(tmp_path, unbalance, sweep="Omega"):
 
 def test_report_study_names_its_unbalance(tmp_path, capsys):
     """A ``[[report.studies]]`` sweep over a rotor's speed takes its own ``unbalance = {at, me}``.
-    Reference: the synchronous response is linear in m·e, so the amplitudes at m·e = 2e-4 kg m are
-    2e-4 times those of the default 1 kg m at the same point (rtol 1e-12: rounding of one scaling).
+    Reference: the synchronous response is linear in m·e, so the report's amplitudes at m·e =
+    2e-4 kg m are 2e-4 times those of the study's default 1 kg m at the same points, computed
+    without a report (mbseig.studies.campbell.rotor_study; rtol 1e-12: rounding of one scaling).
     A bad entry is one line naming the entry, exit 2."""
     import csv
 
-    tables = {}
-    for tag, ub in (("own", '{ at = "rotor", me = 2e-4 }'), ("default", None)):
-        out = tmp_path / tag
-        assert main(["report", _rotor_study_case(tmp_path, ub), "--no-check",
-                     "--no-sensitivities", "--out", str(out)]) == 0
-        md = (out / "report.md").read_text()
-        assert ("m·e = 0.0002 kg m at rotor" in md) == (tag == "own")
-        [path] = out.glob("*/unbalance.csv")
-        with open(path) as fh:
-            rows = list(csv.DictReader(fh))
-        tables[tag] = np.array([[float(v) for k, v in r.items() if k.startswith("amplitude")]
-                                for r in rows])
-    assert tables["own"].shape == tables["default"].shape and tables["own"].max() > 0
-    np.testing.assert_allclose(tables["own"], 2e-4 * tables["default"], rtol=1e-12, atol=0)
+    from mbseig.studies.campbell import rotor_study
+
+    out = tmp_path / "own"
+    case = _rotor_study_case(tmp_path, '{ at = "rotor", me = 2e-4 }')
+    assert main(["report", case, "--no-check", "--no-sensitivities", "--out", str(out)]) == 0
+    assert "m·e = 0.0002 kg m at rotor" in (out / "report.md").read_text()
+    [path] = out.glob("*/unbalance.csv")
+    with open(path) as fh:
+        rows = list(csv.DictReader(fh))
+    own = np.array([[float(v) for k, v in r.items() if k.startswith("amplitude")] for r in rows])
+    rs = rotor_study(case, "Omega", sorted({float(r["Omega"]) for r in rows}))
+    assert rs.default_unbalance and rs.me == 1.0
+    default = np.array([[float(v) for k, v in r.items() if k.startswith("amplitude")]
+                        for r in _csv_rows(rs.unbalance, tmp_path / "default.csv")])
+    assert own.shape == default.shape and own.max() > 0
+    np.testing.assert_allclose(own, 2e-4 * default, rtol=1e-12, atol=0)
     capsys.readouterr()
     for ub, sweep, words in (('{ at = "nowhere", me = 1e-4 }', "Omega", "unknown point"),
                              ('{ at = "rotor", me = -1.0 }', "Omega", "me must be"),

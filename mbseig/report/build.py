@@ -38,7 +38,7 @@ from ..studies.point import as_spec
 from ..studies.report_studies import study_configuration
 from .page import head_blocks, page_blocks, write_page
 from .sections import configuration_blocks
-from .study_blocks import rotor_section, study_section
+from .study_blocks import check_study_unbalance, rotor_section, study_section
 from .summary import comparison_blocks, summary_blocks
 from .units import parameter_units
 
@@ -85,6 +85,12 @@ def build_report(case, *, configs=None, out_dir, run_check=True, jobs=None, stud
     units = parameter_units(case)
     base = case.build(configs[0])
     head = head_blocks(stem, base.description or "", provenance(case), configs)
+    chosen = []
+    if studies:  # the studies that will run, their own unbalance checked before any work
+        for k, st in enumerate(getattr(base, "report", {}).get("studies", [])):  # a linear case has no [report]
+            if st.get("config") in configs or len(configs) > 1:
+                check_study_unbalance(case, st, f"report.studies[{k}]")
+                chosen.append((k, st))
     summaries, cfg_blocks = [], []
     for c in configs:
         s = study_configuration(case, c, run_check=run_check)
@@ -92,14 +98,11 @@ def build_report(case, *, configs=None, out_dir, run_check=True, jobs=None, stud
                                            units=units, animations=animations)
         summaries.append(s)
     study_blocks, study_sums = [], []
-    if studies:
-        for k, st in enumerate(getattr(base, "report", {}).get("studies", [])):  # a linear case has no [report]
-            if st.get("config") not in configs and not (len(configs) > 1):
-                continue
-            b, s = study_section(case, st, out_dir, stem, jobs, units, unbalance=unbalance,
-                                 label=f"report.studies[{k}]")
-            study_blocks += b
-            study_sums.append(s)
+    for k, st in chosen:
+        b, s = study_section(case, st, out_dir, stem, jobs, units, unbalance=unbalance,
+                             label=f"report.studies[{k}]")
+        study_blocks += b
+        study_sums.append(s)
     if speeds is not None:
         study_blocks += rotor_section(case, speeds, out_dir, stem, jobs, units,
                                       config=configs[0], unbalance=unbalance)

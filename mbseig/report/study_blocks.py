@@ -25,6 +25,30 @@ from .units import with_unit
 __all__ = ["study_section", "compare_blocks", "rotor_blocks", "rotor_section"]
 
 
+def check_study_unbalance(case, study, label):
+    """Refuse, before any work, a ``[[report.studies]]`` entry's own ``unbalance`` that its
+    study could not honour: a sweep that does not set a rotor's speed, or ``at`` naming no point,
+    station or body of the model (the one-line errors :func:`study_section` would raise after
+    the configuration sections were drawn)."""
+    from ..studies.campbell import speed_parameter
+    from ..studies.unbalance import unbalance_point
+
+    own = study.get("unbalance")
+    if not own or "compare" in study:
+        return
+    where = f"{label}.unbalance"
+    name, config = study["sweep"], study.get("config")
+    lo, hi = (float(v) for v in study["range"])
+    if not speed_parameter(case, name, [lo, hi], config=config):
+        raise CaseError(f"an unbalance response needs a sweep over a rotor's speed; {name} does "
+                        f"not set the speed of a rotor", element=where,
+                        file=getattr(case, "source", None))
+    try:
+        unbalance_point(case.build(config, **{name: lo}), own["at"])
+    except CaseError as exc:
+        raise CaseError(exc.message, file=getattr(case, "source", None), element=where) from None
+
+
 def study_section(case, study, out_dir, stem, jobs, units, *, unbalance=None, label=None):
     """Blocks of one ``[[report.studies]]`` entry (``label`` names it in errors) and its
     summary; the rotor's unbalance response takes the entry's own ``unbalance = {at, me}``,
