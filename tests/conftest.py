@@ -22,6 +22,8 @@ NOT_NUMERIC_MODULES = {
     "test_report_browser.py": "the page's animations render and move (pixels change)",
     "test_fuzz.py": "mutated inputs: exit code 0 or 2, one line, no traceback, no file touched",
     "test_resume.py": "a resumed sweep equals the uninterrupted one: one kernel, twice",
+    "test_interrupt.py": "signals, exit codes, the one line, and an interrupted sweep resumed "
+                         "equal to the uninterrupted one: one kernel, twice",
 }
 # single tests in modules that are otherwise numeric (the test's name, parameters left off)
 NOT_NUMERIC_TESTS = {
