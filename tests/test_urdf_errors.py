@@ -55,3 +55,15 @@ def test_import_urdf_missing_file_names_it(tmp_path, capsys):
     assert main(["import-urdf", str(missing), "--out", str(tmp_path / "o.toml")]) == 2
     err = capsys.readouterr().err
     assert err.startswith(f"mbseig: {missing}: cannot read URDF file") and err.count("\n") == 1
+
+
+def test_urdf_given_as_a_case_file_says_how_to_import_it(tmp_path, capsys):
+    """A URDF where a case file is read (``mbseig modes robot.urdf``) is not called malformed
+    TOML: the line says it is XML and names the command that writes its case."""
+    urdf = tmp_path / "robot.urdf"
+    urdf.write_text('<?xml version="1.0"?>\n<robot name="r"><link name="a"/></robot>\n')
+    assert main(["modes", str(urdf)]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and "Traceback" not in err
+    assert err.startswith(f"mbseig: {urdf}: not a case file but XML") and "import-urdf" in err
+    assert "malformed TOML" not in err

@@ -135,6 +135,10 @@ def read_case(path) -> CaseSpec:
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
+        if text.lstrip().startswith("<"):  # XML: a URDF given where a case file is read
+            raise CaseError("not a case file but XML (a URDF?): write its case with `mbseig "
+                            "import-urdf FILE --out CASE.toml`, or name it in a case's [urdf] "
+                            "table", file=str(path)) from None
         raise CaseError(f"malformed TOML: {exc}", file=str(path)) from None
     return CaseSpec(_expanded(data, path), path.stem, str(path), path.parent)
 
