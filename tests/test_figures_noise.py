@@ -114,8 +114,8 @@ def test_rotor_disc_is_the_uniform_disc_of_the_body():
     (disc,) = layout["discs"]
     p = a.model.parameters
     assert math.isclose(disc["radius"], math.sqrt(2 * p["Jp"] / p["m"]), rel_tol=1e-14)
-    assert [s["name"] for s in layout["stations"]] == ["forces[0] 'bearing 1'",
-                                                       "forces[1] 'bearing 2'"]
+    assert [s["name"] for s in layout["stations"]] == ["bearing 1",
+                                                       "bearing 2"]
 
 
 def test_margin_text_says_the_side_and_the_distance():

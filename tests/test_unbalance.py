@@ -257,3 +257,18 @@ def test_report_study_names_its_unbalance(tmp_path, capsys):
                      "--no-sensitivities", "--out", str(tmp_path / "bad")]) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and "report.studies[0].unbalance" in err[0] and words in err[0], err
+
+
+def test_unbalance_table_names_stations_as_the_case_does(capsys):
+    """The unbalance table of a rotor on a beam names every station as the case does (a point,
+    ``BEAM.STATION``, an element's own name) or by its arc length, never by a node index
+    (``shaft.n1``) or an element's place in the case with its name (``joints[0] 'disk fit'``),
+    and prints no rounding sign on a phase (−0.000, −180.000: the same angles as 0 and 180)."""
+    import re
+
+    assert main(["unbalance", str(CASES / "overhung_rotor_friswell.toml"), "--param",
+                 "Omega=100:300:2", "--at", "shaft.disk", "--me", "1e-4"]) == 0
+    table = capsys.readouterr().out
+    assert re.search(r"\.n\d+\b", table) is None and "[0] '" not in table
+    assert "shaft at s = 0.25 m" in table and "disk: disk fit" in table
+    assert "-0.000" not in table and "-180.000" not in table

@@ -306,7 +306,8 @@ def assemble(b, forces, constraints, mass_elements, mass_blocks, g_const, gravit
                                                   for fr in frames[1:]], stack=True)
             shafts.append(SpinningShaft(
                 spec.label, stack, spec.R0[:, 0].copy(), float(spec.spin),
-                stations=tuple((f"{spec.name} node {k}", p) for k, p in enumerate(points))))
+                stations=tuple((f"{spec.name} at s = {spec.arcs[k]:.4g} m", p)
+                              for k, p in enumerate(points))))
         p = spec.props
         Phi_y, Phi_z = p.shear_parameters(spec.length)
         record[spec.name] = {

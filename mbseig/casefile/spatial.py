@@ -27,6 +27,8 @@ appended, so the indices that inverse-statics commands hold stay valid).
 
 from __future__ import annotations
 
+import re
+
 import dataclasses
 
 import numpy as np
@@ -58,6 +60,9 @@ from .spatial_readers import (
 )
 
 __all__ = ["UNIT_TOL", "SpatialBuilder"]
+
+
+_NAMED = re.compile(r"^\w+\[\d+\] '(.+)'$")  # an element's label with its name
 
 
 class SpatialBuilder(SpatialElementReaders, Builder):
@@ -309,8 +314,12 @@ class SpatialBuilder(SpatialElementReaders, Builder):
         return np.asarray(x, float) - (0.0 if bname == "ground" else self.bodies[bname]["origin"])
 
     def _station(self, bname, label, aff):
+        """A point where an element acts on a body: a whirl and unbalance station, named by the
+        element's own name where the case gives one ("bearing 1"), else by its place in the case
+        ("forces[0]"), not by the label errors use ("forces[0] 'bearing 1'")."""
         if bname != "ground":
-            self.stations.setdefault(bname, []).append((label, aff))
+            named = _NAMED.match(label)
+            self.stations.setdefault(bname, []).append((named[1] if named else label, aff))
 
     def _carrier(self, pname):
         """The body whose basic point (origin or carried point) ``pname`` is, or None."""

@@ -201,8 +201,14 @@ def _deg(z) -> float:
 
 
 def _phase_text(z) -> str:
-    """The phase in degrees, "–" where the amplitude is 0 (Ω = 0: no force, no phase)."""
-    return "–".rjust(14) if z == 0 or not np.isfinite(z) else f"{_deg(z):14.3f}"
+    """The phase in degrees, "–" where the amplitude is 0 (Ω = 0: no force, no phase); as
+    printed (3 decimals) −0.000 reads 0.000 and −180.000 reads 180.000 (the same angle: the sign
+    was rounding's, the solve's phase error being ~1e-9 degrees)."""
+    if z == 0 or not np.isfinite(z):
+        return "–".rjust(14)
+    text = f"{_deg(z):.3f}"
+    text = {"-0.000": "0.000", "-180.000": "180.000"}.get(text, text)
+    return text.rjust(14)
 
 
 def _map_key(aff):
@@ -220,7 +226,8 @@ def _map_key(aff):
 
 def station_names(model, rs):
     """Readable names of the rotors' stations: a rotor's as ``BODY: label``; a beam node as the
-    case's name of that point (a basic point, ``BEAM.STATION``, else ``BEAM.nK``)."""
+    case's name of that point (a basic point, ``BEAM.STATION``), else its station label
+    (``BEAM at s = 0.25 m``), never its node index."""
     by_map = {}
     for name, aff in model.points.items():
         key = _map_key(aff)
@@ -233,7 +240,8 @@ def station_names(model, rs):
             if getattr(r, "body", None) is not None and hasattr(r, "polar_inertia"):
                 out.append((f"{r.body}: {label}", aff))
                 continue
-            out.append((by_map.get(_map_key(aff), (f"{r.name}: {label}", False))[0], aff))
+            name, auto = by_map.get(_map_key(aff), (label, True))
+            out.append((label if auto else name, aff))  # never a node index (BEAM.nK)
     seen, unique = set(), []
     for name, aff in out:  # a point named twice (a rotor's station on a beam node) listed once
         if name not in seen:
