@@ -9,6 +9,7 @@ and the in-process run of the same points (the JSON compared exactly) for the Da
 
 import json
 import os
+import pickle
 import signal
 from pathlib import Path
 
@@ -123,3 +124,36 @@ def test_killed_dask_worker_loses_no_point(tmp_path):
     assert json.dumps(res.to_json()) == serial
     n = 8 * 2
     assert sorted(ckpt.glob("points-*.pkl")) == [ckpt / f"points-{i:06d}.pkl" for i in range(n)]
+
+
+class _Runs:
+    """A pickle that would run ``os.system`` (or another callable) when read."""
+
+    def __init__(self, fn, *args):
+        self.fn, self.args = fn, args
+
+    def __reduce__(self):
+        return self.fn, self.args
+
+
+@pytest.mark.parametrize("fn", [os.system, eval, np.save], ids=["os.system", "eval", "np.save"])
+def test_resume_folder_cannot_run_code(tmp_path, capsys, fn):
+    """A result file replaced by one that names a callable mbseig never writes is refused in one
+    line naming the file and the callable, and the callable does not run (its witness file is
+    not created); the folder's genuine results still read as before."""
+    case = tmp_path / "map.toml"
+    case.write_text(MAP)
+    ckpt, witness = tmp_path / "ckpt", tmp_path / "ran"
+    args = ["sweep", str(case), "--param", "c=1:-1:3", "--jobs", "1", "--no-progress",
+            "--resume", str(ckpt)]
+    assert main([*args, "--out", str(tmp_path / "a")]) == 0
+    [first, *_] = sorted(ckpt.glob("*.pkl"))
+    payload = {os.system: (f"touch {witness}",), eval: (f"open({str(witness)!r}, 'w')",),
+               np.save: (str(witness), np.zeros(1))}[fn]
+    first.write_bytes(pickle.dumps(_Runs(fn, *payload)))
+    capsys.readouterr()
+    assert main([*args, "--out", str(tmp_path / "b")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and first.name in err[0] and "--resume" in err[0], err
+    assert "mbseig never writes" in err[0] and not witness.exists()
+    assert not list(tmp_path.glob("ran*"))

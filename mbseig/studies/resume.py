@@ -8,9 +8,14 @@ one file per completed task, ``{stage}-{index:06d}.pkl``: the task's result, wri
 temporary file in the same directory, flushed to disk and renamed over its final name, so that a
 file under its final name is always complete (a rename within one directory is atomic on POSIX
 and Windows).  Results are pickled: loaded, they are bit for bit what the task returned, so the
-outputs of a resumed study equal those of an uninterrupted one byte for byte.  A checkpoint
-directory is trusted as the Python that wrote it (pickles can hold code): resume only from
-directories mbseig wrote.
+outputs of a resumed study equal those of an uninterrupted one byte for byte.  A pickle can name
+any Python callable to run while it is read, so results are read by a restricted unpickler
+(:class:`_Loader`, the "restricting globals" pattern of the ``pickle`` documentation): it builds
+only what mbseig writes, the classes of mbseig's own data (not those of the modules that write
+files, start processes or run commands), numpy's arrays, scalars and dtypes, scipy's sparse
+matrices and Python's plain containers.  A file that names anything else (``os.system``,
+``builtins.eval``, a numpy function) is refused in one line naming it, before any of it runs: a
+resume folder from someone else cannot run their code.
 
 A *deferred* checkpoint (``Checkpoint(directory, deferred=True)``) keeps the results in memory
 and writes nothing until :meth:`Checkpoint.flush`: ``mbseig sweep`` without ``--resume`` holds
@@ -35,6 +40,47 @@ __all__ = ["Checkpoint", "study_identity"]
 
 MANIFEST = "manifest.json"
 FORMAT = 1  # version of the directory's layout
+
+
+#: mbseig modules whose classes a result never holds and whose constructors act on the world
+_NOT_DATA = ("mbseig.studies.resume", "mbseig.studies.runners", "mbseig.studies.workers",
+             "mbseig.cli", "mbseig.report", "mbseig.bench", "mbseig.plots")
+#: numpy's functions that rebuild an array, a scalar or a dtype (nothing else of numpy's runs)
+_NUMPY_REBUILD = {"_reconstruct", "scalar", "_frombuffer"}
+_BUILTINS = {"complex", "set", "frozenset", "slice", "range", "bytearray", "bytes", "tuple",
+             "list", "dict", "float", "int", "bool", "str"}
+
+
+class _Loader(pickle.Unpickler):
+    """An unpickler that builds only what mbseig writes (module docstring); anything else is an
+    :class:`pickle.UnpicklingError` naming it."""
+
+    def find_class(self, module, name):
+        root = module.split(".")[0]
+        if module == "builtins" and name in _BUILTINS:
+            return super().find_class(module, name)
+        if root in ("numpy", "scipy", "mbseig") and "." not in name:
+            obj = super().find_class(module, name)
+            if root == "numpy" and (isinstance(obj, type) or name in _NUMPY_REBUILD):
+                return obj
+            if root == "scipy" and module.startswith("scipy.sparse") and isinstance(obj, type):
+                return obj
+            if (root == "mbseig" and isinstance(obj, type)
+                    and not obj.__module__.startswith(_NOT_DATA)):
+                return obj
+        raise pickle.UnpicklingError(f"refers to {module}.{name}, which mbseig never writes")
+
+
+def _load(path):
+    """A result file read by :class:`_Loader`: a refused global is one line naming the file."""
+    with path.open("rb") as fh:
+        try:
+            return _Loader(fh).load()
+        except pickle.UnpicklingError as exc:
+            if "mbseig never writes" in str(exc):
+                raise CaseError(f"{path.name} {exc}: not read (a resume folder holds only what "
+                                f"mbseig wrote)", file=str(path.parent), element="--resume") from None
+            raise
 
 
 def _jsonable(x):
@@ -132,8 +178,9 @@ class Checkpoint:
         if self.deferred:
             return False, None  # (a deferred checkpoint reads nothing: a new study)
         try:
-            with self._path(stage, i).open("rb") as fh:
-                result = pickle.load(fh)
+            result = _load(self._path(stage, i))
+        except CaseError:
+            raise  # a refused global: said, not recomputed around
         except FileNotFoundError:
             batch = self._batch(stage)
             if int(i) not in batch:
@@ -151,8 +198,9 @@ class Checkpoint:
             held = {}
             for path in sorted(self.dir.glob(f"batch-{stage}-*.pkl")):
                 try:
-                    with path.open("rb") as fh:
-                        part = pickle.load(fh)
+                    part = _load(path)
+                except CaseError:
+                    raise
                 except (OSError, EOFError, pickle.UnpicklingError, AttributeError,
                         ImportError, IndexError, TypeError, ValueError):
                     continue  # unreadable: its tasks are computed again
