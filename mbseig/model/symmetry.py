@@ -93,7 +93,7 @@ def _null(R, scale, B):
     if B.shape[1] == 0 or R.shape[0] == 0:
         return B, 0.0
     S = (R @ B) / np.maximum(scale, np.finfo(float).tiny)[:, None]
-    _, sv, Vh = np.linalg.svd(S)
+    _, sv, Vh = np.linalg.svd(S, full_matrices=S.shape[0] < S.shape[1])  # Vh: all of b's space
     sv = np.concatenate([sv, np.zeros(B.shape[1] - sv.size)])
     keep = sv <= TOL
     return B @ Vh.conj().T[:, keep], float(sv[keep].max(initial=0.0))
