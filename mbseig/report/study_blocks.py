@@ -29,7 +29,7 @@ def check_study_unbalance(case, study, label):
     """Refuse, before any work, a ``[[report.studies]]`` entry's own ``unbalance`` that its
     study could not honour: a sweep that does not set a rotor's speed, or ``at`` naming no point,
     station or body of the model (the one-line errors :func:`study_section` would raise after
-    the configuration sections were drawn)."""
+    the configuration sections were drawn: :func:`build_report` calls it first)."""
     from ..studies.campbell import speed_parameter
     from ..studies.unbalance import unbalance_point
 
@@ -54,12 +54,12 @@ def study_section(case, study, out_dir, stem, jobs, units, *, unbalance=None, la
     summary; the rotor's unbalance response takes the entry's own ``unbalance = {at, me}``,
     else ``unbalance`` = (point, m·e) of the command line, else m·e = 1 kg m at the first disk."""
     kind = "compare" if "compare" in study else "sweep"
-    where = f"{label or 'report.studies'}.unbalance"
     config = study.get("config")
     title = study.get("title", f"{kind} on {config}")
     blocks = [("h2", title)]
     if kind == "compare":
         return blocks + compare_blocks(compare_study(case, config)), {"title": title}
+    check_study_unbalance(case, study, label or "report.studies")  # before the sweep runs
     sw = sweep_study(case, study, jobs=jobs)
     res, values, name = sw.result, sw.values, sw.parameter
     sdir = out_dir / f"{stem}_{config}_{name}"
@@ -119,21 +119,12 @@ def study_section(case, study, out_dir, stem, jobs, units, *, unbalance=None, la
     for p in paths:
         if p.suffix == ".png":
             blocks.append(("img", p, f"{title}: {captions.get(p.stem, p.stem.replace('_', ' '))}"))
-    own = study.get("unbalance")
-    try:
-        rs = rotor_study(case, name, values, config=config, jobs=jobs,
-                         unbalance=(own["at"], float(own["me"])) if own else unbalance,
-                         xtol_rel=float(study.get("xtol_rel", 1e-10)))
-    except CaseError as exc:
-        if own and exc.element == "--at":  # the entry's own point: name the entry
-            raise CaseError(exc.message, file=exc.file, element=where) from None
-        raise
+    own = study.get("unbalance")  # checked by check_study_unbalance
+    rs = rotor_study(case, name, values, config=config, jobs=jobs,
+                     unbalance=(own["at"], float(own["me"])) if own else unbalance,
+                     xtol_rel=float(study.get("xtol_rel", 1e-10)))
     if rs is not None:
         blocks += rotor_blocks(rs, sdir, title, units)
-    elif own:
-        raise CaseError(f"an unbalance response needs a sweep over a rotor's speed; {name} does "
-                        f"not set the speed of a rotor", element=where,
-                        file=getattr(case, "source", None))
     return blocks, {"title": title, "parameter": name, "config": config, "critical": crit,
                     "curves": sw.curves}
 

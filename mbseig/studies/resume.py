@@ -51,6 +51,10 @@ _BUILTINS = {"complex", "set", "frozenset", "slice", "range", "bytearray", "byte
              "list", "dict", "float", "int", "bool", "str"}
 
 
+class _Refused(pickle.UnpicklingError):
+    """A result file names a global mbseig never writes."""
+
+
 class _Loader(pickle.Unpickler):
     """An unpickler that builds only what mbseig writes (module docstring); anything else is an
     :class:`pickle.UnpicklingError` naming it."""
@@ -68,7 +72,7 @@ class _Loader(pickle.Unpickler):
             if (root == "mbseig" and isinstance(obj, type)
                     and not obj.__module__.startswith(_NOT_DATA)):
                 return obj
-        raise pickle.UnpicklingError(f"refers to {module}.{name}, which mbseig never writes")
+        raise _Refused(f"refers to {module}.{name}, which mbseig never writes")
 
 
 def _load(path):
@@ -76,11 +80,9 @@ def _load(path):
     with path.open("rb") as fh:
         try:
             return _Loader(fh).load()
-        except pickle.UnpicklingError as exc:
-            if "mbseig never writes" in str(exc):
-                raise CaseError(f"{path.name} {exc}: not read (a resume folder holds only what "
-                                f"mbseig wrote)", file=str(path.parent), element="--resume") from None
-            raise
+        except _Refused as exc:
+            raise CaseError(f"{path.name} {exc}: not read (a resume folder holds only what "
+                            f"mbseig wrote)", file=str(path.parent), element="--resume") from None
 
 
 def _jsonable(x):
