@@ -11,6 +11,8 @@ from __future__ import annotations
 import math
 
 from ..errors import CaseError
+from ..modal.rules import kind_of
+from ..modal.rules import stability as rule
 from ..studies.periodic import floquet_json, frozen_summary, periodic_analysis
 from ..display import fmt
 from .common import analyzed, case_kwargs, print_json
@@ -34,12 +36,11 @@ def exponent_modes(fl, condition=None) -> list:
         if im < 0 or (im == 0 and mu[1] < 0):
             continue  # the conjugate of a listed pair
         m = abs(complex(*mu))
-        stability = "unstable" if m - b > 1 else "stable" if m + b < 1 else "critical"
+        stability = rule(1.0 - m, b)  # unstable: |μ| − b > 1, stable: |μ| + b < 1
         wn = math.hypot(re, im)
-        if im == 0:
-            kind = "divergence" if stability == "unstable" else "overdamped" if re < 0 else "rigid-body"
-        else:
-            kind = "flutter" if stability == "unstable" else "oscillatory"
+        # a real multiplier at 1 within its bound (and not past it) is a rigid-body motion
+        kind = kind_of(stability, -re, im, 0.0,
+                       rigid=im == 0 and re >= 0 and stability != "unstable")
         rows.append({"eigenvalue": [re, im], "delta": -re, "omega_n": wn, "omega_d": abs(im),
                      "freq_hz": abs(im) / (2 * math.pi), "zeta": -re / wn if wn else 0.0,
                      "stability": stability, "kind": kind, "multiplier": mu,

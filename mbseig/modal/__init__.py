@@ -58,14 +58,15 @@ from ..eigen import Problem, Request, SingularPencilError, solve
 from ..eigen.small import small_problem
 from ..errors import SolverError
 from ..linear import LinearModel
-from .bounds import error_bounds, stability, tolerance_rule, tolerances, worst, zero_pair_floor
+from .bounds import error_bounds, tolerance_rule, tolerances, worst, zero_pair_floor
+from .rules import classify, kind_of
 from .listing import band_of, coordinate_text, listing, mode_shapes
 from .scope import apply_scope, reduced_directions
 from .small import small_modes
 from .result import BAND_DENSE_MAX, DENSE_MAX, STABILITY_ORDER, Modes, Verdict
 
 __all__ = ["Modes", "Verdict", "modes", "STABILITY_ORDER", "tolerances", "tolerance_rule",
-           "stability", "worst"]
+           "classify", "kind_of", "worst"]
 
 #: path options the fused small-dense implementation takes (others: the general stage)
 FUSED_OPTIONS = frozenset({"sym_tol", "rayleigh_tol", "left", "companion_cond", "verify_tol",

@@ -368,13 +368,6 @@ def tolerances(sol, *, safety=10.0, stability_rtol=1e-12, stability_atol=0.0, ra
     return b.err, b.tol, b.tol_re, b.rigid
 
 
-def stability(delta, tol_re, rigid) -> list:
-    """stable / critical / unstable per eigenvalue: δ against its tolerance; rigid-body modes
-    (s = 0 within its error) are critical."""
-    return ["critical" if r else "stable" if d > t else "unstable" if d < -t else "critical"
-            for d, t, r in zip(delta, tol_re, rigid)]
-
-
 def worst(stabilities) -> str:
     """The verdict over modes: the worst of their stabilities ("stable" for none)."""
     return max(stabilities, key=STABILITY_ORDER.get) if len(stabilities) else "stable"

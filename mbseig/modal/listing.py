@@ -10,7 +10,8 @@ import warnings
 import numpy as np
 
 from ..errors import SolverError
-from .bounds import stability, worst
+from .bounds import worst
+from .rules import classify, kind_of
 from .result import Modes, Verdict
 from .scope import verdict as scoped_verdict
 
@@ -122,16 +123,9 @@ def listing(sol, b, *, N, coordinate_names, n_dominant, eta_warn, tolerances_use
     X = _columns(sol.vectors, sel, flip)  # the vectors gathered once, in the listed order
     Y = sol.left_vectors
     Y = X if Y is sol.vectors else (None if Y is None else _columns(Y, sel, flip))
-    stability_ = stability(delta, tol_s, is_rigid)
-    kind = []
-    for k in range(s.size):
-        if is_rigid[k]:
-            kd = "rigid-body"
-        elif abs(omega[k]) <= tol[k]:
-            kd = "overdamped" if delta[k] > 0 else "divergence"
-        else:
-            kd = "flutter" if stability_[k] == "unstable" else "oscillatory"
-        kind.append(kd)
+    stability_ = classify(delta, tol_s, is_rigid)
+    kind = [kind_of(st, d, w, t, r) for st, d, w, t, r in zip(
+        stability_, delta.tolist(), omega.tolist(), tol.tolist(), is_rigid.tolist(), strict=True)]
     with np.errstate(divide="ignore", invalid="ignore"):
         zeta = np.where((wn > 0) & ~is_rigid, delta / np.where(wn > 0, wn, 1.0), 0.0)
     shapes, dominant = mode_shapes(X, N, coordinate_names, n_dominant)

@@ -12,7 +12,8 @@ import numpy as np
 import scipy.linalg as sla
 
 from ..eigen import EPS
-from .bounds import Bounds, frequency_scale, numerical_rank, stability, worst
+from .bounds import Bounds, frequency_scale, numerical_rank, worst
+from .rules import classify, kind_of
 from .listing import account, mode_shapes
 from .result import Modes, Verdict
 
@@ -169,11 +170,9 @@ def small_listing(sol, b, *, N, coordinate_names, n_dominant, tolerances_used):
     Y = sol.left_vectors
     Y = X if Y is sol.vectors else (None if Y is None else _columns(Y, sel, flip, any_flip))
     tol, tol_s = tol_all[sel], b.tol_re[sel]
-    stability_ = stability(delta, tol_s, is_rigid)
-    kind = ["rigid-body" if r else ("overdamped" if d > 0 else "divergence") if abs(w) <= t
-            else "flutter" if st == "unstable" else "oscillatory"
-            for r, d, w, t, st in zip(is_rigid.tolist(), delta.tolist(), omega.tolist(),
-                                      tol.tolist(), stability_)]
+    stability_ = classify(delta, tol_s, is_rigid)
+    kind = [kind_of(st, d, w, t, r) for st, d, w, t, r in zip(
+        stability_, delta.tolist(), omega.tolist(), tol.tolist(), is_rigid.tolist(), strict=True)]
     pos = (wn > 0) & ~is_rigid
     zeta = np.where(pos, delta / np.where(wn > 0, wn, 1.0), 0.0)
     shapes, dominant = _shapes(X, N, coordinate_names, n_dominant)

@@ -39,7 +39,7 @@ from ..casefile.element_readers import ScalarUpdate
 from ..eigen import Problem, Request, solve
 from ..errors import MbseigError
 from ..linear import linearize
-from ..modal import stability, tolerances
+from ..modal import classify, tolerances
 from ..modal.scope import spectrum_verdict
 from ..model import Model
 from ..model.linear_case import LinearCase
@@ -155,7 +155,7 @@ def modal_point(model, eq, params, *, safety, stability_rtol, postures=posture, 
         _, _, tol, rigid = tolerances(sol, safety=safety, stability_rtol=stability_rtol)
         X = lin.N @ sol.vectors
         X = X / np.maximum(np.linalg.norm(X, axis=0), np.finfo(float).tiny)
-        verdict = spectrum_verdict(stability(-s.real, tol, rigid), rigid, sol.vectors,
+        verdict = spectrum_verdict(classify(-s.real, tol, rigid), rigid, sol.vectors,
                                    lin.rigid, lin.N)
     out_of_range = ([p["name"] for p in postures(model, eq.q) if not p["in_range"]]
                     if (getattr(model, "report", None) or {}).get("angles") else [])

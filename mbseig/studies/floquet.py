@@ -250,12 +250,12 @@ def _verdict(mu, bounds):
     """The verdict of the multipliers (:func:`mbseig.modal.scope.verdict` over each one's
     stability: unstable when |μ| − b > 1, stable when |μ| + b < 1, else critical) and the
     multiplier that decides it, (k, |μ_k|, b_k, margin)."""
+    from ..modal.rules import classify
     from ..modal.scope import verdict
 
     mod = np.abs(mu)
     upper, lower = mod + bounds, mod - bounds
-    stab = ["unstable" if lo > 1.0 else "stable" if up < 1.0 else "critical"
-            for lo, up in zip(lower.tolist(), upper.tolist())]
+    stab = classify(1.0 - mod, bounds)  # the one rule: margin 1 − |μ| against its bound
     word = verdict(stab).word
     if word == "unstable":
         k = int(np.argmax(lower))

@@ -27,6 +27,7 @@ import scipy.linalg as la
 from ..casefile.expr import evaluate
 from ..casefile.fields import TIME, uses_time
 from ..errors import CaseError, MbseigError
+from ..modal.rules import stability
 from ..model.timed import TrigSeries, sample_time
 from .floquet import FloquetError, FloquetResult, analyze, monodromy
 from .floquet_chebyshev import chebyshev_system
@@ -318,7 +319,7 @@ def frozen_summary(a) -> dict:
     _, lam = frozen_time(a)
     worst = float(lam.real.max()) + 0.0 if lam.size else 0.0  # (no -0)
     tol = 1e-9 * max(1.0, float(abs(lam).max()) if lam.size else 1.0)
-    verdict = "unstable" if worst > tol else "stable" if worst < -tol else "critical"
+    verdict = stability(-worst, tol)
     return {"instants": int(lam.shape[0]), "max_real_part": worst, "verdict": verdict,
             "note": "eigenvalues at frozen instants: not a stability criterion of a periodic "
                     "motion"}

@@ -46,6 +46,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import CaseError
+from ..modal.rules import kind_of, stability
 
 __all__ = ["SAFETY", "INVARIANT_TOL", "SteadyAnalysis", "analyze_steady", "cyclic_directions",
            "mode_rows", "steady_json", "mode_shape"]
@@ -86,10 +87,8 @@ def mode_rows(sol, *, safety=SAFETY, declared=None, formed_in=1) -> list:
         wd = float(s.imag) if s.imag > tol else 0.0
         delta = -float(s.real)
         wn = float(abs(s))
-        stab = "stable" if delta > tol else "unstable" if delta < -tol else "critical"
-        kind = ("rigid-body" if wn <= tol else
-                ("overdamped" if delta > 0 else "divergence") if wd == 0.0 else
-                ("flutter" if stab == "unstable" else "oscillatory"))
+        stab = stability(delta, tol)  # |δ| <= |s| <= τ for a rigid-body mode: critical
+        kind = kind_of(stab, delta, wd, tol, rigid=wn <= tol)
         rows.append({"rigid_body": None, "eigenvalue": [float(s.real), wd], "delta": delta,
                      "omega_n": wn,
                      "omega_d": wd, "freq_hz": wd / (2 * math.pi),
