@@ -123,7 +123,8 @@ PARAM = _simple("a finite number or an expression string",
                 lambda v: isinstance(v, str) or _real(v),
                 lambda v: isinstance(v, str) or math.isfinite(v))
 MODEL = instance("a model built by mbseig.load_case (Model or LinearCase)", "Model", "LinearCase")
-EQUILIBRIUM = instance("an Equilibrium (mbseig.equilibrium(model))", "Equilibrium")
+EQUILIBRIUM = instance("an Equilibrium (mbseig.equilibrium(model); a steady or periodic "
+                       "reference from mbseig.find_reference)", "Equilibrium")
 LINEAR = instance("a LinearModel (mbseig.linearize(model, eq))", "LinearModel")
 MODES = instance("a Modes result (mbseig.modes(lin))", "Modes")
 

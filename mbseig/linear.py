@@ -76,6 +76,9 @@ class LinearModel:
                        └ −M⁻¹Q   −M⁻¹P  ┘
     """
 
+    #: the reference motion this belongs to (mbseig.studies.reference): quadratic M, P, Q with its basis N
+    kind = "rest"
+
     M: np.ndarray
     P: np.ndarray
     Q: np.ndarray

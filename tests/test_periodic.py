@@ -92,7 +92,7 @@ def test_frozen_time_is_wrong_and_floquet_is_right(hanging, inverted, capsys):
     unstable with a margin far above its bound.  Inverted at w = 50 (above ω*): every instant
     with A w² cos(wt) > g has a real s > 0 (frozen: unstable), Floquet: |μ| = 1 within the
     bound (undamped: critical, not unstable)."""
-    from mbseig.studies.periodic import frozen_summary
+    from mbseig.studies.periodic_listing import frozen_summary
 
     fh, fi = hanging.floquet, inverted.floquet
     assert fh.verdict == "unstable" and frozen_summary(hanging)["verdict"] != "unstable"
@@ -105,7 +105,7 @@ def test_frozen_time_is_wrong_and_floquet_is_right(hanging, inverted, capsys):
 def test_pendulum_cases_expected(hanging, inverted):
     """The bundled pendulum cases' [expected] verdicts (Floquet and frozen-time), and their
     stated boundaries against scipy's characteristic values (the cases' sources), 1e-9."""
-    from mbseig.studies.periodic import frozen_summary
+    from mbseig.studies.periodic_listing import frozen_summary
 
     for a, path in ((hanging, HANGING), (inverted, INVERTED)):
         exp = read_case(path).data["expected"]

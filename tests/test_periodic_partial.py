@@ -15,7 +15,7 @@ def test_partial_method_matches_full_monodromy(capsys):
     multiplier of the full monodromy within the two methods' bounds and the same verdict
     (tolerances 1e-8/1e-10 here to keep the suite fast); the modes JSON of ``--n-modes`` has the
     §8 keys; K beyond what ARPACK can give is refused in one line."""
-    from mbseig.cli.periodic_modes import partial_json
+    from mbseig.studies.periodic_listing import partial_json
     from mbseig.studies.periodic import periodic_analysis
     from mbseig.studies.periodic_partial import periodic_partial
 

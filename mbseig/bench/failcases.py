@@ -269,7 +269,8 @@ def driven_pendulum_frozen_time():
     from scipy.special import mathieu_a, mathieu_b
 
     from ..casefile import read_case
-    from ..studies.periodic import frozen_summary, periodic_analysis
+    from ..studies.periodic import periodic_analysis
+    from ..studies.periodic_listing import frozen_summary
 
     out = {}
     for key, name in (("hanging", "pendulum_shaken_pivot"),

@@ -13,7 +13,7 @@ from ..errors import CaseError, MbseigError
 from ..numerics import jsonable
 
 __all__ = ["add_case_arguments", "case_kwargs", "print_json", "print_reactions", "number_option",
-           "output_notes", "equilibrium_notes", "moving_case", "case_command",
+           "output_notes", "equilibrium_notes", "case_command",
            "analyzed", "parameter_units_of", "add_progress_options", "show_progress",
            "add_study_options", "KeptStudy", "resume_dir"]
 
@@ -280,44 +280,29 @@ def equilibrium_notes(eq):
     return [str(n) for n in (getattr(eq, "notes", None) or ())]
 
 
-def moving_case(command, spec):
-    """The module that runs ``command`` on a case with a ``[motion]`` table (DESIGN §8), or None
-    for a static case: ``mbseig.cli.{kind}_{command}`` with kind ``steady`` or ``periodic``
-    (:func:`mbseig.casefile.motion_kind`).  A command that has none for that kind is refused in
-    one line, never run as if the case were at rest."""
-    import importlib
+def case_command(command, rest=None, **moving):
+    """``mbseig COMMAND`` on a case whatever reference motion it declares: the case is read once,
+    its reference is the one its ``[motion]`` table declares
+    (:func:`mbseig.studies.reference.reference_kind`: rest, steady or periodic) and ``run(args,
+    spec)`` of that reference runs (``rest``, and ``steady=`` / ``periodic=`` where the command
+    analyses those); a reference the command does not analyse is refused in one line, never run
+    as if the case were at rest.  Used as ``@case_command("frf")`` on the rest handler, or
+    called with every handler."""
+    def bind(run_rest):
+        handlers = {"rest": run_rest, **moving}
 
-    from ..casefile import motion_kind
-
-    try:
-        kind = motion_kind(spec.data)
-    except CaseError as exc:
-        raise exc.located(file=spec.source) from None
-    if kind is None:
-        return None
-    try:
-        return importlib.import_module(f".{kind}_{command}", __package__)
-    except ModuleNotFoundError as exc:
-        if exc.name != f"{__package__}.{kind}_{command}":
-            raise
-        raise CaseError(f"mbseig {command} does not analyse {kind} motions ([motion] with "
-                        f"{'period' if kind == 'periodic' else 'speed'})", element="motion",
-                        file=spec.source) from None
-
-
-def case_command(command):
-    """Decorate ``run(args, spec)`` of ``mbseig COMMAND`` for a case at rest: the case is read
-    once; a case with a ``[motion]`` table goes to its own module instead (:func:`moving_case`),
-    or is refused in one line."""
-    def wrap(run_static):
-        @functools.wraps(run_static)
+        @functools.wraps(run_rest)
         def run(args) -> int:
             from ..studies.point import as_spec
+            from ..studies.reference import reference_kind
 
             spec = as_spec(args.case)
-            moving = moving_case(command, spec)
-            if moving is not None:
-                return moving.run(args, spec)
-            return run_static(args, spec)
+            kind = reference_kind(spec)
+            handler = handlers.get(kind)
+            if handler is None:
+                raise CaseError(f"mbseig {command} does not analyse {kind} motions ([motion] "
+                                f"with {'period' if kind == 'periodic' else 'speed'})",
+                                element="motion", file=spec.source)
+            return handler(args, spec)
         return run
-    return wrap
+    return bind if rest is None else bind(rest)

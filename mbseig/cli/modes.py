@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+from .common import analyzed
+
 import math
 
 import numpy as np
 
-from ..display import fmt_complex, shown
+from ..display import fmt, fmt_complex, shown
 
 from ..eigen import SOLVERS
 from ..errors import CaseError, MbseigError
@@ -127,8 +129,7 @@ def _design(args, spec, a):
     return sens, energy
 
 
-@case_command("modes")
-def run(args, spec) -> int:
+def run_rest(args, spec) -> int:
     a = analyze(spec, solver=args.solver, modes_options=_partial_options(args) or None,
                 refine=_refine_request(args), **case_kwargs(args))
     sens, energy = _design(args, spec, a)
@@ -175,3 +176,144 @@ def run(args, spec) -> int:
     if args.reactions:
         print_reactions(reaction_forces(a.model, eq))
     return 0
+
+
+# ---- steady motion (steady reference: [motion] with speed)
+# ``mbseig modes CASE`` on a steady motion (DESIGN §8, ``[motion]`` with ``speed``): the steady
+# state, its contact forces and the modes of the first-order descriptor system
+# (:mod:`mbseig.studies.steady_modes`).
+# options of the static command that a steady motion does not take (refused, never ignored)
+_STATIC_ONLY = ("n_modes", "target_hz", "band_hz", "refine_modes", "refine_fmax", "accuracy")
+
+
+def run_steady(args, spec) -> int:
+    from ..studies.steady_modes import analyze_steady, steady_json
+
+    for opt in _STATIC_ONLY:
+        if getattr(args, opt, None) is not None:
+            raise CaseError(f"--{opt.replace('_', '-')} does not apply to a steady motion "
+                            f"(all modes of the descriptor pencil are solved)",
+                            element="command line")
+    for opt in ("sensitivities", "energy", "reactions"):
+        if getattr(args, opt, False):
+            raise CaseError(f"--{opt} is not available for a steady motion",
+                            element="command line")
+    if getattr(args, "solver", "auto") not in ("auto", "descriptor-qz"):
+        raise CaseError(f"solver {args.solver!r} does not apply to a steady motion (its "
+                        f"linearization is a first-order pencil: descriptor-qz)",
+                        element="command line")
+    a = analyzed(args, spec, analyze_steady)
+    out = steady_json(a)
+    if args.json:
+        return print_json(out)
+    m = out["motion"]
+    print(f"case {out['case']}: steady motion at {m['speed']:g} m/s along "
+          f"{motion_direction(m['direction'])}"
+          + (f", yaw rate {m['yaw_rate']:g} rad/s" if m["yaw_rate"] else "")
+          + f"; {out['n_coordinates']} coordinates, {out['n_constraints']} holonomic and "
+          f"{out['n_velocity_constraints']} velocity constraints, {out['dof']} positions, "
+          f"{out['n_velocities']} independent velocities")
+    print(f"steady state: residual {out['equilibrium']['residual']:.3g} after "
+          f"{out['equilibrium']['iterations']} iterations")
+    for c in out["contacts"]:
+        print(f"  contact {c['name']}: normal force {c['force']:.6g} N, "
+              f"{'active' if c['active'] else 'RELEASED'}")
+    for note in out["equilibrium"]["notes"]:
+        print(f"  {note}")
+    print(f"verdict: {out['verdict']} ({out['solver']})")
+    if out.get("verdict_scope"):
+        print(f"verdict scope: {out['verdict_scope']}")
+    print(f"{'#':>3} {'Re s':>14} {'Im s':>14} {'f_n [Hz]':>11} {'zeta':>8}  {'kind':<12} "
+          f"{'stability':<9} dominant")
+    for r in out["modes"]:  # the zero rule: a value within its bound τ of 0 reads 0
+        re, im = r["eigenvalue"]
+        b = r["tolerance"]
+        zeta = 0.0 if shown(re, b) == 0 else r["zeta"]
+        what = r.get("rigid_body") or ", ".join(nm for nm, _ in r.get("dominant", []))
+        print(f"{r['index']:>3} {fmt(re, b, '.8g'):>14} {fmt(im, b, '.8g'):>14} "
+              f"{fmt(r['freq_n_hz'], b / (2 * math.pi), '.6g'):>11} {zeta:>8.4f}  "
+              f"{r['kind']:<12} {r['stability']:<9} {what}")
+    print("values within their error bound of 0 are printed as 0 (the JSON keeps them)")
+    return 0
+
+
+def motion_direction(d) -> str:
+    """A unit direction as a person reads it: 'x', '−y', or '(0.6, 0.8, 0)'."""
+    axes = [k for k, c in enumerate(d) if c != 0]
+    if len(axes) == 1:
+        return ("−" if d[axes[0]] < 0 else "") + "xyz"[axes[0]]
+    return "(" + ", ".join(f"{c:.4g}" for c in d) + ")"
+
+
+# ---- periodic motion (periodic reference: [motion] with period)
+# ``mbseig modes CASE`` on a periodic case (DESIGN §8, "Periodic motions"): the reference
+# motion, the Floquet multipliers with their error bounds and the verdict; the frozen-time
+# eigenvalues are listed beside them as what a frozen-time analysis would (wrongly) conclude.
+# 
+# ``--n-modes K``: the K multipliers of largest modulus by the partial method (Arnoldi on the
+# monodromy operator, :mod:`mbseig.studies.periodic_partial`), without forming the monodromy
+# matrix; the frozen-time summary is left out (it needs every eigenvalue at 64 instants).
+def _run_partial(args, spec) -> int:
+    from ..studies.periodic_listing import partial_json
+    from ..studies.periodic_partial import periodic_partial
+
+    if args.band_hz is not None or args.target_hz is not None:
+        raise CaseError("--target-hz and --band-hz select eigenvalues of a static case; a "
+                        "periodic case takes --n-modes K (the K largest |mu|)",
+                        element="command line", file=spec.source)
+    kw = case_kwargs(args)
+    p = periodic_partial(spec, k=args.n_modes, config=kw["config"], params=kw["params"])
+    out = partial_json(p)
+    if args.json:
+        return print_json(out)
+    fl = out["floquet"]
+    print(f"case {out['case']}: periodic, T = {fl['period']:.6g} s, {out['n_coordinates']} "
+          f"coordinates, {out['n_constraints']} constraints, {out['dof']} DOF")
+    print(f"solver: {out['solver']}")
+    print(f"the {len(fl['multipliers'])} largest of {fl['partial']['of']} multipliers:")
+    _table(fl)
+    return 0
+
+
+def _table(fl):
+    print(f"{'k':>3} {'multiplier':>30} {'|mu|':>12} {'bound':>9} {'exponent':>28}")
+    T = float(fl["period"])
+    for k, (mu, ex, b) in enumerate(zip(fl["multipliers"], fl["exponents"], fl["error_bounds"])):
+        m = abs(complex(*mu))
+        be = b / (m * T) if m else b  # the exponent's bound, to first order
+        # the zero rule (mbseig.display): a part within its bound of 0 reads 0
+        print(f"{k + 1:>3} {fmt(mu[0], b, '.8g'):>14} {fmt(mu[1], b, '+.8g'):>14}j {m:>12.8g} "
+              f"{b:>9.1e} {fmt(ex[0], be, '.6g'):>13} {fmt(ex[1], be, '+.6g'):>13}j")
+    d = fl["decided_by"]
+    print(f"verdict: {fl['verdict']} (multiplier {d['index'] + 1}: |mu| = {d['modulus']:.10g} "
+          f"± {d['bound']:.1e}, margin {d['margin']:.3g})")
+
+
+def run_periodic(args, spec) -> int:
+    if getattr(args, "n_modes", None) is not None:
+        if args.n_modes < 1:
+            raise CaseError(f"--n-modes must be a positive integer, got {args.n_modes}",
+                            element="command line", file=spec.source)
+        return _run_partial(args, spec)
+    from ..studies.periodic import periodic_analysis
+    from ..studies.periodic_listing import periodic_json
+
+    a = analyzed(args, spec, periodic_analysis)
+    out = periodic_json(a)
+    if args.json:
+        return print_json(out)
+    fl, ref = out["floquet"], a.reference
+    print(f"case {out['case']}: periodic, T = {fl['period']:.6g} s, {out['n_coordinates']} "
+          f"coordinates, {out['n_constraints']} constraints, {out['dof']} DOF")
+    print(f"reference motion: {ref.method}; residual {ref.residual:.2e} after {ref.iterations} "
+          "iterations")
+    print(f"solver: {a.floquet.method}; Liouville check {fl['det_check']:.1e}")
+    _table(fl)
+    fz = out["frozen_time"]
+    print(f"frozen-time eigenvalues ({fz['instants']} instants): max Re s = "
+          f"{fz['max_real_part']:.4g}, would say {fz['verdict']} (not a criterion here)")
+    return 0
+
+
+#: the command on every reference the case declares (its [motion] table)
+run = case_command("modes", rest=run_rest, steady=run_steady, periodic=run_periodic)

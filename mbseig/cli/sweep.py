@@ -3,6 +3,11 @@ tracked modes, stability boundaries, folds, two-parameter boundary curves."""
 
 from __future__ import annotations
 
+from ..numerics import jsonable
+import json
+import sys
+from ..studies.tracking import parse_range
+
 from pathlib import Path
 
 from ..casefile import parse_param_overrides
@@ -47,8 +52,7 @@ def register(sub):
     p.set_defaults(run=run)
 
 
-@case_command("sweep")
-def run(args, spec) -> int:
+def run_rest(args, spec) -> int:
     from ..studies.sweep import parse_range, progress_bar
 
     ranges = [parse_range(item) for item in args.param if ":" in item]
@@ -165,3 +169,175 @@ def _campbell(args, spec, ranges, fixed, out_dir, paths, units) -> dict:
     figure = plots_spatial.campbell_diagram(res, units=units)
     paths.append(plots_spatial.save(figure, Path(out_dir) / "campbell.png"))
     return {"campbell": out, "critical_speeds": out["critical_speeds"]}
+
+
+# ---- steady motion (steady reference: [motion] with speed)
+# ``mbseig sweep CASE --param v=START:STOP:COUNT`` on a steady motion (DESIGN §8): the modes at
+# every grid value, the flutter (Hopf), divergence and lift-off boundaries refined between them
+# (:mod:`mbseig.studies.steady_sweep`), as JSON (``--json``) and ``sweep.json`` in ``--out``.
+def run_steady(args, spec) -> int:
+    from ..studies.runners import progress_bar
+    from ..studies.steady_sweep import steady_sweep
+    from ..studies.tracking import parse_range
+
+    ranges = [parse_range(item) for item in args.param if ":" in item]
+    fixed = parse_param_overrides([item for item in args.param if ":" not in item])
+    if len(ranges) != 1:
+        raise CaseError("a steady-motion sweep takes one --param NAME=START:STOP:COUNT",
+                        element="--param")
+    name, values = ranges[0]
+    span = abs(values[-1] - values[0])
+    xtol = float(getattr(args, "xtol_rel", 1e-10) or 1e-10) * span
+    folder = Path(args.out) if args.out else Path(f"sweep-{spec.name}"
+                                                  + (f"-{args.config}" if args.config else ""))
+    bar = progress_bar() if show_progress(args) else None
+    # Ctrl-C: the finished points kept (--resume DIR, else OUT-resume) and said in one line
+    with KeptStudy(getattr(args, "resume", None), resume_dir(folder), len(values),
+                   close=bar.close if bar is not None else None) as kept:
+        try:
+            try:
+                res = steady_sweep(spec, name, values, config=args.config, fixed=fixed,
+                                   xtol=min(xtol, 1e-11 * max(1.0, abs(values[-1]))),
+                                   jobs=getattr(args, "jobs", None), progress=bar,
+                                   resume=kept.checkpoint)
+            finally:
+                if bar is not None:
+                    bar.close()
+            return _write(args, spec, res, name, values, folder)
+        except KeyboardInterrupt as exc:
+            return kept.say(exc)
+
+
+def _write(args, spec, res, name, values, folder) -> int:
+    out = {"case": spec.name, **res.as_dict()}
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "sweep.json").write_text(json.dumps(jsonable(out), indent=1, allow_nan=False))
+    out["outputs"] = [str(folder / "sweep.json")]
+    if args.json:
+        print_json(out)
+        return 0
+    print(f"case {spec.name}: steady motion swept over {name} = {values[0]:g} … {values[-1]:g} "
+          f"({len(values)} points)")
+    for b in res.boundaries:
+        extra = f", {b['contact']}" if "contact" in b else (
+            f", ω = {b['frequency']:.6g} rad/s" if "frequency" in b else "")
+        print(f"  {b['kind']} ({b['stability']}) at {name} = {b['value']:.12g}{extra}")
+    if not res.boundaries:
+        print("  no boundary in the range")
+    print(f"written: {folder / 'sweep.json'}")
+    return 0
+
+
+# ---- periodic motion (periodic reference: [motion] with period)
+# ``mbseig sweep CASE --param NAME=START:STOP:COUNT`` on a periodic case: the Floquet verdict
+# at every point and the ``boundaries`` where it changes (flip / fold / secondary, loss /
+# recovery), located to 1e-8 relative; ``--out DIR`` also gets ``sweep.json``.
+# 
+# With two ranges (``--param A=...:...:n --param B=...:...:m``) it writes the stability chart over
+# the grid (the Ince–Strutt chart of a Mathieu-type system): ``chart.png`` and ``chart.json`` (the
+# verdict, max|μ| and the deciding bound at every point, and where the verdict changes along
+# the first parameter, each grid bracket located to 1e-8 relative) in ``--out DIR`` (default
+# ``sweep-CASE``).
+def run_periodic(args, spec) -> int:
+    ranges = [parse_range(item) for item in args.param if ":" in item]
+    fixed = parse_param_overrides([item for item in args.param if ":" not in item])
+    if len(ranges) not in (1, 2):
+        raise CaseError("a sweep of a periodic case takes one range --param NAME=START:STOP:COUNT "
+                        f"(or two for a stability chart; got {len(ranges)})", element="--param",
+                        file=spec.source)
+    for name, _ in ranges:
+        if name not in spec.parameters:
+            raise CaseError(f"unknown parameter {name!r}", element="--param", file=spec.source)
+    if len(ranges) == 2 and ranges[0][0] == ranges[1][0]:
+        raise CaseError(f"the two ranges sweep the same parameter {ranges[0][0]!r}",
+                        element="--param", file=spec.source)
+    show = show_progress(args)
+    open_line = []  # a progress line not ended yet
+
+    def progress(done, total):
+        print(f"\rpoint {done}/{total}", end="" if done < total else "\n", file=sys.stderr)
+        open_line[:] = [True] if done < total else []
+
+    def end_line():
+        if open_line:
+            print(file=sys.stderr)
+            open_line.clear()
+
+    total = 1
+    for _, values in ranges:
+        total *= len(values)
+    stem = spec.name + (f"-{args.config}" if args.config else "")
+    folder = args.out or f"sweep-{stem}"
+    # Ctrl-C: the finished points kept (--resume DIR, else OUT-resume) and said in one line
+    with KeptStudy(getattr(args, "resume", None), resume_dir(folder), total,
+                   close=end_line) as kept:
+        study = {"progress": progress if show else None, "jobs": getattr(args, "jobs", None),
+                 "resume": kept.checkpoint}
+        try:
+            if len(ranges) == 2:
+                return _chart(args, spec, ranges, fixed, study)
+            return _periodic_sweep(args, spec, ranges, fixed, study)
+        except KeyboardInterrupt as exc:
+            return kept.say(exc)
+
+
+def _periodic_sweep(args, spec, ranges, fixed, study) -> int:
+    from ..studies.periodic_sweep import periodic_sweep
+
+    (name, values), = ranges
+    sweep = periodic_sweep(spec, name, values, config=args.config, fixed=fixed, **study)
+    out = sweep.to_dict()
+    if args.out:
+        folder = Path(args.out)
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / "sweep.json").write_text(json.dumps(jsonable(out), indent=1) + "\n")
+    if args.json:
+        print_json(out)
+        return 0
+    print(f"case {sweep.case}: Floquet verdict over {name} ({len(values)} points)")
+    for pt in out["points"]:
+        print(f"  {name} = {pt['value']:<14.8g} {pt['verdict']:<9} max|mu| = "
+              f"{pt['spectral_radius']:.10g} ± {pt['error_bound']:.1e}")
+    for b in out["boundaries"]:
+        print(f"boundary: {name} = {b['value']:.12g} ({b['kind']}, {b['stability']}; {b['method']})")
+    if not out["boundaries"]:
+        print("no verdict change on this grid")
+    return 0
+
+
+def _chart(args, spec, ranges, fixed, study) -> int:
+    from ..plots import save
+    from ..studies.floquet_sweep import chart_figure
+    from ..studies.periodic_sweep import periodic_chart
+
+    res = periodic_chart(spec, ranges[0], ranges[1], config=args.config, fixed=fixed, **study)
+    out = res.to_dict()
+    stem = spec.name + (f"-{args.config}" if args.config else "")
+    folder = Path(args.out or f"sweep-{stem}")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / "chart.json").write_text(json.dumps(jsonable(out), indent=1) + "\n")
+    except OSError as exc:
+        raise CaseError(f"cannot write: {exc.strerror or exc}", element="--out",
+                        file=str(folder)) from None
+    fig = chart_figure(res.chart)
+    fig.axes[0].set_title(f"{spec.name}: Floquet stability chart")
+    save(fig, folder / "chart.png", element="--out")
+    out["files"] = [str(folder / "chart.json"), str(folder / "chart.png")]
+    if args.json:
+        return print_json(out)
+    (n1, v1), (n2, v2) = ranges
+    counts = {v: sum(1 for row in out["verdicts"] for x in row if x == v)
+              for v in ("stable", "critical", "unstable")}
+    print(f"case {res.case}: Floquet stability chart over {n1} ({len(v1)}) x {n2} ({len(v2)}): "
+          + ", ".join(f"{n} {v}" for v, n in counts.items()))
+    for e in out["boundaries"]:
+        print(f"  {e['verdicts'][0]} -> {e['verdicts'][1]} ({e['kind']}) at {n2} = "
+              f"{e['at'][n2]:.8g}: {n1} = {e['value']:.12g} (in [{e['bracket'][0]:.8g}, "
+              f"{e['bracket'][1]:.8g}]; {e['method']})")
+    print(f"wrote {folder / 'chart.json'} and {folder / 'chart.png'}")
+    return 0
+
+
+#: the command on every reference the case declares (its [motion] table)
+run = case_command("sweep", rest=run_rest, steady=run_steady, periodic=run_periodic)

@@ -29,6 +29,9 @@ class Equilibrium:
     ``path``: how it was reached (direct Newton or load continuation, iterations).
     """
 
+    #: the reference motion this belongs to (mbseig.studies.reference): an equilibrium
+    kind = "rest"
+
     q: np.ndarray
     lam: np.ndarray
     residual: float

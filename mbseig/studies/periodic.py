@@ -22,22 +22,19 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg as la
 
 from ..casefile.expr import evaluate
 from ..casefile.fields import TIME, uses_time
 from ..errors import CaseError, MbseigError
-from ..modal.rules import stability
-from ..model.timed import TrigSeries, sample_time
+from ..model.timed import sample_time
 from .floquet import FloquetError, FloquetResult, analyze, monodromy
 from .floquet_chebyshev import chebyshev_system
 from .floquet_paths import constrained_system
-from .floquet_sparse import as_operator, pattern_series
-from .periodic_motion import reference_motion
+from .floquet_sparse import as_operator
+from .periodic_motion import reference_motion, sample_linearization
 
 __all__ = ["PeriodicAnalysis", "periodic_analysis", "PeriodicLinearization",
-           "periodic_linearization", "period_of", "check_time_fields",
-           "frozen_time", "frozen_summary", "floquet_json", "reduced_exponents",
+           "periodic_linearization", "linearize_periodic", "timed_model", "period_of", "check_time_fields",
            "forget_kept", "TIMED_SECTIONS"]
 
 TIMED_SECTIONS = ("points", "joints", "forces")  # where a numeric field may use t
@@ -143,6 +140,9 @@ class PeriodicAnalysis:
     linearization (``samples`` instants) and the Floquet result; ``basis`` maps the Floquet
     state (y, p) at t = 0 to (δq, δq̇) in full coordinates."""
 
+    #: the reference motion this belongs to (mbseig.studies.reference): a periodic orbit
+    kind = "periodic"
+
     name: str
     parameters: dict
     timed: object = field(repr=False)
@@ -154,24 +154,17 @@ class PeriodicAnalysis:
     basis: np.ndarray = field(repr=False)
     system: object = field(repr=False)
 
+    @property
+    def verdict(self) -> str:
+        """The stability verdict of the Floquet multipliers."""
+        return self.floquet.verdict
 
-def _sample_linearization(reference, N, offset, *, sparse=False):
-    T = reference.period
-    model = reference.partition.timed
-    Cs, Ks, Js = [], [], []
-    for j in range(N):
-        t = offset + j * T / N
-        q, qd, _, lam = reference.at(t)
-        m = model.at(t)
-        K, C = m.force_jacobians(q, qd, dense=True)
-        K = np.asarray(K) + (np.asarray(m.constraint_hessian(q, lam, dense=True))
-                             if m.n_constraints else 0.0)
-        Cs.append(np.asarray(C))
-        Ks.append(K)
-        Js.append(model.phi_q(q, t))
-    if not sparse:
-        return [TrigSeries.fit(np.array(v), T, offset=offset) for v in (Cs, Ks, Js)]
-    return [pattern_series(v, T, offset=offset) for v in (Cs, Ks, Js)]
+    def to_json(self) -> dict:
+        """The ``mbseig modes --json`` object of a periodic case
+        (:func:`mbseig.studies.periodic_listing.periodic_json`)."""
+        from .periodic_listing import periodic_json
+
+        return periodic_json(self)
 
 
 def _system(M, fit, T, *, start=None):
@@ -191,6 +184,9 @@ def _relative_difference(a, b):
 class PeriodicLinearization:
     """The linearization along the reference motion, sampled twice (on N instants and on
     the grid shifted by half a step) as trigonometric series, and its projected systems."""
+
+    #: the reference motion this belongs to (mbseig.studies.reference): sampled A(t), the monodromy map
+    kind = "periodic"
 
     timed: object
     parameters: dict
@@ -233,12 +229,27 @@ def _periodic_linearization(spec, config, params, samples, max_samples):
     timed, parameters = timed_model(spec, config=config, params=params)
     try:
         ref = reference_motion(timed)
+    except MbseigError as exc:
+        raise exc.located(file=spec.source) from None
+    except (np.linalg.LinAlgError, ArithmeticError) as exc:
+        raise FloquetError(f"the reference motion failed: {exc}", element="motion",
+                           file=spec.source) from None
+    return linearize_periodic(timed, ref, samples=samples, max_samples=max_samples,
+                              parameters=parameters, file=spec.source)
+
+
+def linearize_periodic(timed, ref, *, samples=SAMPLES, max_samples=1024, parameters=None,
+                       file=None) -> PeriodicLinearization:
+    """The linearization of a timed model along its periodic reference motion ``ref``
+    (:func:`mbseig.studies.periodic_motion.reference_motion`), sampled on ``samples`` instants a
+    period, doubled up to ``max_samples`` until the shifted sampling agrees to 1e-10."""
+    try:
         T = timed.period
         M = ref.partition.M
         N = samples
         while True:
-            fit = _sample_linearization(ref, N, 0.0, sparse=True)
-            fit2 = _sample_linearization(ref, N, 0.5 * T / N, sparse=True)
+            fit = sample_linearization(ref, N, 0.0, sparse=True)
+            fit2 = sample_linearization(ref, N, 0.5 * T / N, sparse=True)
             probe = np.linspace(0.0, T, 7)[1:-1] + 0.01 * T
             diff = max(_relative_difference(a(t), b(t)) for a, b in zip(fit, fit2)
                        for t in probe)
@@ -248,10 +259,12 @@ def _periodic_linearization(spec, config, params, samples, max_samples):
         sys1 = _system(M, fit, T)
         sys2 = _system(M, fit2, T, start=sys1.path.bases[0])
     except MbseigError as exc:
-        raise exc.located(file=spec.source) from None
+        raise exc.located(file=file) from None
     except (np.linalg.LinAlgError, ArithmeticError) as exc:
-        raise FloquetError(f"the reference motion or its linearization failed: {exc}",
-                           element="motion", file=spec.source) from None
+        raise FloquetError(f"the linearization along the reference motion failed: {exc}",
+                           element="motion", file=file) from None
+    if parameters is None:
+        parameters = {k: v for k, v in timed.base.parameters.items() if k != TIME}
     return PeriodicLinearization(timed, parameters, ref, N, diff, sys1, sys2)
 
 
@@ -291,65 +304,3 @@ def _periodic_analysis(spec, config, params, rtols, samples, max_samples):
     basis = np.block([[N0, np.zeros((N0.shape[0], r))], [Nd0 - N0 @ G @ H, N0 @ G]])
     return PeriodicAnalysis(spec.name, lin.parameters, lin.timed, lin.reference, res,
                             lin.samples, lin.sampling_difference, r, basis, sys1)
-
-
-def frozen_time(analysis, *, instants=64):
-    """(times, eigenvalues) of the linearization frozen at instants of the period: what a
-    frozen-time analysis would report (M_r s² + C_r s + K_r on the null space at each instant,
-    without the motion's Ṅ terms).  Not a stability criterion of a periodic motion."""
-    T = analysis.floquet.period
-    C, K, J = _sample_linearization(analysis.reference, 8, 0.0)
-    M = analysis.reference.partition.M
-    times = np.arange(instants) * T / instants
-    out = []
-    for t in times:
-        Jt = J(t)
-        N = la.null_space(Jt) if Jt.shape[0] else np.eye(M.shape[0])
-        Mr, Cr, Kr = N.T @ M @ N, N.T @ C(t) @ N, N.T @ K(t) @ N
-        r = Mr.shape[0]
-        A = np.block([[np.zeros((r, r)), np.eye(r)],
-                      [-np.linalg.solve(Mr, Kr), -np.linalg.solve(Mr, Cr)]])
-        out.append(np.linalg.eigvals(A))
-    return times, np.array(out)
-
-
-def frozen_summary(a) -> dict:
-    """The frozen-time verdict: the largest real part of the eigenvalues of the linearization
-    frozen at 64 instants (not a stability criterion of a periodic motion)."""
-    _, lam = frozen_time(a)
-    worst = float(lam.real.max()) + 0.0 if lam.size else 0.0  # (no -0)
-    tol = 1e-9 * max(1.0, float(abs(lam).max()) if lam.size else 1.0)
-    verdict = stability(-worst, tol)
-    return {"instants": int(lam.shape[0]), "max_real_part": worst, "verdict": verdict,
-            "note": "eigenvalues at frozen instants: not a stability criterion of a periodic "
-                    "motion"}
-
-
-def floquet_json(analysis) -> dict:
-    """The §8 ``"floquet"`` object (and its extras: per-multiplier bounds, the deciding
-    multiplier and margin, Liouville's check, the method, tolerances and samples)."""
-    out = analysis.floquet.to_dict()
-    out["exponents"] = reduced_exponents(analysis.floquet.multipliers, analysis.floquet.period)
-    out["samples"] = analysis.samples
-    out["sampling_difference"] = analysis.sampling_difference
-    ref = analysis.reference
-    out["reference"] = {"method": ref.method, "residual": ref.residual,
-                        "iterations": ref.iterations}
-    out["time_dependent"] = list(analysis.timed.time_dependent)
-    return out
-
-
-def reduced_exponents(multipliers, period) -> list:
-    """[re, im] of the exponents ln(μ)/T, imaginary parts reduced modulo 2π/T into
-    (−π/T, π/T]."""
-    T = float(period)
-    w = 2 * math.pi / T
-    out = []
-    for mu in multipliers:
-        with np.errstate(divide="ignore"):
-            e = np.log(complex(mu)) / T
-        im = e.imag - w * math.floor((e.imag + math.pi / T) / w)
-        if im <= -math.pi / T:
-            im += w
-        out.append([float(e.real), float(im)])
-    return out

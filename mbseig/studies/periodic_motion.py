@@ -27,7 +27,8 @@ from .floquet import FloquetError
 
 _MARCH = 64  # instants of the marched assembly
 
-__all__ = ["Partitioned", "ReferenceMotion", "reference_motion", "shoot", "simulate"]
+__all__ = ["Partitioned", "ReferenceMotion", "reference_motion", "sample_linearization", "shoot",
+           "simulate"]
 
 
 class Partitioned:
@@ -142,6 +143,9 @@ class ReferenceMotion:
     """The T-periodic reference: its independent state at t = 0, how it was found (kinematics
     or shooting: residual ‖x(T) − x(0)‖, Newton iterations, where it started) and the dense
     solution of one period (None when fully driven)."""
+
+    #: the reference motion this belongs to (mbseig.studies.reference): a periodic orbit
+    kind = "periodic"
 
     partition: Partitioned = field(repr=False)
     period: float
@@ -314,3 +318,28 @@ def simulate(reference, x_start, periods, *, rtol=1e-11):
         raise FloquetError(f"the nonlinear simulation failed at t = {sol.t[-1]:g}: {sol.message}",
                            element="check")
     return sol.y.T
+
+
+def sample_linearization(reference, N, offset, *, sparse=False):
+    """The damping, stiffness and constraint Jacobian along the reference motion at N instants
+    of its period from ``offset``, fitted as trigonometric series (each entry's pattern
+    kept with ``sparse``): [C(t), K(t) + Σλ∇²Φ, Φ_q(t)]."""
+    from ..model.timed import TrigSeries
+    from .floquet_sparse import pattern_series
+
+    T = reference.period
+    model = reference.partition.timed
+    Cs, Ks, Js = [], [], []
+    for j in range(N):
+        t = offset + j * T / N
+        q, qd, _, lam = reference.at(t)
+        m = model.at(t)
+        K, C = m.force_jacobians(q, qd, dense=True)
+        K = np.asarray(K) + (np.asarray(m.constraint_hessian(q, lam, dense=True))
+                             if m.n_constraints else 0.0)
+        Cs.append(np.asarray(C))
+        Ks.append(K)
+        Js.append(model.phi_q(q, t))
+    if not sparse:
+        return [TrigSeries.fit(np.array(v), T, offset=offset) for v in (Cs, Ks, Js)]
+    return [pattern_series(v, T, offset=offset) for v in (Cs, Ks, Js)]

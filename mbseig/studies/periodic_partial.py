@@ -35,7 +35,8 @@ from scipy.optimize import linear_sum_assignment
 from ..errors import CaseError, MbseigError
 from .floquet import FloquetError, floquet_partial
 from .floquet_chebyshev import chebyshev_system
-from .periodic import periodic_linearization, reduced_exponents
+from .periodic import periodic_linearization
+from .periodic_listing import reduced_exponents
 
 __all__ = ["PartialAnalysis", "periodic_partial", "PARTIAL_RTOLS"]
 

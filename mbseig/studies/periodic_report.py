@@ -21,7 +21,8 @@ import numpy as np
 
 from ..errors import CaseError
 from .floquet_sweep import StabilityChart
-from .periodic import floquet_json, frozen_summary, frozen_time, periodic_analysis
+from .periodic import periodic_analysis
+from .periodic_listing import floquet_json, frozen_summary, frozen_time
 from .periodic_check import check_floquet
 from .periodic_sweep import periodic_sweep
 

@@ -13,22 +13,55 @@ factory) or an already built model.
 
 from __future__ import annotations
 
-import math
 
 from ..arguments import check
-from ..numerics import jsonable
-from .point import Analysis, analyze_model, as_spec
+from ..errors import CaseError
+from .point import Analysis, analyze_model, as_spec, modes_json
+from .reference import reference_kind
 
 __all__ = ["Analysis", "analyze", "analyze_model", "modes_json", "as_spec"]
 
 
 def analyze(case=None, *, config=None, params=None, solver="auto", constraint_stiffness=True,
-            modes_options=None, model=None, refine=None) -> Analysis:
-    """Run the pipeline on ``case`` (a path or a :class:`CaseSpec`), or on a built ``model``.
+            modes_options=None, model=None, refine=None):
+    """Run the whole pipeline on a case about the reference motion it declares.
 
-    refine : {"modes", "f_max", "accuracy", "max_elements"} to refine the case's
-        ``elements = "auto"`` beams for those modes (:mod:`mbseig.studies.refine`); a case's own
-        ``[refinement]`` table does the same.
+    Parameters
+    ----------
+    case : str, pathlib.Path or CaseSpec, optional
+        A case file or a read case (:func:`mbseig.read_case`); its ``[motion]`` table decides
+        the reference (:func:`mbseig.studies.reference.reference_kind`).
+    config : str, optional
+        The configuration (``[configurations.NAME]``).
+    params : dict, optional
+        Parameter overrides {name: value or expression}.
+    solver : str
+        The eigensolver path (``mbseig.eigen.SOLVERS``; "auto" chooses by structure).  At rest
+        only.
+    constraint_stiffness : bool
+        Keep the constraint forces' stiffness Σ λ ∇²Φ (False: the geometric stiffness left out,
+        for comparison).  At rest only.
+    modes_options : dict, optional
+        Options of :func:`mbseig.modes` (``n_modes``, ``target``, ``band``, tolerances).  At
+        rest only.
+    model : Model, optional
+        A built model instead of ``case`` (analysed at rest).
+    refine : dict, optional
+        {"modes", "f_max", "accuracy", "max_elements"} to refine the case's
+        ``elements = "auto"`` beams for those modes (:mod:`mbseig.studies.refine`); a case's
+        own ``[refinement]`` table does the same.  At rest only.
+
+    Returns
+    -------
+    Analysis, SteadyAnalysis or PeriodicAnalysis
+        The analysis of the case's reference: each has ``kind``, ``reference``, ``verdict`` and
+        ``to_json()``.
+
+    Examples
+    --------
+    >>> a = analyze("cases/pendulum.toml")  # doctest: +SKIP
+    >>> a.kind, a.verdict
+    ('rest', 'stable')
     """
     check("analyze", locals())
     opts = {"solver": solver, "constraint_stiffness": constraint_stiffness,
@@ -36,6 +69,9 @@ def analyze(case=None, *, config=None, params=None, solver="auto", constraint_st
     if model is not None:
         return analyze_model(model, **opts)
     spec = as_spec(case)
+    kind = reference_kind(spec)
+    if kind != "rest":  # the motion the case declares, never analysed as if at rest
+        return _analyze_moving(spec, kind, config, params, refine=refine, **opts)
     model = spec.build(config, **(params or {}))
     if refine or (getattr(model, "flexible", None) or {}).get("refinement"):
         from .refine import refine_analysis  # cases with beams to refine only
@@ -45,69 +81,21 @@ def analyze(case=None, *, config=None, params=None, solver="auto", constraint_st
     return analyze_model(model, **opts)
 
 
-def modes_json(a: Analysis) -> dict:
-    """The fixed ``mbseig modes --json`` object (extra keys only extend it)."""
-    from ..model.spatial_whirl import whirl  # spatial models only: off the start-up path
+def _analyze_moving(spec, kind, config, params, *, solver, constraint_stiffness, modes_options,
+                    refine):
+    """The analysis of a steady or periodic case; the options of a case at rest are refused,
+    never ignored."""
+    given = {"solver": solver != "auto", "constraint_stiffness": constraint_stiffness is not True,
+             "modes_options": bool(modes_options), "refine": bool(refine)}
+    bad = [k for k, v in given.items() if v]
+    if bad:
+        raise CaseError(f"{', '.join(bad)} does not apply to a {kind} motion (analyze takes "
+                        f"the whole spectrum of its linearization)", element="motion",
+                        file=spec.source)
+    if kind == "steady":
+        from .steady_modes import analyze_steady
 
-    md, lin, eq, model = a.modes, a.linear, a.eq, a.model
-    out = {
-        "case": model.name,
-        "parameters": dict(model.parameters),
-        "n_coordinates": int(model.n),
-        "n_constraints": int(model.n_constraints),
-        "n_redundant": int(eq.n_redundant),
-        "dof": int(lin.dof),
-        "solver": md.solver,
-        "equilibrium": {"residual": float(eq.residual), "iterations": int(eq.iterations),
-                        "notes": [str(n) for n in (getattr(eq, "notes", None) or ())]},
-        "verdict": md.verdict,
-        # what the verdict covers: a partial spectrum, the rigid-body modes by construction
-        "verdict_scope": getattr(md.verdict, "full_scope", ""),
-        "coverage": md.coverage,
-        "accounting": md.accounting,
-        "modes": [],
-        "solver_reason": md.solver_reason,
-        "n_infinite": int(md.n_infinite),
-        "redundant_constraints": list(eq.redundant),
-        "tolerances": {k: float(v) for k, v in md.tolerances.items() if isinstance(v, (int, float))},
-    }
-    if eq.contacts:  # DESIGN §8: each single-sided contact's force and state
-        out["contacts"] = [dict(c) for c in eq.contacts]
-    flexible = (getattr(model, "flexible", None) or {}).get("bodies")
-    if flexible:  # extension: theory, slenderness and mesh of each beam / FE body
-        out["flexible_bodies"] = {nm: dict(r) for nm, r in flexible.items()}
-    if a.refinement is not None:
-        out["refinement"] = a.refinement.as_dict()
-    rows = getattr(lin, "angle_rows", None)
-    angle_shapes = None
-    if rows is not None and rows.shape[0] and md.shapes.shape[0] == rows.shape[1]:
-        angle_shapes = rows @ md.shapes  # the named angles of each mode (same normalization)
-    for k in range(len(md)):
-        s = md.eigenvalues[k]
-        # extension: the whirl of each mode of a model with a rotor (docs/spatial.md)
-        w = whirl(model, eq.q, md.shapes[:, k], s) if md.shapes.shape[0] == model.n else None
-        out["modes"].append({
-            "index": k + 1,
-            "eigenvalue": [float(s.real), float(s.imag)],
-            "delta": float(md.delta[k]),
-            "omega_n": float(md.omega_n[k]),
-            "omega_d": float(md.omega_d[k]),
-            "freq_hz": float(md.freq_hz[k]),  # damped: omega_d / 2 pi
-            "freq_n_hz": float(md.omega_n[k] / (2 * math.pi)),  # natural: omega_n / 2 pi
-            "zeta": float(md.zeta[k]),
-            "stability": md.stability[k],
-            "kind": md.kind[k],
-            # the declared rigid-body direction this mode is (left out of the verdict), or None
-            "rigid_body": md.rigid_body[k] if md.rigid_body else None,
-            "backward_error": float(md.backward_error[k]),
-            "condition": float(md.condition[k]),
-            "tolerance": float(md.tolerance[k]),
-            "dominant": [[nm, float(v)] for nm, v in md.dominant[k]],
-            "multiplicity": int(md.multiplicity[k]) if md.multiplicity is not None else 1,
-            "flags": list(md.flags[k]) if md.flags else [],
-            **({} if w is None else {"whirl": w}),
-            **({} if angle_shapes is None else {"angles": {
-                nm: [float(angle_shapes[i, k].real), float(angle_shapes[i, k].imag)]
-                for i, nm in enumerate(lin.angle_names)}}),
-        })
-    return jsonable(out)
+        return analyze_steady(spec, config=config, params=params)
+    from .periodic import periodic_analysis
+
+    return periodic_analysis(spec, config=config, params=params)

@@ -107,6 +107,9 @@ class SteadyState:
     per wheel: contact, gauge) and μ₀ (two per wheel), the Newton record, and per wheel its
     normal force (N, > 0 pushing) and whether it is active."""
 
+    #: the reference motion this belongs to (mbseig.studies.reference): a steady motion
+    kind = "steady"
+
     q: np.ndarray
     qd: np.ndarray
     spin: np.ndarray
@@ -122,6 +125,9 @@ class SteadyState:
 class SteadyLinearization:
     """E Ẋ = A X, X = [x; z] (module docstring); q = q₀(t) + N x, [q̇ − q̇₀; Ω − Ω₀] =
     [N 0; 0 I](T z − S x)."""
+
+    #: the reference motion this belongs to (mbseig.studies.reference): descriptor E, A
+    kind = "steady"
 
     E: np.ndarray
     A: np.ndarray

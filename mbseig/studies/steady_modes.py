@@ -62,6 +62,9 @@ class SteadyAnalysis:
     """One steady motion analysed: model, motion, state, linearization, solution and the mode
     rows (dicts with the fields of ``modes --json``), with the verdict and notes."""
 
+    #: the reference motion this belongs to (mbseig.studies.reference): a steady motion
+    kind = "steady"
+
     model: object
     motion: object
     state: object
@@ -71,6 +74,15 @@ class SteadyAnalysis:
     verdict: str
     notes: tuple
     cyclic: object = None  # the declared rigid-body directions (Cyclic)
+
+    @property
+    def reference(self):
+        """The reference motion: the steady state."""
+        return self.state
+
+    def to_json(self) -> dict:
+        """The ``mbseig modes --json`` object of a steady motion (:func:`steady_json`)."""
+        return steady_json(self)
 
 
 def mode_rows(sol, *, safety=SAFETY, declared=None, formed_in=1) -> list:
