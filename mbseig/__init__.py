@@ -45,7 +45,7 @@ _LAZY = {
     "solve_qep": "eigen", "QEPSolution": "eigen",
     "check_modes": "check", "CheckResult": "check", "ModeCheck": "check",
     "analyze": "studies", "run_sweep": "studies", "SweepResult": "studies",
-    "write_report": "report",
+    "write_report": "studies.report_data", "report_data": "studies.report_data",
     "LinearCase": "model", "Model": "model",
     "MbseigError": "errors", "CaseError": "errors", "ExpressionError": "errors",
     "EquilibriumError": "errors", "SolverError": "errors", "SimulationError": "errors",

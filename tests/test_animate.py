@@ -91,7 +91,7 @@ def test_a_linear_case_has_nothing_to_animate(capsys):
 def test_report_embeds_one_animation_per_mode(tmp_path):
     """report.html carries one decodable, looping GIF per listed mode next to the still
     figures; in headless Chromium (when installed) every animation loads."""
-    from mbseig.report import write_report
+    from mbseig.studies.report_data import write_report
 
     md, page = write_report(CASES / "pendulum.toml", out_dir=tmp_path, run_check=False)
     html = page.read_text()

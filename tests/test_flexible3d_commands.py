@@ -78,7 +78,7 @@ def test_report_on_a_3d_flexible_rotor(tmp_path):
     """The report of the rotor: its speed sweep study adds the Campbell diagram, the critical
     speeds (at each, the mode's frequency equals the speed: ω = Ω to the printed 6 digits) and
     the unbalance response with its figures; the mode shapes draw the lowest 6 modes."""
-    from mbseig.report import write_report
+    from mbseig.studies.report_data import write_report
 
     path = small_rotor(tmp_path)
     out = tmp_path / "rep"

@@ -27,6 +27,18 @@ def test_import_linter_contracts_kept():
                         no_logo=True) == 0
 
 
+def test_contracts_hold_without_indirect_imports():
+    """Every contract is checked on the whole import graph: none allows indirect imports (the
+    report imports no computing stage even through another package)."""
+    import tomllib
+
+    contracts = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["importlinter"][
+        "contracts"]
+    names = {c["name"] for c in contracts}
+    assert {"pipeline layers", "the report computes nothing"} <= names
+    assert [c["name"] for c in contracts if c.get("allow_indirect_imports")] == []
+
+
 def test_no_import_cycles():
     """No module of mbseig imports, directly or through others, a module that imports it."""
     grimp = pytest.importorskip("grimp")  # installed with import-linter
@@ -105,7 +117,7 @@ def test_two_configuration_report_parses_the_case_once(monkeypatch, tmp_path):
     """A report of two configurations of the finger device reads and parses the case file once
     (exact count: 1; it used to be parsed five times)."""
     import mbseig.casefile as cf
-    from mbseig.report import write_report
+    from mbseig.studies.report_data import write_report
 
     calls = []
     real = cf.tomllib.loads

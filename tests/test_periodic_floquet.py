@@ -28,7 +28,8 @@ from mbseig.studies.floquet_paths import (
     floquet_of_orbit,
     periodic_orbit,
 )
-from mbseig.studies.floquet_sweep import chart_figure, stability_chart, verdict_changes
+from mbseig.plots.charts import chart_figure
+from mbseig.studies.floquet_sweep import stability_chart, verdict_changes
 
 # ---- reference systems ------------------------------------------------------------------
 _REFERENCE_SYSTEMS = """Reference periodic systems and their mappings onto the Mathieu equation.

@@ -11,7 +11,7 @@ from conftest import CASES, ROOT
 
 import mbseig
 from mbseig.cli import main
-from mbseig.report import write_report
+from mbseig.studies.report_data import write_report
 
 sys.path.insert(0, str(ROOT / "scripts"))
 import check_report_html  # noqa: E402
@@ -105,7 +105,7 @@ def test_report_on_a_linear_case(tmp_path):
     and leaves out posture, reactions and the drawing (it used to fail on the missing fields)."""
     from conftest import CASES
 
-    from mbseig.report import write_report
+    from mbseig.studies.report_data import write_report
 
     md_path, html_path = write_report(CASES / "rotating_mass.toml", out_dir=tmp_path)
     text = md_path.read_text()

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from ..errors import CaseError
 
-from pathlib import Path
 import math
 
 from .common import case_command
@@ -37,7 +36,6 @@ def register(sub):
 
 def _rotor_options(args, spec):
     """(speeds, unbalance) of the command line, checked: one line naming the option if bad."""
-    from ..errors import CaseError
     from ..studies.sweep import parse_range
 
     speeds = unbalance = None
@@ -63,11 +61,13 @@ def _rotor_options(args, spec):
     return speeds, unbalance
 
 
-def run_rest(args, spec) -> int:
-    from ..report import write_report
+def run_any(args, spec) -> int:
+    """The report of a case about the reference motion it declares (rest, steady or periodic:
+    :func:`mbseig.studies.report_data.write_report`, one path for all three)."""
+    from ..studies.report_data import write_report
 
     speeds, unbalance = _rotor_options(args, spec)
-    md, page = write_report(args.case, out_dir=args.out, configs=args.config,
+    md, page = write_report(spec, out_dir=args.out, configs=args.config,
                             all_configs=args.all_configs, run_check=not args.no_check,
                             jobs=args.jobs, studies=not args.no_studies,
                             sensitivities=not args.no_sensitivities, speeds=speeds,
@@ -76,51 +76,5 @@ def run_rest(args, spec) -> int:
     return 0
 
 
-# ---- steady motion (steady reference: [motion] with speed)
-# ``mbseig report CASE`` on a steady motion (DESIGN §8): report.md and a self-contained
-# report.html on the page every motion shares, with the motion, the steady state (residual,
-# spins, each wheel's normal force and state), the modes with their verdict, shapes and pole map,
-# and the time-domain check (unless ``--no-check``).  Computed by
-# :mod:`mbseig.studies.steady_report`, formatted by :mod:`mbseig.report.steady`.
-def run_steady(args, spec) -> int:
-    from ..report.steady import write_steady_report
-    from ..studies.steady_report import steady_report_data
-
-    configs = getattr(args, "config", None) or [None]
-    if len(configs) > 1 or getattr(args, "all_configs", False):
-        raise CaseError("a steady-motion report covers one configuration (one --config)",
-                        element="command line", file=spec.source)
-    rep = steady_report_data(spec, config=configs[0],
-                             run_check=not getattr(args, "no_check", False))
-    out = Path(args.out) if args.out else Path("reports") / spec.name
-    md, page = write_steady_report(rep, spec, out)
-    print(f"wrote {md} and {page}")
-    return 0
-
-
-# ---- periodic motion (periodic reference: [motion] with period)
-# ``mbseig report CASE`` on a periodic case (DESIGN §8): report.md and a self-contained
-# report.html with the Floquet multipliers and their bounds, the verdict and what decided it, the
-# frozen-time eigenvalues beside them (not a criterion), the multipliers on the unit circle, the
-# time-domain check (unless ``--no-check``) and the ``[[report.studies]]`` sweeps (unless
-# ``--no-studies``; a study with ``lines`` also draws the stability chart).  Computed by
-# :mod:`mbseig.studies.periodic_report`, formatted by :mod:`mbseig.report.periodic`.
-def run_periodic(args, spec) -> int:
-    from ..report.periodic import write_periodic_report
-    from ..studies.periodic_report import periodic_report_data
-
-    configs = getattr(args, "config", None) or [None]
-    if len(configs) > 1 or getattr(args, "all_configs", False):
-        raise CaseError("a periodic-motion report covers one configuration (one --config)",
-                        element="command line", file=spec.source)
-    rep = periodic_report_data(spec, config=configs[0],
-                               run_check=not getattr(args, "no_check", False),
-                               studies=not getattr(args, "no_studies", False))
-    out = Path(args.out) if args.out else Path("reports") / spec.name
-    md, page = write_periodic_report(rep, spec, out)
-    print(f"wrote {md} and {page}")
-    return 0
-
-
 #: the command on every reference the case declares (its [motion] table)
-run = case_command("report", rest=run_rest, steady=run_steady, periodic=run_periodic)
+run = case_command("report", rest=run_any, steady=run_any, periodic=run_any)

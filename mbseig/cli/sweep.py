@@ -307,7 +307,7 @@ def _periodic_sweep(args, spec, ranges, fixed, study) -> int:
 
 def _chart(args, spec, ranges, fixed, study) -> int:
     from ..plots import save
-    from ..studies.floquet_sweep import chart_figure
+    from ..plots.charts import chart_figure
     from ..studies.periodic_sweep import periodic_chart
 
     res = periodic_chart(spec, ranges[0], ranges[1], config=args.config, fixed=fixed, **study)

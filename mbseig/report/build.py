@@ -1,4 +1,6 @@
-"""Stability reports: ``report.md`` and a self-contained ``report.html`` per case.
+"""Stability reports: ``report.md`` and a self-contained ``report.html`` per case, rendered
+from what :func:`mbseig.studies.report_data.report_data` computed (this package computes
+nothing: the layer contract "the report computes nothing" holds without indirect imports).
 
 First the summary (:mod:`mbseig.report.summary`).  For each configuration (all of the case's
 ``[configurations]`` with ``all_configs``): the model summary, the equilibrium (posture,
@@ -28,111 +30,77 @@ links them.
 
 from __future__ import annotations
 
-import hashlib
-import os
-import time
 from pathlib import Path
 
-from ..studies.campbell import is_rotor
-from ..studies.point import as_spec
-from ..studies.report_studies import study_configuration
 from .page import head_blocks, page_blocks, write_page
+from .provenance import provenance
 from .sections import configuration_blocks
-from .study_blocks import check_study_unbalance, rotor_section, study_section
+from .study_blocks import rotor_section, study_section
 from .summary import comparison_blocks, summary_blocks
-from .units import parameter_units
 
-__all__ = ["build_report", "write_report", "provenance"]
-
-
-def provenance(case) -> dict:
-    """mbseig version, date (UTC; ``SOURCE_DATE_EPOCH`` when set, for reproducible builds) and
-    the SHA-256 of the case file: what a reader needs to know which inputs made the report."""
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        ver = version("mbseig")
-    except PackageNotFoundError:  # not installed as a distribution (a source tree)
-        ver = "unknown"
-    epoch = os.environ.get("SOURCE_DATE_EPOCH")
-    try:
-        stamp = float(epoch) if epoch else time.time()
-    except ValueError:
-        stamp = time.time()
-    date = time.strftime("%Y-%m-%d", time.gmtime(stamp))
-    try:
-        digest = hashlib.sha256(Path(case.source).read_bytes()).hexdigest()
-    except (OSError, TypeError):
-        digest = "unavailable"
-    import numpy
-    import scipy
-
-    return {"mbseig": ver, "date": date, "case": Path(str(case.source)).name,
-            "sha256": digest, "numpy": numpy.__version__, "scipy": scipy.__version__}
+__all__ = ["build_report", "render_report", "provenance"]
 
 
-def build_report(case, *, configs=None, out_dir, run_check=True, jobs=None, studies=True,
-                 sensitivities=True, animations=True, speeds=None, unbalance=None):
-    """Blocks of the report of ``case`` (a path or a parsed :class:`~mbseig.casefile.CaseSpec`,
-    read once) for ``configs`` (list of names; [None] for the base): title, provenance, table
-    of contents, summary, comparison, one section a configuration, the studies (and the rotor
-    over ``speeds``, module docstring)."""
-    case = as_spec(case)
+def build_report(data, out_dir, *, animations=True):
+    """Blocks of the report of a case at rest from its computed
+    :class:`~mbseig.studies.report_data.ReportData`: title, provenance, table of contents,
+    summary, comparison, one section a configuration, the studies (and the rotor over the
+    speeds asked for, module docstring)."""
+    case, configs, units = data.case, data.configs, data.units
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     stem = case.name
-    configs = configs or [None]
-    units = parameter_units(case)
-    base = case.build(configs[0])
-    head = head_blocks(stem, base.description or "", provenance(case), configs)
-    chosen = []
-    if studies:  # the studies that will run, their own unbalance checked before any work
-        for k, st in enumerate(getattr(base, "report", {}).get("studies", [])):  # a linear case has no [report]
-            if st.get("config") in configs or len(configs) > 1:
-                check_study_unbalance(case, st, f"report.studies[{k}]")
-                chosen.append((k, st))
-    summaries, cfg_blocks = [], []
-    for c in configs:
-        s = study_configuration(case, c, run_check=run_check)
-        cfg_blocks += configuration_blocks(case, s, out_dir, run_check=run_check, stem=stem,
+    head = head_blocks(stem, data.description, provenance(case), configs)
+    cfg_blocks = []
+    for s in data.summaries:
+        cfg_blocks += configuration_blocks(case, s, out_dir, run_check=data.run_check, stem=stem,
                                            units=units, animations=animations)
-        summaries.append(s)
     study_blocks, study_sums = [], []
-    for k, st in chosen:
-        b, s = study_section(case, st, out_dir, stem, jobs, units, unbalance=unbalance,
-                             label=f"report.studies[{k}]")
+    for d in data.studies:
+        b, s = study_section(d, units)
         study_blocks += b
         study_sums.append(s)
-    if speeds is not None:
-        study_blocks += rotor_section(case, speeds, out_dir, stem, jobs, units,
-                                      config=configs[0], unbalance=unbalance)
-    elif is_rotor(case, base) and not any(b[0] == "h3" and "Campbell" in b[1]
-                                          for b in study_blocks):
+    if data.rotor is not None:
+        study_blocks += rotor_section(data.rotor, units)
+    elif data.rotor_note and not any(b[0] == "h3" and "Campbell" in b[1] for b in study_blocks):
         study_blocks += [("h2", "Rotor"), ("p", "The case has a spinning rotor: a "
                           "[[report.studies]] sweep over its speed (or a speed range asked of "
                           "the report) adds its Campbell diagram, critical speeds and unbalance "
                           "response.")]
-    body = summary_blocks(case, summaries, study_sums, units, sensitivities, out_dir=out_dir,
-                          stem=stem)
+    body = summary_blocks(data.summaries, study_sums, units, data.sensitivities,
+                          out_dir=out_dir, stem=stem)
     if len(configs) > 1:
-        body += comparison_blocks(summaries, study_sums, units)
+        body += comparison_blocks(data.summaries, study_sums, units)
     body += cfg_blocks + study_blocks
     return page_blocks(head, body)
 
 
-def write_report(case, *, out_dir=None, configs=None, all_configs=False, run_check=True,
-                 jobs=None, studies=True, sensitivities=True, animations=True, speeds=None,
-                 unbalance=None):
-    """Write report.md and report.html (default directory reports/<case>); returns their paths.
-    ``animations=False`` leaves out the animated mode shapes (one GIF a mode); ``speeds`` and
-    ``unbalance``: the rotor section (module docstring).
+def render_report(data, out_dir, *, animations=True):
+    """Write report.md and report.html of computed report data
+    (:func:`mbseig.studies.report_data.report_data`) into ``out_dir``; returns their paths.
 
-    ``case`` is a path or a parsed :class:`~mbseig.casefile.CaseSpec`; it is read once."""
-    case = as_spec(case)
-    if all_configs:  # the base case first, then every named configuration
-        configs = [None] + sorted(case.configurations)
-    out = Path(out_dir) if out_dir else Path("reports") / case.name
-    blocks = build_report(case, configs=configs, out_dir=out, run_check=run_check, jobs=jobs,
-                          studies=studies, sensitivities=sensitivities, animations=animations,
-                          speeds=speeds, unbalance=unbalance)
-    return write_page(blocks, out, f"Stability report: {case.name}")
+    Parameters
+    ----------
+    data : ReportData
+        What the report shows; its ``kind`` (rest, steady, periodic) picks the page.
+    out_dir : str or pathlib.Path
+        The report's folder.
+    animations : bool
+        One looping GIF a mode (rest; False leaves them out).
+
+    Returns
+    -------
+    tuple of pathlib.Path
+        (report.md, report.html).
+    """
+    out = Path(out_dir)
+    if data.kind == "steady":
+        from .steady import write_steady_report
+
+        return write_steady_report(data.moving, data.case, out)
+    if data.kind == "periodic":
+        from .periodic import write_periodic_report
+
+        return write_periodic_report(data.moving, data.case, out)
+    blocks = build_report(data, out, animations=animations)
+    return write_page(blocks, out, f"Stability report: {data.case.name}")

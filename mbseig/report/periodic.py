@@ -23,8 +23,8 @@ import numpy as np
 from ..display import fmt, fmt_complex, shown
 from ..plots import save
 from ..plots.common import styled
-from ..studies.floquet_sweep import chart_figure
-from .build import provenance
+from ..plots.charts import chart_figure
+from .provenance import provenance
 from .page import head_blocks, page_blocks, write_page
 from .sections import describe, parameter_blocks
 from .summary import scope_sentences, verdict_cell

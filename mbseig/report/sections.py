@@ -178,14 +178,10 @@ def pole_blocks(listing, tag, path):
                          f"ω_n; numbers are the modes of the table")]
 
 
-def animation_blocks(model, q0, md, out_dir, prefix, *, frames=12, fps=10, count=None,
-                     listing=None):
+def animation_blocks(model, q0, md, out_dir, prefix, *, listing, frames=12, fps=10, count=None):
     """One looping GIF a listed mode (the lowest ``count``;
     :func:`mbseig.plots.animation.write_mode_gif`), shown side by side."""
     from ..plots.animation import oscillates, write_mode_gif
-    from ..studies.report_studies import listing_of_modes
-
-    listing = listing if listing is not None else listing_of_modes(md)
     items = []
     for k in range(len(md) if count is None else min(len(md), count)):
         path = write_mode_gif(model, q0, md.shapes[:, k], out_dir / f"{prefix}_mode{k + 1}.gif",

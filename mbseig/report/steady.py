@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import plots
-from .build import provenance
+from .provenance import provenance
 from .modes import check_table, mode_label
 from .page import head_blocks, page_blocks, write_page
 from .sections import MAX_DRAWN_MODES, describe, modes_blocks, parameter_blocks, pole_blocks

@@ -14,56 +14,26 @@ import numpy as np
 
 from .. import plots
 from ..display import fmt_complex
-from ..errors import CaseError
 from ..plots import rotor as rotor_plots
-from ..studies import write_outputs
-from ..studies.campbell import rotor_study
-from ..studies.report_studies import compare_study, sweep_study
 from .text import fmt
 from .units import with_unit
 
 __all__ = ["study_section", "compare_blocks", "rotor_blocks", "rotor_section"]
 
-
-def check_study_unbalance(case, study, label):
-    """Refuse, before any work, a ``[[report.studies]]`` entry's own ``unbalance`` that its
-    study could not honour: a sweep that does not set a rotor's speed, or ``at`` naming no point,
-    station or body of the model (the one-line errors :func:`study_section` would raise after
-    the configuration sections were drawn: :func:`build_report` calls it first)."""
-    from ..studies.campbell import speed_parameter
-    from ..studies.unbalance import unbalance_point
-
-    own = study.get("unbalance")
-    if not own or "compare" in study:
-        return
-    where = f"{label}.unbalance"
-    name, config = study["sweep"], study.get("config")
-    lo, hi = (float(v) for v in study["range"])
-    if not speed_parameter(case, name, [lo, hi], config=config):
-        raise CaseError(f"an unbalance response needs a sweep over a rotor's speed; {name} does "
-                        f"not set the speed of a rotor", element=where,
-                        file=getattr(case, "source", None))
-    try:
-        unbalance_point(case.build(config, **{name: lo}), own["at"])
-    except CaseError as exc:
-        raise CaseError(exc.message, file=getattr(case, "source", None), element=where) from None
+# what they format is computed by mbseig.studies.report_data (StudyData, RotorData)
 
 
-def study_section(case, study, out_dir, stem, jobs, units, *, unbalance=None, label=None):
-    """Blocks of one ``[[report.studies]]`` entry (``label`` names it in errors) and its
-    summary; the rotor's unbalance response takes the entry's own ``unbalance = {at, me}``,
-    else ``unbalance`` = (point, m·e) of the command line, else m·e = 1 kg m at the first disk."""
-    kind = "compare" if "compare" in study else "sweep"
+def study_section(data, units):
+    """Blocks of one ``[[report.studies]]`` entry and its summary, from its computed
+    :class:`~mbseig.studies.report_data.StudyData`."""
+    study, title = data.study, data.title
     config = study.get("config")
-    title = study.get("title", f"{kind} on {config}")
     blocks = [("h2", title)]
-    if kind == "compare":
-        return blocks + compare_blocks(compare_study(case, config)), {"title": title}
-    check_study_unbalance(case, study, label or "report.studies")  # before the sweep runs
-    sw = sweep_study(case, study, jobs=jobs)
+    if data.kind == "compare":
+        return blocks + compare_blocks(data.compare), {"title": title}
+    sw = data.sweep
     res, values, name = sw.result, sw.values, sw.parameter
-    sdir = out_dir / f"{stem}_{config}_{name}"
-    paths = write_outputs(res, sdir, units=units)
+    sdir, paths = data.folder, data.paths
     xtol = res.tolerances["xtol"]
     unit = units.get(name)
     rows = []
@@ -119,12 +89,8 @@ def study_section(case, study, out_dir, stem, jobs, units, *, unbalance=None, la
     for p in paths:
         if p.suffix == ".png":
             blocks.append(("img", p, f"{title}: {captions.get(p.stem, p.stem.replace('_', ' '))}"))
-    own = study.get("unbalance")  # checked by check_study_unbalance
-    rs = rotor_study(case, name, values, config=config, jobs=jobs,
-                     unbalance=(own["at"], float(own["me"])) if own else unbalance,
-                     xtol_rel=float(study.get("xtol_rel", 1e-10)))
-    if rs is not None:
-        blocks += rotor_blocks(rs, sdir, title, units)
+    if data.rotor is not None:
+        blocks += rotor_blocks(data.rotor, sdir, title, units)
     return blocks, {"title": title, "parameter": name, "config": config, "critical": crit,
                     "curves": sw.curves}
 
@@ -144,17 +110,16 @@ def compare_blocks(cmp):
             ("table", ["#", "s with Σλ∇²Φ", "s without", "|Δs|/|s|"], rows)]
 
 
-def rotor_section(case, speeds, out_dir, stem, jobs, units, *, config=None, unbalance=None):
-    """A report section of a rotor over ``speeds`` = (parameter, values) asked for by the
-    caller (not a ``[[report.studies]]`` entry): :func:`rotor_blocks`, or a sentence when the
-    parameter does not set a rotor's speed."""
-    name, values = speeds
+def rotor_section(data, units):
+    """A report section of a rotor over the speeds asked for by the caller (not a
+    ``[[report.studies]]`` entry), from its :class:`~mbseig.studies.report_data.RotorData`:
+    :func:`rotor_blocks`, or a sentence when the parameter does not set a rotor's speed."""
+    name, config = data.parameter, data.config
     title = f"Rotor over {name}" + (f" ({config})" if config else "")
-    rs = rotor_study(case, name, values, config=config, jobs=jobs, unbalance=unbalance)
-    if rs is None:
+    if data.rotor is None:
         return [("h2", title), ("p", f"{name} does not set the speed of a rotor of the case: "
                                      f"no Campbell diagram or unbalance response.")]
-    return [("h2", title)] + rotor_blocks(rs, out_dir / f"{stem}_rotor_{name}", title, units)
+    return [("h2", title)] + rotor_blocks(data.rotor, data.folder, title, units)
 
 
 def rotor_blocks(rs, out_dir, title, units):

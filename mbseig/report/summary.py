@@ -11,7 +11,6 @@ from pathlib import Path
 
 from .. import plots
 from ..display import shown
-from ..studies.report_studies import least_mode_sensitivities
 from .modes import read
 from .text import fmt
 from .units import with_unit
@@ -34,7 +33,7 @@ def margin_text(name, current, crit, unit, kind, *, verdict="stable"):
             f"{with_unit(fmt(crit, 6), unit)}")
 
 
-def summary_blocks(case, summaries, study_sums, units, sensitivities=True, *, out_dir=None,
+def summary_blocks(summaries, study_sums, units, sensitivities=None, *, out_dir=None,
                    stem="case"):
     """The summary first: the figure of every configuration's least-damped pole with the
     boundaries found (when ``out_dir`` is given), then per configuration the verdict, the
@@ -76,8 +75,8 @@ def summary_blocks(case, summaries, study_sums, units, sensitivities=True, *, ou
                              "margins to the boundaries found (where the present value lies, how "
                              "far the boundary is)"], rows))
     blocks += scope_sentences([(s["config"], s["verdict"]) for s in summaries])
-    if sensitivities:
-        blocks += sensitivity_blocks(case, summaries, units, out_dir=out_dir, stem=stem)
+    if sensitivities is not None:  # one ranking a configuration (mbseig.studies.report_data)
+        blocks += sensitivity_blocks(summaries, sensitivities, units, out_dir=out_dir, stem=stem)
     else:
         blocks.append(("p", "Eigenvalue sensitivities not computed (--no-sensitivities)."))
     return blocks
@@ -158,14 +157,13 @@ def _shown_pole(lm):
     return complex(shown(re, lm.get("bound_re")), shown(im, lm.get("bound_im")))
 
 
-def sensitivity_blocks(case, summaries, units, *, out_dir=None, stem="case", top=6):
+def sensitivity_blocks(summaries, rankings, units, *, out_dir=None, stem="case"):
     """The table of the parameters that move the least-damped mode most per relative change
     (:func:`mbseig.studies.report_studies.least_mode_sensitivities`), with units, and their
     tornado chart (when ``out_dir`` is given)."""
     rows, panels, notes = [], [], []
     unbounded = False
-    for s in summaries:
-        ranked = least_mode_sensitivities(case, s, top=top)
+    for s, ranked in zip(summaries, rankings, strict=True):
         if isinstance(ranked, str):
             notes.append(f"{s['config']}: sensitivities not computed ({ranked}).")
             continue
