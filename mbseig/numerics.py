@@ -350,7 +350,7 @@ def min_norm_projection(residual, jacobian, x, scales, *, tol, max_iter):
         if res <= tol:
             return x, res, True, total
         J = jacobian(x)
-        J = J.toarray() if hasattr(J, "toarray") else np.asarray(J)
+        J = J.toarray() if sp.issparse(J) else np.asarray(J)
         step = -np.linalg.lstsq(J, r, rcond=None)[0]
         x += step
         total += step

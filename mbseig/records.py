@@ -20,7 +20,8 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import field
 
-__all__ = ["Record", "optional", "internal"]
+__all__ = ["Record", "optional", "internal", "encode", "decode", "RecordFormatError",
+           "NOT_DATA_MODULES"]
 
 
 def optional(default=None):
@@ -65,3 +66,160 @@ class Record:
     def to_json(self) -> dict:
         """The fields in declaration order, without the internal and the unset optional ones."""
         return {f.name: v for f, v in self._present() if not f.metadata.get("internal")}
+
+
+# ---- records written and read back exactly: JSON and arrays, never pickle -----------------
+#
+# A study's results are kept between runs (mbseig.studies.resume) as one JSON document and the
+# arrays it refers to, in one ``.npz`` file read with ``allow_pickle=False``: reading builds
+# numbers, strings, containers, numpy arrays and scalars, scipy sparse matrices and mbseig's
+# own data classes (dataclasses of mbseig's modules, :class:`mbseig.modal.result.Verdict`),
+# each field set as written and no constructor or method of theirs run.  Nothing in a file can
+# name a function to call.  Every value comes back bit for bit: floats are written by ``repr``
+# (shortest exact form), arrays as arrays (dtype and bytes kept), a tuple as a tuple, a dict
+# with its keys' types and order.
+
+#: modules whose classes are never data (they start processes, write files, run commands)
+NOT_DATA_MODULES = ("mbseig.studies.resume", "mbseig.studies.runners", "mbseig.studies.workers",
+                    "mbseig.cli", "mbseig.report", "mbseig.bench", "mbseig.plots")
+
+
+class RecordFormatError(ValueError):
+    """A stored record names a class mbseig never writes, or is not a record mbseig wrote."""
+
+
+def encode(obj):
+    """``obj`` as (a JSON-able structure, {name: numpy array}) for :func:`decode` (module
+    section above)."""
+    arrays: dict = {}
+    return _enc(obj, arrays), arrays
+
+
+def _enc(x, arrays):
+    import numpy as np
+    import scipy.sparse as sp
+
+    if x is None or isinstance(x, (bool, str)) and type(x) in (bool, str):
+        return x
+    if isinstance(x, (np.ndarray, np.generic)):
+        a = np.asarray(x)
+        if a.dtype == object:
+            return {"oa": list(a.shape), "v": [_enc(v, arrays) for v in a.ravel().tolist()]}
+        key = f"a{len(arrays)}"
+        arrays[key] = a
+        return {"a": key, "scalar": isinstance(x, np.generic)}
+    if type(x) is int:
+        return x
+    if type(x) is float:
+        return {"f": repr(x)}
+    if type(x) is complex:
+        return {"c": [repr(x.real), repr(x.imag)]}
+    if type(x) is list:
+        return [_enc(v, arrays) for v in x]
+    if type(x) is tuple:
+        return {"t": [_enc(v, arrays) for v in x]}
+    if type(x) is dict:
+        return {"d": [[_enc(k, arrays), _enc(v, arrays)] for k, v in x.items()]}
+    if type(x) in (set, frozenset):
+        return {type(x).__name__: [_enc(v, arrays) for v in x]}
+    if type(x) is bytes:
+        return {"b": x.hex()}
+    if sp.issparse(x) and x.format in ("csr", "csc", "coo"):
+        parts = ([x.data, x.row, x.col] if x.format == "coo" else [x.data, x.indices, x.indptr])
+        return {"sp": x.format, "shape": list(x.shape), "v": [_enc(p, arrays) for p in parts]}
+    cls = type(x)
+    name = f"{cls.__module__}:{cls.__qualname__}"
+    if isinstance(x, str) and _data_module(cls.__module__):  # a word with attributes (Verdict)
+        return {"word": name, "v": str.__str__(x),
+                "attrs": [[k, _enc(v, arrays)] for k, v in vars(x).items()]}
+    if dataclasses.is_dataclass(x) and _data_module(cls.__module__):
+        return {"r": name, "f": [[f.name, _enc(getattr(x, f.name), arrays)]
+                                 for f in dataclasses.fields(x)]}
+    raise TypeError(f"{name} is not a record mbseig writes")
+
+
+def _data_module(module: str) -> bool:
+    return module.split(".")[0] == "mbseig" and not module.startswith(NOT_DATA_MODULES)
+
+
+def _data_class(name):
+    """The class ``module:qualname`` of one of mbseig's data modules (imported), or a
+    :class:`RecordFormatError`."""
+    import importlib
+
+    module, _, qualname = str(name).partition(":")
+    if not _data_module(module) or "." in qualname:
+        raise RecordFormatError(f"names {module}.{qualname}, which mbseig never writes")
+    try:
+        cls = getattr(importlib.import_module(module), qualname, None)
+    except ImportError:
+        cls = None
+    if not isinstance(cls, type):
+        raise RecordFormatError(f"names {module}.{qualname}, which is not a class of mbseig")
+    return cls
+
+
+def decode(data, arrays):
+    """The object :func:`encode` wrote: ``data`` its JSON structure, ``arrays`` a mapping of its
+    arrays (e.g. an ``np.load(..., allow_pickle=False)`` file).  A class outside mbseig's data
+    modules, or anything :func:`encode` never writes, is a :class:`RecordFormatError`."""
+    return _dec(data, arrays)
+
+
+def _dec(x, arrays):
+    import numpy as np
+    import scipy.sparse as sp
+
+    if x is None or isinstance(x, (bool, int, str)):
+        return x
+    if isinstance(x, list):
+        return [_dec(v, arrays) for v in x]
+    if not isinstance(x, dict) or len(x) == 0:
+        raise RecordFormatError(f"not a record mbseig writes: {str(x)[:60]}")
+    if "f" in x and len(x) == 1:
+        return float(x["f"])
+    if "t" in x:
+        return tuple(_dec(v, arrays) for v in x["t"])
+    if "d" in x:
+        return {_dec(k, arrays): _dec(v, arrays) for k, v in x["d"]}
+    if "a" in x:
+        a = np.asarray(arrays[x["a"]])
+        return a[()] if x.get("scalar") else a
+    if "c" in x:
+        return complex(float(x["c"][0]), float(x["c"][1]))
+    if "oa" in x:
+        out = np.empty(len(x["v"]), dtype=object)
+        out[:] = [_dec(v, arrays) for v in x["v"]]
+        return out.reshape(x["oa"])
+    if "set" in x or "frozenset" in x:
+        kind = set if "set" in x else frozenset
+        return kind(_dec(v, arrays) for v in x[kind.__name__])
+    if "b" in x:
+        return bytes.fromhex(x["b"])
+    if "sp" in x:
+        parts = [_dec(v, arrays) for v in x["v"]]
+        shape = tuple(x["shape"])
+        if x["sp"] == "coo":
+            return sp.coo_matrix((parts[0], (parts[1], parts[2])), shape=shape)
+        make = sp.csr_matrix if x["sp"] == "csr" else sp.csc_matrix
+        return make((parts[0], parts[1], parts[2]), shape=shape)
+    if "word" in x:
+        cls = _data_class(x["word"])
+        if not issubclass(cls, str):
+            raise RecordFormatError(f"names {x['word']}, which is not a word")
+        obj = str.__new__(cls, str(x["v"]))
+        for name, value in x["attrs"]:
+            object.__setattr__(obj, str(name), _dec(value, arrays))
+        return obj
+    if "r" in x:
+        cls = _data_class(x["r"])
+        if not dataclasses.is_dataclass(cls):
+            raise RecordFormatError(f"names {x['r']}, which is not a record")
+        names = {f.name for f in dataclasses.fields(cls)}
+        obj = object.__new__(cls)
+        for name, value in x["f"]:
+            if name not in names:
+                raise RecordFormatError(f"{cls.__name__} has no field {name!r}")
+            object.__setattr__(obj, name, _dec(value, arrays))
+        return obj
+    raise RecordFormatError(f"not a record mbseig writes: {str(x)[:60]}")

@@ -64,8 +64,8 @@ def test_interrupted_sweep_resumes_to_identical_outputs(tmp_path, monkeypatch):
     monkeypatch.setattr(sweep_module, "sweep_line", failing)
     with pytest.raises(RuntimeError, match="simulated fault"):
         main(["sweep", str(case), *SWEEP, "--out", str(out), "--resume", str(ckpt)])
-    kept = sorted(p.name for p in ckpt.glob("lines-*.pkl"))
-    assert kept == ["lines-000000.pkl"]  # the line completed before the fault
+    kept = sorted(p.name for p in ckpt.glob("lines-*.npz"))
+    assert kept == ["lines-000000.npz"]  # the line completed before the fault
     assert not list(ckpt.glob(".*.tmp"))  # no partial file left behind
 
     calls.clear()
@@ -123,7 +123,7 @@ def test_killed_dask_worker_loses_no_point(tmp_path):
     assert killed and res.runner == "dask"
     assert json.dumps(res.to_json()) == serial
     n = 8 * 2
-    assert sorted(ckpt.glob("points-*.pkl")) == [ckpt / f"points-{i:06d}.pkl" for i in range(n)]
+    assert sorted(ckpt.glob("points-*.npz")) == [ckpt / f"points-{i:06d}.npz" for i in range(n)]
 
 
 class _Runs:
@@ -136,24 +136,100 @@ class _Runs:
         return self.fn, self.args
 
 
-@pytest.mark.parametrize("fn", [os.system, eval, np.save], ids=["os.system", "eval", "np.save"])
-def test_resume_folder_cannot_run_code(tmp_path, capsys, fn):
-    """A result file replaced by one that names a callable mbseig never writes is refused in one
-    line naming the file and the callable, and the callable does not run (its witness file is
-    not created); the folder's genuine results still read as before."""
+def _swept(tmp_path, out):
     case = tmp_path / "map.toml"
     case.write_text(MAP)
-    ckpt, witness = tmp_path / "ckpt", tmp_path / "ran"
+    ckpt = tmp_path / "ckpt"
     args = ["sweep", str(case), "--param", "c=1:-1:3", "--jobs", "1", "--no-progress",
             "--resume", str(ckpt)]
-    assert main([*args, "--out", str(tmp_path / "a")]) == 0
-    [first, *_] = sorted(ckpt.glob("*.pkl"))
+    assert main([*args, "--out", str(tmp_path / out)]) == 0
+    return ckpt, args
+
+
+def test_resume_folder_holds_no_pickle(tmp_path):
+    """A resume folder holds its manifest and one .npz a task: each a JSON document and arrays,
+    read with numpy's allow_pickle=False (a pickled entry would raise there)."""
+    ckpt, _ = _swept(tmp_path, "a")
+    files = sorted(p.name for p in ckpt.iterdir() if p.name != "manifest.json")
+    assert (ckpt / "manifest.json").exists() and files, files
+    assert all(name.endswith(".npz") for name in files), files
+    for name in files:
+        with np.load(ckpt / name, allow_pickle=False) as npz:
+            for key in npz.files:
+                assert npz[key].dtype != object
+
+
+@pytest.mark.parametrize("fn", [os.system, eval, np.save], ids=["os.system", "eval", "np.save"])
+def test_an_old_pickle_folder_is_refused_unopened(tmp_path, capsys, fn):
+    """A folder of an earlier mbseig that pickled its results is refused in one line, and none
+    of its files is opened: a pickle that would run a callable (its witness file) does not."""
+    ckpt, args = _swept(tmp_path, "a")
+    witness = tmp_path / "ran"
     payload = {os.system: (f"touch {witness}",), eval: (f"open({str(witness)!r}, 'w')",),
                np.save: (str(witness), np.zeros(1))}[fn]
-    first.write_bytes(pickle.dumps(_Runs(fn, *payload)))
+    (ckpt / "points-000000.pkl").write_bytes(pickle.dumps(_Runs(fn, *payload)))
+    capsys.readouterr()
+    assert main([*args, "--out", str(tmp_path / "b")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--resume" in err[0] and "pickled" in err[0], err
+    assert not witness.exists() and not list(tmp_path.glob("ran*"))
+
+
+@pytest.mark.parametrize("name", ["os:system", "builtins:eval", "mbseig.studies.workers:Pool",
+                                  "numpy:save"])
+def test_a_record_naming_another_class_is_refused(tmp_path, capsys, name):
+    """A result file whose JSON names a class outside mbseig's data modules is refused in one
+    line naming the file; the genuine results of the folder still read."""
+    import json
+    import zipfile
+
+    ckpt, args = _swept(tmp_path, "a")
+    first = sorted(ckpt.glob("*.npz"))[0]
+    with np.load(first, allow_pickle=False) as npz:
+        arrays = {k: npz[k] for k in npz.files}
+    arrays["__record__"] = np.frombuffer(json.dumps({"r": name, "f": []}).encode(), np.uint8)
+    np.savez(first, **arrays)
+    assert zipfile.is_zipfile(first)
     capsys.readouterr()
     assert main([*args, "--out", str(tmp_path / "b")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and first.name in err[0] and "--resume" in err[0], err
-    assert "mbseig never writes" in err[0] and not witness.exists()
-    assert not list(tmp_path.glob("ran*"))
+    assert "mbseig never writes" in err[0] or "not a class of mbseig" in err[0]
+
+
+def test_records_come_back_bit_for_bit():
+    """encode/decode (mbseig.records) keep every value and type: floats of every kind (−0, NaN,
+    ±inf, subnormals), complex, tuple against list, dict keys of any type in order, numpy
+    arrays and scalars with their dtypes, sparse matrices, a Verdict with its scope, a record."""
+    import scipy.sparse as sp
+
+    from mbseig.modal.result import Verdict
+    from mbseig.records import decode, encode
+    from mbseig.studies.records import SweepPoint
+
+    vals = [0.0, -0.0, float("nan"), float("inf"), -float("inf"), 5e-324, 0.1 + 0.2]
+    obj = {"floats": vals, 3: (1 + 2j, complex(-0.0, float("nan"))), (1, "a"): [None, True],
+           "arr": np.arange(6, dtype=np.int32).reshape(2, 3), "c": np.array([1j, -0.0]),
+           "scalar": np.float32(1.5), "flag": np.bool_(True), "word": np.str_("x"),
+           "sparse": sp.csr_matrix(np.array([[0.0, 2.0], [3.0, 0.0]])),
+           "verdict": Verdict("stable", "of the 4 modes computed", "rigid-body left out"),
+           "set": frozenset({1, 2}), "bytes": b"\x00\xff"}
+    fields = {f.name: None for f in __import__("dataclasses").fields(SweepPoint)}
+    obj["record"] = SweepPoint(**fields)
+    data, arrays = encode(obj)
+    back = decode(json.loads(json.dumps(data)), arrays)
+    assert list(back) == list(obj)
+    for a, b in zip(vals, back["floats"], strict=True):
+        assert type(b) is float and np.array(a).tobytes() == np.array(b).tobytes()
+    assert type(back[3]) is tuple and back[3][0] == 1 + 2j
+    assert np.signbit(back[3][1].real) and np.isnan(back[3][1].imag)
+    assert back[(1, "a")] == [None, True]
+    for k in ("arr", "c"):
+        assert back[k].dtype == obj[k].dtype and back[k].tobytes() == obj[k].tobytes()
+    assert type(back["scalar"]) is np.float32 and back["scalar"] == 1.5
+    assert type(back["flag"]) is np.bool_ and type(back["word"]) is np.str_
+    assert back["sparse"].format == "csr" and (back["sparse"] != obj["sparse"]).nnz == 0
+    v = back["verdict"]
+    assert type(v) is Verdict and v == "stable" and v.full_scope == obj["verdict"].full_scope
+    assert back["set"] == frozenset({1, 2}) and back["bytes"] == b"\x00\xff"
+    assert type(back["record"]) is SweepPoint and vars(back["record"]) == vars(obj["record"])

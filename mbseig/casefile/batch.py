@@ -244,7 +244,7 @@ class Batcher:
 
     def _forces(self, item, label, var, ivals, params):
         kind = item.get("type")
-        if kind == "bushing" and hasattr(self.b, "bushings"):  # spatial bushings (spatial_readers)
+        if kind == "bushing":  # spatial bushings (spatial_readers); a planar builder declines
             if not self.b.bushings(item, label, var, ivals, params, self.forces):
                 raise _Decline
             return

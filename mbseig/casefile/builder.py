@@ -75,6 +75,11 @@ class Builder(ElementReaders):
         self.periodic = isinstance(motion, dict) and "period" in motion
         self.driven_points: list = []  # (label, coordinate indices, position) of moving pivots
 
+    def bushings(self, item, label, var, ivals, params, forces) -> bool:
+        """Repeated bushings read all at once: none in a planar case (False: declined, the
+        member-by-member reader reads the entry and reports what is wrong with it)."""
+        return False
+
     @property
     def coord_names(self) -> list:
         return self.assembly.names

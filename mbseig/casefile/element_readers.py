@@ -276,7 +276,7 @@ class ScalarUpdate:
                 or axis not in self.raw:
             self.reason = "not a planar multibody case"
             return
-        names = {getattr(f, "name", None) for f in model0.forces}
+        names = {f.name for f in model0.forces}
         index = {f.name: k for k, f in enumerate(model0.forces)}
         for k, item in enumerate(data.get("forces") or []):
             kind = item.get("type") if isinstance(item, dict) else None

@@ -18,6 +18,8 @@ when the case is loaded.
 
 from __future__ import annotations
 
+import numpy as np
+
 import datetime as _dt
 import math
 import re
@@ -143,14 +145,14 @@ def _number(x, what):
         raise TypeError(f"{what}: expected a number or an expression, got {x!r}")
     if isinstance(x, (int, float, str)):
         return x
-    if hasattr(x, "item"):  # numpy scalar
+    if isinstance(x, np.generic):  # numpy scalar
         return x.item()
     raise TypeError(f"{what}: expected a number or an expression, got {x!r}")
 
 
 def _plain(value):
     """numpy arrays and scalars, tuples → lists and Python numbers (recursively)."""
-    if hasattr(value, "tolist"):
+    if isinstance(value, (np.ndarray, np.generic)):
         return value.tolist()
     if isinstance(value, (list, tuple)):
         return [_plain(v) for v in value]

@@ -151,7 +151,7 @@ class ForwardDynamics:
             vmax = float(np.max(np.abs(v)))
             if vmax == 0.0:
                 continue
-            closed = getattr(el, "velocity_terms", None)
+            closed = el.velocity_terms  # declared on the element's class (mbseig.model.base)
             if closed is not None:
                 h[idx] += closed(q, qd)
                 continue

@@ -7,6 +7,7 @@ import math
 from dataclasses import replace
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..errors import SimulationError
 
@@ -134,7 +135,7 @@ def mode_scale(dyn, shape, eq, length, names, involved_tol=1e-3):
         lam = getattr(eq, "lam", None)
         if dyn.m and lam is not None and len(lam):
             K = K + abs(dyn.model.constraint_hessian(q0, lam))
-        K = K.toarray() if hasattr(K, "toarray") else np.asarray(K)
+        K = K.toarray() if sp.issparse(K) else np.asarray(K)
     f = float(np.max(np.abs(g[coords]), initial=0.0))
     k = float(np.max(K[coords].sum(axis=1), initial=0.0))
     return math.sqrt(max(f / (length * m), k / m))

@@ -25,6 +25,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 import scipy.linalg as sla
 
 from .base import QEPSolution
@@ -165,8 +166,8 @@ def _driver(problem, request):
     unknown = sorted(set(opts) - {"inf_tol", "zero_tol"})
     if unknown:
         raise SolverError(f"unknown option {unknown[0]!r} of solver 'descriptor-qz'")
-    E = problem.P.toarray() if hasattr(problem.P, "toarray") else np.asarray(problem.P)
-    A = -(problem.Q.toarray() if hasattr(problem.Q, "toarray") else np.asarray(problem.Q))
+    E = problem.P.toarray() if sp.issparse(problem.P) else np.asarray(problem.P)
+    A = -(problem.Q.toarray() if sp.issparse(problem.Q) else np.asarray(problem.Q))
     return solve_descriptor(E, A, **opts)
 
 

@@ -58,6 +58,7 @@ from ..eigen import Problem, Request, SingularPencilError, solve
 from ..eigen.small import small_problem
 from ..errors import SolverError
 from ..linear import LinearModel
+from ..model.symmetry import RigidDirections
 from .bounds import error_bounds, tolerance_rule, tolerances, worst, zero_pair_floor
 from .rules import classify, kind_of
 from .listing import band_of, coordinate_text, listing, mode_shapes
@@ -171,7 +172,7 @@ def _scoped(md, rigid, N, coordinate_names, n_dominant, display=None):
     names, D = (), None
     if rigid is not None and "rigid-body" in md.kind:
         got = rigid() if callable(rigid) else rigid
-        if hasattr(got, "vectors"):
+        if isinstance(got, RigidDirections):
             names, D = tuple(got.names), got.vectors
         else:
             D = np.asarray(got)

@@ -21,6 +21,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+import scipy.sparse as sp
 
 from .result import STABILITY_ORDER, Verdict
 
@@ -64,7 +65,7 @@ def reduced_directions(D, N):
     D = np.asarray(D)
     if N is None or D.shape[1] == 0:
         return D
-    if hasattr(N, "toarray"):
+    if sp.issparse(N):
         N = N.toarray()
     Dr = N.T @ D
     q, _ = np.linalg.qr(Dr)

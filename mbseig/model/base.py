@@ -55,10 +55,17 @@ class _Element:
 
     name: str
     affine_field: str = ""
+    #: how a drawing shows the element (mbseig.plots.mechanism, mbseig.plots.spatial): "spring"
+    #: (a spring-damper between two named points), "torsional" (a torsional spring at a joint),
+    #: "load" (a follower force), "rod" (a rigid distance), "guide" (a point on a line),
+    #: "rotor" (a spinning rotor on a body), or "" (no glyph of its own)
+    glyph = ""
 
     @property
-    def idx(self) -> np.ndarray:
-        return getattr(self, self.affine_field).idx
+    def idx(self) -> np.ndarray | None:
+        """The coordinates the element acts on (those of its affine map; None for an element
+        on no single map)."""
+        return getattr(self, self.affine_field).idx if self.affine_field else None
 
 
 class Constraint(_Element):
@@ -69,6 +76,12 @@ class Constraint(_Element):
     #: a single-sided constraint (a contact) pushes only: the statics release it where its
     #: multiplier would pull (mbseig.statics.contacts)
     single_sided: bool = False
+    #: what the constraint is part of, e.g. ("triad", body) for a frame's own unit-vector
+    #: conditions (internal to the body: the reaction table summarizes them)
+    role = ()
+    #: None, or (offset of a body's frame in the element's coordinates, local coordinates of the
+    #: joint point, body name) where the reaction is a force and moment on that body
+    wrench = None
 
     def phi(self, q):
         raise NotImplementedError
@@ -95,6 +108,13 @@ class Constraint(_Element):
 
 class Force(_Element):
     """Base class of force elements (module docstring)."""
+
+    #: a load the statics may scale (load continuation, inverse statics): its ``magnitude`` a
+    #: number (a follower force)
+    scalable_load = False
+    #: None, or ``velocity_terms(q, q̇)``: the element's velocity-dependent inertia terms in
+    #: closed form (the 3-D beams), which the time-domain check uses instead of differences
+    velocity_terms = None
 
     def force(self, q, qd):
         raise NotImplementedError

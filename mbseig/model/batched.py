@@ -226,7 +226,7 @@ class QuadraticGroup:
         # maps that select their coordinates (frames of free bodies): C = I, products skipped
         self.unit = n_z == n_q and bool(np.all(self.C == np.eye(n_z)))
         self.Ct = np.ascontiguousarray(self.C.transpose(0, 2, 1))
-        if hasattr(members[0], "stiffness"):
+        if isinstance(members[0], Force):  # spring-dampers (constraints have no stiffness)
             self.K = _stacked([m.stiffness for m in members])
             self.D = _stacked([m.damping for m in members])
 

@@ -75,6 +75,8 @@ def body_direction(ri: Affine, rj: Affine, local, length: float) -> Affine:
 class DistanceConstraint(Constraint):
     """Φ = d·d − L² with d = r_b − r_a (a rigid length or a massless rod)."""
 
+    glyph = "rod"
+
     name: str
     diff: Affine
     length: float
@@ -107,6 +109,8 @@ class DistanceConstraint(Constraint):
 @dataclass(frozen=True, eq=False)
 class LinearConstraint(Constraint):
     """Φ = G r(q) − b: a fixed point, a point on a fixed line, a point attached to a body."""
+
+    glyph = "guide"
 
     name: str
     point: Affine
@@ -155,6 +159,8 @@ class SpringDamper(Force):
     g = −Dᵀ f.  In one dimension the extension is signed, f = k (d − l0) + c ḋ, so that points
     may pass each other (chains written in displacement coordinates).
     """
+
+    glyph = "spring"
 
     name: str
     diff: Affine
@@ -215,6 +221,8 @@ class TorsionalSpringDamper(Force):
     τ = −k (θ − θ0) − c θ̇, so g = −(k (θ − θ0) + c θ̇) ∇θ, with θ − θ0 wrapped to (−π, π].
     """
 
+    glyph = "torsional"
+
     name: str
     dirs: Affine  # stacked [a; b] (4 rows)
     stiffness: float
@@ -253,6 +261,9 @@ class FollowerForce(Force):
     F = f u(q) with u = (ū I + v̄ J)(r_j − r_i)/L linear in q, so g = C_Pᵀ f u(q) and
     K = −f C_Pᵀ C_u, which is not symmetric: never put such a K through a symmetric solver.
     """
+
+    glyph = "load"
+    scalable_load = True
 
     name: str
     stacked: Affine  # [r_P; u] on the union of their indices (4 rows)

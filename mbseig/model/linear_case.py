@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from types import MappingProxyType
 
 import numpy as np
 
@@ -21,6 +22,18 @@ class LinearCase:
     Q: np.ndarray
     description: str = ""
     expected: dict = field(default_factory=dict)
+
+    # what the stages read of every model (mbseig.model.Model), empty here: no elements, no
+    # commands, no inputs or outputs, no report tables, no beams
+    forces = ()
+    constraints = ()
+    velocity_constraints = ()
+    commands = ()
+    inputs = ()
+    outputs = ()
+    report = MappingProxyType({})
+    flexible = MappingProxyType({})
+    bodies = MappingProxyType({})
 
     @property
     def n(self) -> int:

@@ -165,7 +165,7 @@ def find_element(model, label, kind, where):
     """The force (``kind = "force"``) or constraint of ``model`` with this label."""
     pool = model.forces if kind == "force" else model.constraints
     for el in pool:
-        if getattr(el, "name", None) == label:
+        if el.name == label:
             return el
     raise CaseError(f"element {label} is not in the model (disabled, or set by a command)",
                     element=where)

@@ -102,6 +102,9 @@ class Rotor(Force):
     define the whirl of a mode (:func:`mbseig.model.spatial_whirl.whirl`).
     """
 
+    glyph = "rotor"
+    station_map = None  # a rigid rotor: its stations read one at a time (a SpinningShaft has one)
+
     name: str
     frame: Affine
     axis: np.ndarray

@@ -70,7 +70,7 @@ def station_orbits(model, q0, shape, s=1j) -> list[dict]:
         a = a / np.linalg.norm(a)
         e1, e2 = normal_pair(a)
         sigma = -1.0 if r.speed < 0 else 1.0
-        smap = getattr(r, "station_map", None)  # a spinning beam: (idx, sparse rows) of all
+        smap = r.station_map  # a spinning beam: (idx, sparse rows) of all
         if smap is None:                         # its stations, its nodes' coordinates
             frame = r.frame.C @ x[r.frame.idx]
             body_motion = float(model.length_scale * np.max(np.abs(frame[3:]), initial=0.0))
@@ -99,7 +99,7 @@ def lateral_fraction(model, q0, shape) -> float:
     for r in rotors(model):
         a = r.axis_map()(q0)
         a = a / np.linalg.norm(a)
-        smap = getattr(r, "station_map", None)
+        smap = r.station_map
         if smap is None:
             X = np.array([aff.C @ x[aff.idx] for _, aff in r.stations]).reshape(-1, 3)
         else:

@@ -239,7 +239,7 @@ def _parts(model, frames):
         return k
 
     for e in (*model.forces, *model.constraints):
-        idx = getattr(e, "idx", None)
+        idx = e.idx
         if idx is None:
             continue
         keys = {frame_of[int(i)] for i in np.asarray(idx).ravel() if int(i) in frame_of}

@@ -25,8 +25,7 @@ def project_constraints(model, q, *, tol=1e-12, max_iter=30):
     phi_fn, jac_fn = getattr(model, "phi", None), getattr(model, "phi_q", None)
     if phi_fn is None or jac_fn is None or not getattr(model, "n_constraints", 0):
         return q, 0.0
-    scales = np.asarray(model.constraint_scales() if hasattr(model, "constraint_scales")
-                        else np.ones(model.n_constraints), float)
+    scales = np.asarray(model.constraint_scales(), float)
     q, res, _, _ = min_norm_projection(phi_fn, jac_fn, q, scales, tol=tol, max_iter=max_iter)
     return q, res
 
@@ -47,7 +46,7 @@ def _point_pair(model, element):
 
 
 def mechanism_layout(model, q0):
-    """What a planar drawing shows, found from the model by duck typing: bodies (basic points and
+    """What a planar drawing shows, from each element's declared glyph: bodies (basic points and
     body markers), fixed points, springs and dampers between named points, rods, lines that
     points slide on, torsional springs at the points their bodies share, and follower forces.
     Each entry names the element as the user did."""
@@ -63,30 +62,29 @@ def mechanism_layout(model, q0):
         pts = list(b.get("points", ()))
         if len(pts) == 2:
             body_dirs[name] = pts
-    for e in getattr(model, "forces", ()):
-        kind = type(e).__name__
-        user = element_name(getattr(e, "name", kind), part=False)
-        if hasattr(e, "diff") and hasattr(e, "stiffness"):
+    for e in model.forces:  # each element's glyph is declared on its class (mbseig.model.base)
+        user = element_name(e.name, part=False)
+        if e.glyph == "spring":
             ends = _point_pair(model, e)
             if ends:
                 out["springs"].append({"name": user, "ends": ends,
-                                       "spring": float(getattr(e, "stiffness", 0)) != 0,
-                                       "damper": float(getattr(e, "damping", 0)) != 0})
-        elif hasattr(e, "dirs") and hasattr(e, "angle0"):
+                                       "spring": float(e.stiffness) != 0,
+                                       "damper": float(e.damping) != 0})
+        elif e.glyph == "torsional":
             at = _torsion_point(model, e, body_dirs)
             if at is not None:
                 out["torsional"].append({"name": user, "at": at})
-        elif hasattr(e, "stacked") and hasattr(e, "magnitude"):
+        elif e.glyph == "load":
             out["loads"].append({"name": user, "element": e})
-    for c in getattr(model, "constraints", ()):
-        user = element_name(getattr(c, "name", ""), part=False)
-        if hasattr(c, "diff") and hasattr(c, "length"):
+    for c in model.constraints:
+        user = element_name(c.name, part=False)
+        if c.glyph == "rod":
             if any(user == b["name"] for b in out["bodies"]):
                 continue  # a body's rigid length: the body is drawn
             ends = _point_pair(model, c)
             if ends:
                 out["rods"].append({"name": user, "ends": ends})
-        elif hasattr(c, "G") and hasattr(c, "point") and np.shape(c.G) == (1, 2):
+        elif c.glyph == "guide" and np.shape(c.G) == (1, 2):
             g = np.asarray(c.G[0], float)
             out["guides"].append({"name": user, "normal": g / np.linalg.norm(g),
                                   "offset": float(c.b[0]) / float(np.linalg.norm(g)),

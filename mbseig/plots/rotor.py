@@ -64,7 +64,7 @@ def _critical_lines(ax, critical):
 
 def _resonances(res):
     """The swept values where the response is a resonance (no steady response)."""
-    return res.resonance_values() if hasattr(res, "resonance_values") else []
+    return res.resonance_values()
 
 
 RESONANCE_LABEL = "resonance: no steady response"

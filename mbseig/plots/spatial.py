@@ -77,8 +77,8 @@ def spatial_layout(model):
     joints = [p for p, bs in carried_by.items() if len(bs) > 1 or p in fixed]
     for name, b in model.bodies.items():
         joints += list(b.get("markers") or ())[1:]
-    for e in getattr(model, "forces", ()):
-        if not all(hasattr(e, a) for a in ("body", "axis", "polar_inertia", "stations", "frame")):
+    for e in model.forces:
+        if e.glyph != "rotor":
             continue
         if not e.stations:
             continue
@@ -107,7 +107,7 @@ def _springs(model):
     ends = getattr(model, "element_ends", {}) or {}
     out = []
     for e in getattr(model, "forces", ()):
-        pts = ends.get(getattr(e, "name", None)) or ()
+        pts = ends.get(e.name) or ()
         if len(pts) == 2 and all(p in model.points for p in pts):
             out.append(tuple(pts))
     return out

@@ -87,7 +87,7 @@ def _equilibrium_api(model, *, tol, max_iter, rank_tol, q_init, xtol, floor_tol,
             model = resolve_commands(model, lambda m, q_init: solve_statics(m, q_init=q_init, **opts))
         except MbseigError as exc:
             raise exc.located(file=getattr(model, "source", None)) from None
-    if any(getattr(c, "single_sided", False) for c in getattr(model, "constraints", ())):
+    if any(c.single_sided for c in model.constraints):
         from .contacts import solve_with_contacts
 
         eq = solve_with_contacts(model, lambda m: solve_statics(m, q_init=q_init, **opts))

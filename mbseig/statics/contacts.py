@@ -54,7 +54,7 @@ class _HeldContact(QuadraticConstraint):
 def held_active(model):
     """``model`` with every single-sided row made bilateral (same name, rows and scale)."""
     cons = tuple(_HeldContact(c.name, c.rows, c.residual_scale, c.wrench, c.length)
-                 if getattr(c, "single_sided", False) else c for c in model.constraints)
+                 if c.single_sided else c for c in model.constraints)
     return dataclasses.replace(model, constraints=cons)
 
 
@@ -63,7 +63,7 @@ def contact_forces(model, lam) -> dict:
     :func:`held_active` copy, same order) from the multipliers ``lam``."""
     out, k = {}, 0
     for c in model.constraints:
-        if getattr(c, "single_sided", False) or isinstance(c, _HeldContact):
+        if c.single_sided or isinstance(c, _HeldContact):
             out[c.name] = c.force(lam[k:k + 1])
         k += c.n_eq
     return out
@@ -72,8 +72,8 @@ def contact_forces(model, lam) -> dict:
 def solve_with_contacts(model, solve, *, tol=RELEASE_TOL):
     """The equilibrium with the active set of the model's contacts (module docstring);
     ``solve(model) -> Equilibrium`` solves one active set."""
-    contacts = [c for c in model.constraints if getattr(c, "single_sided", False)]
-    others = [c for c in model.constraints if not getattr(c, "single_sided", False)]
+    contacts = [c for c in model.constraints if c.single_sided]
+    others = [c for c in model.constraints if not c.single_sided]
     active, messages, seen = list(contacts), [], set()
     while True:
         key = frozenset(id(c) for c in active)

@@ -67,8 +67,7 @@ def resolve_commands(model, equilibrium, *, tol=1e-12, max_iter=30, hint=None, c
                                    q_init=model.q_init if q_init is None else q_init, commands=())
 
     forces, constraints = list(model.forces), list(model.constraints)
-    followers = {k for k, f in enumerate(forces)
-                 if isinstance(getattr(f, "magnitude", None), (int, float))}
+    followers = {k for k, f in enumerate(forces) if f.scalable_load}
     q_guess, records = (None if hint is None else np.asarray(hint.q_init, float)), []
     for driver, targets in drivers:
         springs, locks = check_command(driver, targets, forces, constraints)
@@ -247,9 +246,8 @@ def held_tension(model, prev, *, tol=1e-12, posture_tol=1e-10, cache=None):
     forces = list(model.forces)
     forces[k] = dataclasses.replace(spring, free_length=l0)
     q = np.asarray(prev.q_init, float)
-    device = dataclasses.replace(model, forces=tuple(f for f in forces if not isinstance(
-        getattr(f, "magnitude", None), (int, float))), constraints=model.constraints + (driver,),
-        commands=())
+    device = dataclasses.replace(model, forces=tuple(f for f in forces if not f.scalable_load),
+                                 constraints=model.constraints + (driver,), commands=())
     with np.errstate(all="ignore"):
         g = device.generalized_force(q)
         G = _device_phi_q(device, prev, driver, q, cache)

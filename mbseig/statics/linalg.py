@@ -82,7 +82,7 @@ class StepScales:
                 vals.append(C[rr, cc])
                 inv_len += [1.0 / c.length] * C.shape[0]
                 r += C.shape[0]
-        self.dims = model.dimension if hasattr(model, "dimension") else 1
+        self.dims = model.dimension
         if r:
             self.D = coo_sum(r, model.n, [(np.concatenate(rows), np.concatenate(cols),
                                            np.concatenate(vals))])

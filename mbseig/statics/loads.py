@@ -29,7 +29,7 @@ EASY = 4  # a corrector that converged in at most EASY iterations doubles the ne
 
 
 def _is_load(f):
-    return isinstance(getattr(f, "magnitude", None), (int, float))
+    return f.scalable_load  # declared on the element's class (mbseig.model.base)
 
 
 def has_loads(model) -> bool:

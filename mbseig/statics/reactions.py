@@ -31,6 +31,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..model.elements import (
     DistanceConstraint,
@@ -140,10 +141,10 @@ def _reaction_value(c, q, lam, dlam):
 def _where(model, c, q, lam, unc, forces, errors) -> dict:
     """Where a constraint acts and its force and moment there (:func:`reaction_forces`)."""
     bodies = getattr(model, "bodies", {}) or {}
-    role = getattr(c, "role", ()) or ()
+    role = c.role or ()
     if role[:1] == ("triad",):  # a frame's rigid-body conditions: internal to its body
         return {"kind": "internal", "on": role[1] if role[1] in bodies else None}
-    if getattr(c, "wrench", None) is not None:  # a spatial joint (model.spatial_joints)
+    if c.wrench is not None:  # a spatial joint (model.spatial_joints)
         off, local, body = c.wrench
         z = c.aff(q)
         return _wrench(z[off:off + FRAME_SIZE], c.rows.grad(z)[:, off:off + FRAME_SIZE], lam,
@@ -161,7 +162,7 @@ def _axes(frame_z):
 
 
 def _dense(J):
-    return J.toarray() if hasattr(J, "toarray") else np.asarray(J, float)
+    return J.toarray() if sp.issparse(J) else np.asarray(J, float)
 
 
 def _in_body(R, vec, err, ddir):

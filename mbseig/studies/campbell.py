@@ -246,7 +246,7 @@ def default_unbalance_point(case, config=None, fixed=None, parameter=None, value
     params = {**(fixed or {}), **({parameter: float(value)} if parameter else {})}
     model = spec.build(config, **params)
     rs = rotors(model)
-    body = next((getattr(r, "body", None) for r in rs if getattr(r, "body", None)), None)
+    body = next((r.body for r in rs if r.body), None)
     if body is not None:
         return body
     names = [n for n, _ in station_names(model, rs) if n in model.points]

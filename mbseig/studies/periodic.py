@@ -22,6 +22,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..casefile.expr import evaluate
 from ..casefile.fields import TIME, uses_time
@@ -174,8 +175,8 @@ def _system(M, fit, T, *, start=None):
 
 def _relative_difference(a, b):
     """max |a − b| / max(1, max |a|) of two samples (dense, CSR or None for zero)."""
-    a = 0.0 if a is None else (a.toarray() if hasattr(a, "toarray") else np.asarray(a))
-    b = 0.0 if b is None else (b.toarray() if hasattr(b, "toarray") else np.asarray(b))
+    a = 0.0 if a is None else (a.toarray() if sp.issparse(a) else np.asarray(a))
+    b = 0.0 if b is None else (b.toarray() if sp.issparse(b) else np.asarray(b))
     return (float(np.max(np.abs(a - b), initial=0.0))
             / max(1.0, float(np.max(np.abs(a), initial=0.0))))
 

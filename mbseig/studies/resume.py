@@ -4,24 +4,22 @@ computes only the tasks it does not hold (``mbseig sweep ... --resume DIR``, doc
 
 The directory holds ``manifest.json`` (what the study is: the case's content, configuration,
 grid, fixed parameters and options; a rerun with a different study refuses the directory) and
-one file per completed task, ``{stage}-{index:06d}.pkl``: the task's result, written to a
-temporary file in the same directory, flushed to disk and renamed over its final name, so that a
-file under its final name is always complete (a rename within one directory is atomic on POSIX
-and Windows).  Results are pickled: loaded, they are bit for bit what the task returned, so the
-outputs of a resumed study equal those of an uninterrupted one byte for byte.  A pickle can name
-any Python callable to run while it is read, so results are read by a restricted unpickler
-(:class:`_Loader`, the "restricting globals" pattern of the ``pickle`` documentation): it builds
-only what mbseig writes, the classes of mbseig's own data (not those of the modules that write
-files, start processes or run commands), numpy's arrays, scalars and dtypes, scipy's sparse
-matrices and Python's plain containers.  A file that names anything else (``os.system``,
-``builtins.eval``, a numpy function) is refused in one line naming it, before any of it runs: a
-resume folder from someone else cannot run their code.
+one file per completed task, ``{stage}-{index:06d}.npz``: the task's result as one JSON document
+and the arrays it refers to (:func:`mbseig.records.encode`), written to a temporary file in the
+same directory, flushed to disk and renamed over its final name, so that a file under its final
+name is always complete (a rename within one directory is atomic on POSIX and Windows).  Read
+back (:func:`mbseig.records.decode`, ``numpy.load`` with ``allow_pickle=False``), a result is
+bit for bit what the task returned, so the outputs of a resumed study equal those of an
+uninterrupted one byte for byte.  Nothing is pickled: reading builds numbers, containers,
+arrays and mbseig's own data classes, and no file can name code to run, so a resume folder
+from someone else is data and nothing more.  A folder of an earlier mbseig that pickled its
+results (``*.pkl``) is refused in one line: its files are not opened.
 
 A *deferred* checkpoint (``Checkpoint(directory, deferred=True)``) keeps the results in memory
 and writes nothing until :meth:`Checkpoint.flush`: ``mbseig sweep`` without ``--resume`` holds
 one, and when the sweep is interrupted (Ctrl-C) it writes the finished tasks to the directory
 next to ``--out`` that its last line names.  Its tasks go to one file per stage,
-``batch-{stage}-{n:03d}.pkl`` (a dict index → result, written and renamed as above: one fsync,
+``batch-{stage}-{n:03d}.npz`` (a dict index → result, written and renamed as above: one fsync,
 not one per task, so that an interruption after thousands of points still ends at once); a
 rerun with ``--resume`` reads them as it reads the single files.
 """
@@ -29,60 +27,48 @@ rerun with ``--resume`` reads them as it reads the single files.
 from __future__ import annotations
 
 import hashlib
+import io
 import json
 import os
-import pickle
+import zipfile
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import CaseError, MbseigError
+from ..records import RecordFormatError, decode, encode
 
 __all__ = ["Checkpoint", "study_identity"]
 
 MANIFEST = "manifest.json"
-FORMAT = 1  # version of the directory's layout
+FORMAT = 2  # version of the directory's layout (1: pickled results, no longer read)
+_RECORD = "__record__"  # the npz entry that holds the JSON document
 
 
-#: mbseig modules whose classes a result never holds and whose constructors act on the world
-_NOT_DATA = ("mbseig.studies.resume", "mbseig.studies.runners", "mbseig.studies.workers",
-             "mbseig.cli", "mbseig.report", "mbseig.bench", "mbseig.plots")
-#: numpy's functions that rebuild an array, a scalar or a dtype (nothing else of numpy's runs)
-_NUMPY_REBUILD = {"_reconstruct", "scalar", "_frombuffer"}
-_BUILTINS = {"complex", "set", "frozenset", "slice", "range", "bytearray", "bytes", "tuple",
-             "list", "dict", "float", "int", "bool", "str"}
-
-
-class _Refused(pickle.UnpicklingError):
-    """A result file names a global mbseig never writes."""
-
-
-class _Loader(pickle.Unpickler):
-    """An unpickler that builds only what mbseig writes (module docstring); anything else is an
-    :class:`pickle.UnpicklingError` naming it."""
-
-    def find_class(self, module, name):
-        root = module.split(".")[0]
-        if module == "builtins" and name in _BUILTINS:
-            return super().find_class(module, name)
-        if root in ("numpy", "scipy", "mbseig") and "." not in name:
-            obj = super().find_class(module, name)
-            if root == "numpy" and (isinstance(obj, type) or name in _NUMPY_REBUILD):
-                return obj
-            if root == "scipy" and module.startswith("scipy.sparse") and isinstance(obj, type):
-                return obj
-            if (root == "mbseig" and isinstance(obj, type)
-                    and not obj.__module__.startswith(_NOT_DATA)):
-                return obj
-        raise _Refused(f"refers to {module}.{name}, which mbseig never writes")
+def _dump(result) -> bytes:
+    """One result as the bytes of an .npz file: the JSON document and its arrays."""
+    data, arrays = encode(result)
+    text = json.dumps(data, separators=(",", ":"))
+    buf = io.BytesIO()
+    np.savez(buf, **{_RECORD: np.frombuffer(text.encode(), dtype=np.uint8)}, **arrays)
+    return buf.getvalue()
 
 
 def _load(path):
-    """A result file read by :class:`_Loader`: a refused global is one line naming the file."""
-    with path.open("rb") as fh:
+    """A result file read back (module docstring); a file that names a class mbseig never writes
+    is one line naming the file."""
+    with np.load(path, allow_pickle=False) as npz:
         try:
-            return _Loader(fh).load()
-        except _Refused as exc:
+            data = json.loads(bytes(npz[_RECORD]).decode())
+            return decode(data, npz)
+        except RecordFormatError as exc:
             raise CaseError(f"{path.name} {exc}: not read (a resume folder holds only what "
                             f"mbseig wrote)", file=str(path.parent), element="--resume") from None
+
+
+#: what an unreadable result file raises (a truncated or foreign file): its task is computed again
+_UNREADABLE = (OSError, EOFError, ValueError, KeyError, TypeError, IndexError,
+               zipfile.BadZipFile, UnicodeDecodeError)
 
 
 def _jsonable(x):
@@ -93,7 +79,7 @@ def _jsonable(x):
         return [_jsonable(v) for v in x]
     if isinstance(x, (set, frozenset)):
         return sorted(_jsonable(v) for v in x)
-    if hasattr(x, "tolist"):
+    if isinstance(x, (np.ndarray, np.generic)):
         return _jsonable(x.tolist())
     if isinstance(x, float):
         return repr(x)  # every bit: 0.1 and 0.1 + 1e-17 are different studies
@@ -154,6 +140,10 @@ class Checkpoint:
         except OSError as exc:
             raise MbseigError(f"cannot create the resume directory {str(self.dir)!r}: "
                               f"{exc.strerror or exc}", element="--resume") from None
+        if any(self.dir.glob("*.pkl")):
+            raise CaseError(f"{str(self.dir)!r} holds pickled results of an earlier mbseig "
+                            f"(*.pkl): they are not opened (a pickle can run code); give an "
+                            f"empty or new directory", element="--resume")
         manifest = self.dir / MANIFEST
         text = json.dumps(self.identity, indent=1, sort_keys=True) + "\n"
         if manifest.exists():
@@ -170,7 +160,7 @@ class Checkpoint:
             self._atomic(manifest, text.encode())
 
     def _path(self, stage, i):
-        return self.dir / f"{stage}-{int(i):06d}.pkl"
+        return self.dir / f"{stage}-{int(i):06d}.npz"
 
     def held(self, stage) -> int:
         """The tasks of ``stage`` held now: read from the directory or completed in this run."""
@@ -188,9 +178,8 @@ class Checkpoint:
             if int(i) not in batch:
                 return False, None
             result = batch[int(i)]
-        except (OSError, EOFError, pickle.UnpicklingError, AttributeError, ImportError,
-                IndexError, TypeError, ValueError):
-            return False, None  # unreadable (another mbseig's layout): computed again
+        except _UNREADABLE:
+            return False, None  # unreadable (a truncated file): computed again
         self.loaded.append((stage, int(i)))
         return True, result
 
@@ -198,13 +187,12 @@ class Checkpoint:
         """{index: result} of every batch file of ``stage`` (read once)."""
         if stage not in self._batches:
             held = {}
-            for path in sorted(self.dir.glob(f"batch-{stage}-*.pkl")):
+            for path in sorted(self.dir.glob(f"batch-{stage}-*.npz")):
                 try:
                     part = _load(path)
                 except CaseError:
                     raise
-                except (OSError, EOFError, pickle.UnpicklingError, AttributeError,
-                        ImportError, IndexError, TypeError, ValueError):
+                except _UNREADABLE:
                     continue  # unreadable: its tasks are computed again
                 if isinstance(part, dict):
                     held.update(part)
@@ -219,8 +207,7 @@ class Checkpoint:
         if self.deferred:
             self._memory[key] = result
         else:
-            self._atomic(self._path(stage, i),
-                         pickle.dumps(result, protocol=pickle.HIGHEST_PROTOCOL))
+            self._atomic(self._path(stage, i), _dump(result))
         self.written.append(key)
 
     def flush(self) -> Path:
@@ -247,10 +234,9 @@ class Checkpoint:
             stages.setdefault(stage, {})[i] = result
         for stage, part in stages.items():
             k = 0
-            while (self.dir / f"batch-{stage}-{k:03d}.pkl").exists():
+            while (self.dir / f"batch-{stage}-{k:03d}.npz").exists():
                 k += 1
-            self._atomic(self.dir / f"batch-{stage}-{k:03d}.pkl",
-                         pickle.dumps(part, protocol=pickle.HIGHEST_PROTOCOL))
+            self._atomic(self.dir / f"batch-{stage}-{k:03d}.npz", _dump(part))
         self.flushed = True
         return self.dir
 

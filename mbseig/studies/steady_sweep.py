@@ -32,6 +32,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
+from ..records import Record
+
 __all__ = ["SteadySweep", "contact_boundaries", "growth_rates", "lift_off", "steady_sweep"]
 
 IMAG_TOL = 1e-9  # |Im s| above IMAG_TOL·max(1, |s|): an oscillatory eigenvalue
@@ -68,14 +70,14 @@ def growth_rates(a, persistent=0) -> dict:
     pull (minus its normal force).  ``persistent``: zeros present at both ends of an interval
     (:func:`zeros_left`): that many real eigenvalues nearest 0 are left out, as they stay at 0
     and cross nothing (their computed real parts are rounding residue of either sign)."""
-    s = np.asarray(a.solution.eigenvalues)
+    s = np.asarray(a.eigenvalues)
     cplx = np.abs(s.imag) > IMAG_TOL * np.maximum(1.0, np.abs(s))
     osc, real = s[cplx].real, s[~cplx].real
     if persistent:
         real = real[np.argsort(np.abs(real), kind="stable")][persistent:]
     return {"flutter": float(osc.max()) if osc.size else None,
             "divergence": float(real.max()) if real.size else None,
-            **{f"lift-off:{c['name']}": -c["force"] for c in a.state.contacts}}
+            **{f"lift-off:{c['name']}": -c["force"] for c in a.contacts}}
 
 
 def _unstable(a):
@@ -87,11 +89,28 @@ def _count(a):
     return sum(2 if r["omega_d"] > 0 else 1 for r in _unstable(a))
 
 
+@dataclass(frozen=True, eq=False)
+class SteadyPoint(Record):
+    """What a sweep keeps of the steady motion at one grid point: its verdict, the solver's
+    eigenvalues, the number of declared rigid-body directions, each wheel's contact record and
+    the mode rows (:class:`~mbseig.studies.steady_modes.SteadyAnalysis` without the model and
+    matrices, so that a resume folder holds only these)."""
+
+    verdict: str
+    eigenvalues: np.ndarray
+    n_rigid: int
+    contacts: tuple
+    modes: tuple
+
+
 def _steady_point(spec, config, params):
     """The steady motion and its modes at one grid point (a pure task for the runners)."""
     from .steady_modes import analyze_steady
 
-    return analyze_steady(spec, config=config, params=params)
+    a = analyze_steady(spec, config=config, params=params)
+    return SteadyPoint(a.verdict, np.asarray(a.solution.eigenvalues),
+                       len(a.cyclic.names) if a.cyclic is not None else 0,
+                       tuple(dict(c) for c in a.state.contacts), a.modes)
 
 
 def steady_sweep(spec, name, values, *, config=None, fixed=None, xtol=1e-11, jobs=None,
@@ -121,9 +140,9 @@ def steady_sweep(spec, name, values, *, config=None, fixed=None, xtol=1e-11, job
     for v, a in zip(values, runs):
         points.append({"value": float(v), "verdict": a.verdict,
                        "eigenvalues": [[float(s.real), float(s.imag)]
-                                       for s in a.solution.eigenvalues],
-                       "n_rigid": len(a.cyclic.names) if a.cyclic is not None else 0,
-                       "contacts": [dict(c) for c in a.state.contacts]})
+                                       for s in a.eigenvalues],
+                       "n_rigid": a.n_rigid,
+                       "contacts": [dict(c) for c in a.contacts]})
     boundaries = []
     for k in range(len(values) - 1):
         lo, hi = float(values[k]), float(values[k + 1])
@@ -170,7 +189,7 @@ def _stability_crossing(at, lo, hi, a0, a1, name, xtol):
         fun = lambda p: _value(growth_rates(at(p), base)[kind], f0)
         root = float(brentq(fun, lo, hi, xtol=xtol, rtol=4 * np.finfo(float).eps))
         g = growth_rates(at(root), base)[kind]
-        scale = max(1.0, max(abs(s) for s in at(root).solution.eigenvalues))
+        scale = max(1.0, max(abs(s) for s in at(root).eigenvalues))
         if g is None or abs(g) > ROOT_TOL * scale:
             root = None  # the maximum jumped: fall back on the count
     if root is None and kind == "divergence":
@@ -197,7 +216,7 @@ def _stability_crossing(at, lo, hi, a0, a1, name, xtol):
 def _cluster_square(a, count):
     """Σ s² over the ``count`` eigenvalues of ``a`` nearest 0 (declared directions are deflated
     and not among them), and the largest |s| of the spectrum (its scale)."""
-    s = np.asarray(a.solution.eigenvalues)
+    s = np.asarray(a.eigenvalues)
     s = s[np.isfinite(s)]
     if s.size < count:
         return None, 1.0

@@ -34,6 +34,7 @@ import re
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..eigen.structure import fro
 from ..errors import CaseError, MbseigError
@@ -215,7 +216,7 @@ def _map_key(aff):
     """A canonical key of an affine point map r = C q[idx] + d (columns sorted and summed, zero
     columns dropped), so two maps of the same point compare equal however they were built."""
     idx = np.asarray(aff.idx, int)
-    C = np.asarray(aff.C.toarray() if hasattr(aff.C, "toarray") else aff.C, float)
+    C = np.asarray(aff.C.toarray() if sp.issparse(aff.C) else aff.C, float)
     cols = {}
     for j, i in enumerate(idx):
         cols[int(i)] = cols.get(int(i), 0.0) + C[:, j]
@@ -237,7 +238,7 @@ def station_names(model, rs):
     out = []
     for r in rs:
         for label, aff in r.stations:
-            if getattr(r, "body", None) is not None and hasattr(r, "polar_inertia"):
+            if r.body:  # a rigid rotor on its body (a spinning beam has none)
                 out.append((f"{r.body}: {label}", aff))
                 continue
             name, auto = by_map.get(_map_key(aff), (label, True))
@@ -359,7 +360,7 @@ def _steady(lin, g, W) -> Harmonic:
         return Harmonic(np.zeros(lin.dof, complex), "rest", 0.0, accuracy(lin.N.shape[0]),
                         0.0, 0, 0.0)
     f = lin.N.T @ g
-    M, P, Q = (A.toarray() if hasattr(A, "toarray") else np.asarray(A, float)
+    M, P, Q = (A.toarray() if sp.issparse(A) else np.asarray(A, float)
                for A in (lin.M, lin.P, lin.Q))
     Z = Q - W**2 * M + 1j * W * P
     return solve_harmonic(Z, f, weight((fro(M), fro(P), fro(Q)), W), n=lin.N.shape[0])
