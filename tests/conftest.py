@@ -15,6 +15,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 # by default.  Whole modules:
 NOT_NUMERIC_MODULES = {
     "test_layers.py": "import contracts, cycles and call counts of the parser",
+    "test_lint.py": "the linter on the source text",
+    "test_no_probing.py": "a scan of the source text",
     "test_packaging.py": "the package list and the bundled files",
     "test_names.py": "string labels",
     "test_expr.py": "the expression whitelist: Python floats and refusals, no array kernel",
