@@ -117,9 +117,31 @@ class CaseSpec:
 
 
 def read_case(path) -> CaseSpec:
-    """Read and parse a case file (one line naming the file on any problem), or take a case
-    given as a Python dict with the structure of the TOML (validated when built, with the same
-    messages; exceptions instead of exit codes)."""
+    """Read and parse a case file once; its models are built from the parsed content.
+
+    Parameters
+    ----------
+    path : str, pathlib.Path or dict
+        A case file (TOML), or a case given as a Python dict with the structure of the TOML
+        (validated when built, with the same messages).
+
+    Returns
+    -------
+    CaseSpec
+        The parsed case: ``spec.build(config, **params)`` gives its model at a parameter point.
+
+    Raises
+    ------
+    CaseError
+        One line naming the file and the element on any problem.
+
+    Examples
+    --------
+    >>> from mbseig.casefile.examples import pendulum
+    >>> spec = read_case(pendulum().data)
+    >>> spec.build().n   # the bob's two coordinates
+    2
+    """
     check("read_case", locals())
     if isinstance(path, dict):
         title = path.get("title")
@@ -156,9 +178,31 @@ def _expanded(data, path):
 def load_case(path, config: str | None = None, **params):
     """Read a case file and build its model (``read_case(path).build(config, **params)``).
 
-    ``params`` override entries of the case's ``[parameters]`` table (numbers or expressions);
-    ``config`` selects a named entry of its ``[configurations]`` table (a set of parameter
-    values).  Raises :class:`CaseError` naming the file and element on any problem.
+    Parameters
+    ----------
+    path : str, pathlib.Path or dict
+        A case file, or a case as a dict (:func:`read_case`).
+    config : str, optional
+        A named entry of the case's ``[configurations]`` table (a set of parameter values).
+    **params
+        Overrides of entries of the case's ``[parameters]`` table (numbers or expressions).
+
+    Returns
+    -------
+    Model or LinearCase
+        The built model (a ``kind = "linear"`` case gives its matrices).
+
+    Raises
+    ------
+    CaseError
+        One line naming the file and the element on any problem.
+
+    Examples
+    --------
+    >>> from mbseig.casefile.examples import pendulum
+    >>> model = load_case(pendulum().data, l=2.0)
+    >>> model.parameters["l"]
+    2.0
     """
     check("load_case", locals())
     return read_case(path).build(config, **params)

@@ -342,8 +342,39 @@ def expand_urdf(case: dict, case_path) -> dict:
 
 def import_urdf(urdf_path, out_toml=None, *, positions=None, stiffness=None, damping=None,
                 floating: bool = False, gravity=(0.0, 0.0, -9.81), title: str | None = None) -> dict:
-    """The plain 3-D case equivalent to a URDF (``mbseig import-urdf ROBOT.urdf --out
-    CASE.toml``): written to ``out_toml`` when given, and returned as a dict."""
+    """The plain 3-D case equivalent to a URDF (``mbseig import-urdf ROBOT.urdf --out CASE.toml``).
+
+    Parameters
+    ----------
+    urdf_path : str or pathlib.Path
+        The robot's URDF file.
+    out_toml : str or pathlib.Path, optional
+        Where to write the case (TOML); nothing is written when omitted.
+    positions : dict, optional
+        {joint: value} of the reference configuration (rad or m; the others 0).
+    stiffness : dict, optional
+        {"default": k, joint: k}: a torsional (revolute) or axial (prismatic) spring on each
+        joint named or covered by the default.
+    damping : dict or str, optional
+        The same for dampers, or "urdf": each joint's ``<dynamics damping>``.
+    floating : bool
+        The root body free (False: welded to the ground).
+    gravity : sequence of 3 numbers or None
+        Gravity in the robot's base frame (None: no gravity).
+    title : str, optional
+        The case's title (default: the robot's name and the file's).
+
+    Returns
+    -------
+    dict
+        The case as the 3-D format's tables (:func:`mbseig.read_case` takes it as it is).
+
+    Examples
+    --------
+    >>> case = import_urdf("two_link_arm.urdf", positions={"shoulder": 0.3})  # doctest: +SKIP
+    >>> sorted(case)[:3]  # doctest: +SKIP
+    ['bodies', 'dimension', 'forces']
+    """
     from .writer import to_toml
 
     urdf_path = Path(urdf_path)

@@ -38,10 +38,37 @@ _ESCAPES = {"\\": "\\\\", '"': '\\"', "\b": "\\b", "\t": "\\t", "\n": "\\n", "\f
 # TOML writer
 # ---------------------------------------------------------------------------------------------
 def to_toml(case: dict) -> str:
-    """TOML text of a case dict (any dict of TOML values: str, int, float, bool, dates, lists,
-    dicts).  Top-level dicts become ``[tables]``, lists of dicts ``[[arrays of tables]]``; inside
-    an entry of an array of tables every dict is an inline table (the point references and
-    parameter tables of the formats).  Raises TypeError on a value TOML cannot hold."""
+    """TOML text of a case dict.
+
+    Top-level dicts become ``[tables]``, lists of dicts ``[[arrays of tables]]``; inside an entry
+    of an array of tables every dict is an inline table (the point references and parameter
+    tables of the formats).  The round trip is exact: ``tomllib.loads(to_toml(case)) == case``.
+
+    Parameters
+    ----------
+    case : dict
+        Any dict of TOML values: str, int, float, bool, dates, lists, dicts (numpy scalars and
+        arrays are written as numbers and lists).
+
+    Returns
+    -------
+    str
+        The TOML text.
+
+    Raises
+    ------
+    TypeError
+        A value TOML cannot hold.
+
+    Examples
+    --------
+    >>> print(to_toml({"title": "x", "parameters": {"m": 1.0}}))
+    title = "x"
+    <BLANKLINE>
+    [parameters]
+    m = 1.0
+    <BLANKLINE>
+    """
     if not isinstance(case, dict):
         raise TypeError(f"a case must be a dict, got {type(case).__name__}")
     lines: list[str] = []

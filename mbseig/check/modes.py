@@ -155,28 +155,71 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
                 defective_amplification: float = 1e8, progress=None) -> CheckResult:
     """Prove the listed ``modes`` (predicted from ``lin``) against the nonlinear ``model``.
 
-    indices : 1-based mode numbers (default: all listed modes).
-    amplitude : ε, the largest coordinate deviation relative to the model's length scale.
-    periods, efolds : the run lasts ``periods`` periods of an oscillatory mode, cut short at
-        ``efolds`` e-folding times 1/|δ|; a real mode runs ``efolds`` e-folding times 1/|s|.
-    samples_per_period, min_samples : output sampling of the modal coordinate.
-    delta_rtol, omega_rtol : relative tolerances, widened to the run's resolution u_δ, u_ω only
-        (module docstring); zero_delta_tol : a δ resolved no better than zero_delta_tol·|s| is
-        reported in ``unresolved``.
-    resolution_k : standard errors of the fitted slopes counted as the run's resolution.
-    max_fast_periods : cap of the run length in periods of the fastest listed mode (explicit
-        integration only: a model with a configuration-dependent mass runs implicit, uncapped).
-    recheck_amplification, defective_amplification : a mode whose modal coordinate amplifies
-        state errors by more than the first (a nearly defective pair, near critical damping) is
-        run again at a tenth of the amplitude, the difference counted into its resolution; above
-        the second it is a Jordan block and is not simulated (the reason is recorded).
-    rigid_tol : a rigid-body mode passes when the probed ω_eff ≤ rigid_tol · ω_ref.
-    method, ode_rtol : integrator and its relative tolerance; absolute tolerances are ode_rtol
-        times the smallest expected deviation.
-    mass_tol : relative eigenvalue of Nᵀ M N below which the model counts as massless.
-    progress : None, or a callback ``(label, done, total)`` called with "modes" before each
-        mode and once after the last (the CLI's progress bar: a stiff model's mode takes tens
-        of seconds).
+    Each mode is simulated from the equilibrium displaced along its shape; its measured decay
+    rate δ and frequency ω are compared with the prediction.
+
+    Parameters
+    ----------
+    model : Model
+        The nonlinear model (``eq.model`` when it had commands).
+    eq : Equilibrium
+        Its equilibrium (:func:`mbseig.equilibrium`).
+    lin : LinearModel
+        The linearization the modes came from (:func:`mbseig.linearize`).
+    modes : Modes
+        The listed modes (:func:`mbseig.modes`).
+    indices : sequence of int, optional
+        1-based mode numbers (default: all listed modes).
+    amplitude : float
+        ε, the largest coordinate deviation relative to the model's length scale.
+    periods, efolds : float
+        The run lasts ``periods`` periods of an oscillatory mode, cut short at ``efolds``
+        e-folding times 1/|δ|; a real mode runs ``efolds`` e-folding times 1/|s|.
+    samples_per_period, min_samples : int
+        Output sampling of the modal coordinate.
+    delta_rtol, omega_rtol : float
+        Relative tolerances, widened to the run's resolution u_δ, u_ω only (module docstring).
+    zero_delta_tol : float
+        A δ resolved no better than zero_delta_tol·|s| is reported in ``unresolved``.
+    rigid_tol : float
+        A rigid-body mode passes when the probed ω_eff ≤ rigid_tol · ω_ref.
+    method : str
+        The integrator (:data:`mbseig.check.INTEGRATORS`).
+    ode_rtol : float
+        Its relative tolerance; absolute tolerances are ode_rtol times the smallest expected
+        deviation.
+    mass_tol : float
+        Relative eigenvalue of Nᵀ M N below which the model counts as massless.
+    resolution_k : float
+        Standard errors of the fitted slopes counted as the run's resolution.
+    max_fast_periods : float
+        Cap of the run length in periods of the fastest listed mode (explicit integration only:
+        a model with a configuration-dependent mass runs implicit, uncapped).
+    recheck_amplification, defective_amplification : float
+        A mode whose modal coordinate amplifies state errors by more than the first (a nearly
+        defective pair, near critical damping) is run again at a tenth of the amplitude, the
+        difference counted into its resolution; above the second it is a Jordan block and is
+        not simulated (the reason is recorded).
+    progress : callable, optional
+        A callback ``(label, done, total)`` called with "modes" before each mode and once after
+        the last (the CLI's progress bar: a stiff model's mode takes tens of seconds).
+
+    Returns
+    -------
+    CheckResult
+        Per mode a :class:`ModeCheck` (predicted and measured δ and ω, their resolution, passed
+        or the reason it was not simulated) and whether all passed.
+
+    Examples
+    --------
+    >>> import mbseig
+    >>> from mbseig.casefile.examples import damped_pendulum
+    >>> model = damped_pendulum(c=0.5).build()
+    >>> eq = mbseig.equilibrium(model)
+    >>> lin = mbseig.linearize(model, eq)
+    >>> res = check_modes(model, eq, lin, mbseig.modes(lin), periods=5)
+    >>> res.passed
+    True
     """
     check("check_modes", locals())
     t_start = time.perf_counter()

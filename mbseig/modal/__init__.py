@@ -82,33 +82,73 @@ def modes(M, P=None, Q=None, *, solver: str = "auto", N=None, coordinate_names=N
           fused: bool = True, rigid=None, display=None, **solver_options) -> Modes:
     """Solve and classify the modes of (M s² + P s + Q) x = 0.
 
-    M may be a :class:`~mbseig.linear.LinearModel` instead of a matrix: its M, P, Q, N,
-    coordinate names and (large constrained models) constraint Jacobian are used.
-    N, coordinate_names : null-space basis and full-coordinate names for mode shapes (q = N x).
-    stability_rtol, stability_atol, safety : see the module docstring.
-    rigid_rank_tol : relative threshold for counting independent eigenvectors (rigid-body modes,
-        Jordan block sizes of clusters).
-    n_modes, target, band, constraints : ask for a partial spectrum of sparse matrices (the
-        ``partial-*`` paths of :func:`mbseig.eigen.solve_partial`): ``n_modes`` modes nearest the
-        angular frequency ``target`` (rad/s, default 0), or every mode with ω_n in
-        ``band = (ω_lo, ω_hi)``; ``constraints`` is Φ_q when M, P, Q are in full coordinates.
-    eta_warn : a listed mode whose backward errors (normwise and componentwise) both exceed it is
+    Parameters
+    ----------
+    M : array_like, scipy.sparse matrix or LinearModel
+        The mass matrix, or a :class:`~mbseig.linear.LinearModel` whose M, P, Q, N, coordinate
+        names, rigid-body directions, display map and (large constrained models) constraint
+        Jacobian are used.
+    P, Q : array_like or scipy.sparse matrix, optional
+        Damping (with gyroscopic terms) and stiffness; P defaults to zero.  Q is required
+        unless M is a LinearModel.
+    solver : str
+        The eigensolver path (:data:`mbseig.eigen.SOLVERS`); "auto" chooses by structure.
+    N : array_like, optional
+        Null-space basis for the mode shapes in full coordinates (q = N x).
+    coordinate_names : sequence of str, optional
+        The names of the full coordinates (the dominant coordinates of each mode).
+    stability_rtol, stability_atol : float
+        The relative and absolute floors of each mode's stability tolerance
+        (module docstring: τ = max(safety κ η, rtol |s|, atol)).
+    safety : float
+        The factor on the first-order error bound κ η.
+    n_dominant : int
+        How many dominant coordinates each mode lists.
+    rigid_rank_tol : float
+        Relative threshold for counting independent eigenvectors (rigid-body modes, Jordan block
+        sizes of clusters).
+    n_modes : int, optional
+        A partial spectrum of sparse matrices: the ``n_modes`` modes nearest ``target``.
+    target : float, optional
+        The angular frequency [rad/s] the partial spectrum is nearest (default 0).
+    band : tuple of float, optional
+        Every mode with ω_n in ``band = (ω_lo, ω_hi)``.
+    constraints : array_like or scipy.sparse matrix, optional
+        Φ_q when M, P, Q are in full coordinates (partial paths).
+    eta_warn : float
+        A listed mode whose backward errors (normwise and componentwise) both exceed it is
         flagged in :attr:`Modes.flags` and named in a RuntimeWarning.
-    rigid : the model's rigid-body directions by construction (DESIGN §6,
-        :mod:`mbseig.modal.scope`): a :class:`~mbseig.model.symmetry.RigidDirections`, a
-        callable returning one (called only when a mode is rigid-body), or an array whose
-        columns are directions in the coordinates of the shapes (full coordinates q when N is
-        given).  The verdict leaves those modes out; a LinearModel supplies its own.
-    display : a :class:`~mbseig.model.naming.DisplayMap` (or a callable returning one): the
-        dominant coordinates are named by its rows (a body's translation and rotation, a beam
-        station) instead of the natural coordinates; a LinearModel supplies its own.
-    fused : a small real dense problem (order ≤ :data:`mbseig.eigen.small.SMALL_MAX`, ``auto``,
-        the full spectrum) takes the fused implementation of its path
+    fused : bool
+        A small real dense problem (order ≤ :data:`mbseig.eigen.small.SMALL_MAX`, ``auto``, the
+        full spectrum) takes the fused implementation of its path
         (:func:`mbseig.modal.small.small_modes`: the same numbers, a fraction of the time);
-        ``False`` runs the general stage (for comparisons).
-    Other keywords are the path options of the request (:class:`mbseig.eigen.Request`): those of
-    :func:`mbseig.eigen.solve_qep` (``sym_tol``, ``rayleigh_tol``, ``scale``, ``left``,
-    ``companion_cond``) or of :func:`mbseig.eigen.solve_partial`.
+        False runs the general stage (for comparisons).
+    rigid : RigidDirections, callable or array_like, optional
+        The model's rigid-body directions by construction (DESIGN §6,
+        :mod:`mbseig.modal.scope`): a :class:`~mbseig.model.symmetry.RigidDirections`, a callable
+        returning one (called only when a mode is rigid-body), or an array whose columns are
+        directions in the coordinates of the shapes.  The verdict leaves those modes out.
+    display : DisplayMap or callable, optional
+        The dominant coordinates named by its rows (a body's translation and rotation, a beam
+        station) instead of the natural coordinates.
+    **solver_options
+        The path options of the request (:class:`mbseig.eigen.Request`): those of
+        :func:`mbseig.eigen.solve_qep` (``sym_tol``, ``rayleigh_tol``, ``scale``, ``left``,
+        ``companion_cond``) or of :func:`mbseig.eigen.solve_partial`.
+
+    Returns
+    -------
+    Modes
+        Per mode (a complex pair once): eigenvalue s, δ = −Re s, ω_n, ω_d, ζ, stability and kind
+        (:mod:`mbseig.modal.rules`), backward error η, condition κ, tolerance τ, shape and
+        dominant coordinates; ``verdict`` the worst stability of the modes it covers.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> md = modes(np.eye(1), np.array([[0.2]]), np.array([[4.0]]))   # s² + 0.2 s + 4
+    >>> md.verdict, round(float(md.delta[0]), 12), round(float(md.omega_n[0]), 12)
+    ('stable', 0.1, 2.0)
     """
     check("modes", locals())
     if isinstance(M, LinearModel):

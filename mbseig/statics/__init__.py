@@ -47,26 +47,62 @@ def equilibrium(model, *, tol: float = 1e-12, max_iter: int = 50, rank_tol: floa
                 compliance: dict | None = None, blas: int | None = 1) -> Equilibrium:
     """Find the static equilibrium of ``model``, resolving its inverse-statics commands first.
 
-    tol : constraint residual relative to each constraint's scale (e.g. L² for a rigid length);
+    Parameters
+    ----------
+    model : Model
+        The built model (:func:`mbseig.load_case`).
+    tol : float
+        Constraint residual relative to each constraint's scale (e.g. L² for a rigid length);
         also the force outside the range of the tangent stiffness relative to force_scale.
-    xtol : the Newton correction at convergence, in the model's length and angle scales
-        (default: tol); floor_tol : the correction accepted where rounding stops its decrease.
-    rank_tol : relative singular-value threshold for the rank of Φ_q (redundancy count).
-    q_init : start of the iteration (default: the case's positions, or the commanded posture
-        found by inverse statics).
-    continuation : when Newton fails, continue in the loads from the unloaded state.
-    offer_stable : when the equilibrium is statically unstable, look for a stable one (load
-        continuation from the unloaded state, then descent from the unstable direction) and
-        attach it as ``stable_alternative``; a :class:`StaticInstabilityWarning` says so.
-    self_stress : "refuse" (default) raises :class:`UndeterminedSelfStress` when redundant
-        constraints carry a self-stress that changes the stiffness; "report" returns the
-        minimum-norm multipliers with the states recorded in ``self_stress``.
-    compliance : {constraint name: compliance} of redundant constraints (extension per unit of
-        the force the element reports), which determines their self-stress
+    max_iter : int
+        Newton iterations before the load continuation takes over.
+    rank_tol : float
+        Relative singular-value threshold for the rank of Φ_q (redundancy count).
+    q_init : array_like, optional
+        Start of the iteration (default: the case's positions, or the commanded posture found
+        by inverse statics).
+    xtol : float, optional
+        The Newton correction at convergence, in the model's length and angle scales
+        (default: tol).
+    floor_tol : float
+        The correction accepted where rounding stops its decrease.
+    continuation : bool
+        When Newton fails, continue in the loads from the unloaded state.
+    offer_stable : bool
+        When the equilibrium is statically unstable, look for a stable one (load continuation
+        from the unloaded state, then descent from the unstable direction) and attach it as
+        ``stable_alternative``; a :class:`StaticInstabilityWarning` says so.
+    self_stress : {"refuse", "report"}
+        "refuse" raises :class:`UndeterminedSelfStress` when redundant constraints carry a
+        self-stress that changes the stiffness; "report" returns the minimum-norm multipliers
+        with the states recorded in ``self_stress``.
+    compliance : dict, optional
+        {constraint name: compliance} of redundant constraints (extension per unit of the force
+        the element reports), which determines their self-stress
         (:func:`mbseig.statics.stiffness.compliant_multipliers`).
-    blas : BLAS threads while it runs (:func:`mbseig.statics.linalg.blas_threads`; None leaves
-        them as they are).
-    Errors name the case file and the constraint or coordinates (docs/design.md, "Equilibrium").
+    blas : int or None
+        BLAS threads while it runs (:func:`mbseig.statics.linalg.blas_threads`; None leaves them
+        as they are).
+
+    Returns
+    -------
+    Equilibrium
+        q₀, λ₀ with their residuals, the rank of Φ_q(q₀), the static stability and how the
+        equilibrium was reached; ``eq.model`` is the model with its commands resolved.
+
+    Raises
+    ------
+    EquilibriumError
+        Naming the case file and the constraint or coordinates (docs/design.md,
+        "Equilibrium"): :class:`ConstraintsUnsatisfiable` only where that was shown,
+        :class:`NotConverged` otherwise, with where it started.
+
+    Examples
+    --------
+    >>> from mbseig.casefile.examples import pendulum
+    >>> eq = equilibrium(pendulum().build())
+    >>> eq.kind, [round(float(x), 12) + 0.0 for x in eq.q]   # the bob hangs below the pivot
+    ('rest', [0.0, -1.0])
     """
     check("equilibrium", locals())
     from .linalg import blas_threads

@@ -59,9 +59,10 @@ def analyze(case=None, *, config=None, params=None, solver="auto", constraint_st
 
     Examples
     --------
-    >>> a = analyze("cases/pendulum.toml")  # doctest: +SKIP
-    >>> a.kind, a.verdict
-    ('rest', 'stable')
+    >>> from mbseig.casefile.examples import damped_pendulum
+    >>> a = analyze(damped_pendulum(c=0.2))
+    >>> a.kind, str(a.verdict), len(a.to_json()["modes"])
+    ('rest', 'stable', 1)
     """
     check("analyze", locals())
     opts = {"solver": solver, "constraint_stiffness": constraint_stiffness,

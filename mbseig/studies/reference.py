@@ -101,7 +101,8 @@ def find_reference(case, *, config=None, params=None):
 
     Examples
     --------
-    >>> model, ref = find_reference("cases/pendulum.toml")  # doctest: +SKIP
+    >>> from mbseig.casefile.examples import pendulum
+    >>> model, ref = find_reference(pendulum())
     >>> ref.kind
     'rest'
     """
@@ -158,9 +159,11 @@ def linearize(model, reference, /, **options):
 
     Examples
     --------
-    >>> model, eq = find_reference("cases/pendulum.toml")  # doctest: +SKIP
-    >>> linearize(model, eq).kind
-    'rest'
+    >>> from mbseig.casefile.examples import pendulum
+    >>> model, eq = find_reference(pendulum())
+    >>> lin = linearize(model, eq)
+    >>> lin.kind, lin.dof
+    ('rest', 1)
     """
     from .periodic_motion import ReferenceMotion
     from .steady import SteadyState

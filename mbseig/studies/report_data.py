@@ -155,6 +155,15 @@ def report_data(case, *, configs=None, out_dir, run_check=True, jobs=None, studi
     -------
     ReportData
         The record :func:`mbseig.report.build.render_report` formats.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from mbseig.casefile.examples import pendulum
+    >>> data = report_data(pendulum(), out_dir=tempfile.mkdtemp(), run_check=False,
+    ...                    sensitivities=False)
+    >>> data.kind, [str(s.verdict) for s in data.summaries]
+    ('rest', ['critical'])
     """
     case = as_spec(case)
     configs = configs or [None]
@@ -245,7 +254,12 @@ def write_report(case, *, out_dir=None, configs=None, all_configs=False, run_che
 
     Examples
     --------
-    >>> md, page = write_report("cases/pendulum.toml", out_dir="out")  # doctest: +SKIP
+    >>> import tempfile
+    >>> from mbseig.casefile.examples import pendulum
+    >>> md, page = write_report(pendulum(), out_dir=tempfile.mkdtemp(), run_check=False,
+    ...                         animations=False, sensitivities=False)
+    >>> md.name, page.name
+    ('report.md', 'report.html')
     """
     from ..report.build import render_report
 

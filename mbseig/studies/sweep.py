@@ -92,28 +92,65 @@ def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None,
               curves=True, curve_values=None, diagram=None, resume=None, lean=True) -> SweepResult:
     """Sweep ``case`` over ``axes`` = [(name, values), ...] (see the module docstring).
 
-    case : a path (read and parsed once, here) or a :class:`~mbseig.casefile.CaseSpec`; the
-        lines and boundary searches receive the parsed case, never the path.
-    jobs : local worker processes; None (default) decides per stage from its first tasks
-        whether a pool of the usable CPUs is faster than in-process
-        (:mod:`mbseig.studies.runners`); 1 runs in-process.
-    scheduler : a Dask scheduler address (or a ``distributed.Client``) to run on.
-    xtol_rel : boundary tolerance relative to the first axis' span.
-    continuation : follow the branch along each line (default); False solves each point alone.
-    curves : with two axes, follow each first-line boundary across the second axis (at
-        ``curve_values`` of it, default its grid values; more are inserted where it bends).
-    resume : a directory (:mod:`mbseig.studies.resume`), or a
-        :class:`~mbseig.studies.resume.Checkpoint`: every line, point, boundary search and
-        curve is written there as it completes, and the ones it already holds are read
-        instead of computed; the result equals that of an uninterrupted sweep bit for bit.
-        Interrupted (Ctrl-C), the sweep raises :class:`~mbseig.studies.runners.Interrupted`
-        (a KeyboardInterrupt) saying how many grid points finished.
-    diagram : the coordinate or named angle of the bifurcation diagram (default: the named angle,
+    Parameters
+    ----------
+    case : str, pathlib.Path or CaseSpec
+        A path (read and parsed once, here) or a read case; the lines and boundary searches
+        receive the parsed case, never the path.
+    axes : list of (str, sequence of float)
+        The swept parameters: the first is followed by continuation and tracked; a second
+        gives a stability map and the boundaries followed across it.
+    config : str, optional
+        The configuration (``[configurations.NAME]``).
+    fixed : dict, optional
+        Parameters held at other values than the case's {name: value or expression}.
+    jobs : int, optional
+        Local worker processes; None decides per stage from its first tasks whether a pool of
+        the usable CPUs is faster than in-process (:mod:`mbseig.studies.runners`); 1 runs
+        in-process.
+    scheduler : str or distributed.Client, optional
+        A Dask scheduler address (or a client) to run on.
+    progress : callable or tqdm, optional
+        The progress bar (or a callback) the runners update.
+    xtol_rel : float
+        Boundary tolerance relative to the first axis' span.
+    safety : float
+        The factor on each eigenvalue's error bound in its tolerance (:func:`mbseig.modes`).
+    stability_rtol : float
+        The relative floor of each eigenvalue's tolerance (:func:`mbseig.modes`).
+    continuation : bool
+        Follow the branch along each line (default); False solves each point alone.
+    curves : bool
+        With two axes, follow each first-line boundary across the second axis.
+    curve_values : sequence of float, optional
+        The second axis' values the curves are followed at (default its grid values; more are
+        inserted where a curve bends).
+    diagram : str, optional
+        The coordinate or named angle of the bifurcation diagram (default: the named angle,
         else the coordinate, that varies most along the branch).
-    lean : build the case once per line and update only the force scalars the swept parameter
-        enters, holding a commanded spring's tension when only its stiffness is swept
-        (:func:`~mbseig.studies.continuation.family_maker`; the same numbers to rounding);
-        False builds and resolves every value (the general path, for comparison).
+    resume : str, pathlib.Path or Checkpoint, optional
+        A directory (:mod:`mbseig.studies.resume`): every line, point, boundary search and curve
+        is written there as it completes, and the ones it already holds are read instead of
+        computed; the result equals that of an uninterrupted sweep bit for bit.  Interrupted
+        (Ctrl-C), the sweep raises :class:`~mbseig.studies.runners.Interrupted` (a
+        KeyboardInterrupt) saying how many grid points finished.
+    lean : bool
+        Build the case once per line and update only the force scalars the swept parameter
+        enters (:func:`~mbseig.studies.continuation.family_maker`; the same numbers to
+        rounding); False builds and resolves every value (the general path, for comparison).
+
+    Returns
+    -------
+    SweepResult
+        The points (modes, verdicts), the tracked modes, the stability boundaries with their
+        crossing eigenvalues, folds and branch points, and the boundary curves.
+
+    Examples
+    --------
+    >>> from mbseig.casefile.examples import damped_pendulum
+    >>> res = run_sweep(damped_pendulum(), [("c", [0.0, 0.1, 0.2])], jobs=1)
+    >>> [str(p.verdict) for p in res.points[0]]   # δ = c/(2m): 0 (within its bound), then > 0
+    ['critical', 'stable', 'stable']
     """
     check("run_sweep", locals())
     spec = as_spec(case)
