@@ -25,7 +25,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Callable, Mapping
+from collections.abc import Callable, Mapping
 
 from ..errors import SolverError
 
@@ -98,6 +98,16 @@ class SolverPath:
     needs: str  # the structure it requires, in words
     applies: Callable = field(repr=False, compare=False)  # Structure -> None or refusal text
     kernel: Callable = field(repr=False, compare=False)  # the family driver's call of the path
+    #: what the driver must know of a path, declared here instead of tested by name:
+    #: M must be symmetric positive definite (checked before the kernel runs)
+    needs_definite_mass: bool = False
+    #: M, P, Q must be real
+    real_only: bool = False
+    #: the kernel divides by the mass (mass normalization): a problem scaled for its range
+    #: takes the general path instead
+    divides_by_mass: bool = False
+    #: the pencil's regularity is checked before the kernel (a singular pencil named)
+    checks_regularity: bool = False
 
     @property
     def partial(self) -> bool:
@@ -108,10 +118,11 @@ SOLVERS: dict[str, SolverPath] = {}
 FAMILIES: dict[str, Callable] = {}
 
 
-def register(name, *, family, needs, kernel, applies=None):
+def register(name, *, family, needs, kernel, applies=None, **traits):
     """Add the path ``name`` of ``family`` to :data:`SOLVERS` (``applies`` defaults to
-    "always")."""
-    SOLVERS[name] = SolverPath(name, family, needs, applies or (lambda structure: None), kernel)
+    "always"; ``traits``: the fields of :class:`SolverPath` the driver reads)."""
+    SOLVERS[name] = SolverPath(name, family, needs, applies or (lambda structure: None), kernel,
+                               **traits)
 
 
 def register_family(name, driver):

@@ -73,6 +73,7 @@ __all__ = ["choose_solver", "problem_scaling", "solve_qep", "blas_held", "small_
 
 #: cond(M) above which a positive definite M is not mass-normalized (companion, eigh paths)
 COMPANION_COND = 1e5
+GENERAL = "qz"  # the dense path that needs nothing of M, P, Q (QZ on the companion pencil)
 STRUCTURED_COND = 1.0 / (1e3 * EPS)
 SMALL_BLAS = 100  # order up to which the dense solve runs on one BLAS thread
 _HELD = threading.local()  # BLAS threads a caller holds capped (mbseig.studies.runners)
@@ -321,14 +322,15 @@ def solve_qep(M, P, Q, *, solver: str = "auto", sym_tol: float = 1e-13,
     memo = {"fro": dict(zip("MPQ", norms))}
     name, reason, extras = choose_solver(M, P, Q, sym_tol=sym_tol, rayleigh_tol=rayleigh_tol,
                                          memo=memo, companion_cond=companion_cond)
-    if scaled and name == "companion":  # no mass normalization of a problem scaled for range
-        name, reason = "qz", reason.replace("mass-normalized companion", "scaled QZ (magnitudes out "
-                                            "of range: no division by the mass)")
+    if scaled and SOLVERS[name].divides_by_mass:  # no mass normalization of a problem scaled
+        name, reason = GENERAL, reason.replace("mass-normalized companion", "scaled QZ (magnitudes "
+                                               "out of range: no division by the mass)")
     structure = Structure(name, reason, extras, complex_problem=complex_problem)
     name, reason, extras = select_path(solver, structure, "dense")
-    if name in ("companion", "eigh", "proportional") and not mass_condition(M, memo)[0]:
-        raise SolverError(f"solver {name!r} needs {SOLVERS[name].needs}")
-    if name in ("eigh", "proportional") and complex_problem:
+    path = SOLVERS[name]
+    if path.needs_definite_mass and not mass_condition(M, memo)[0]:
+        raise SolverError(f"solver {name!r} needs {path.needs}")
+    if path.real_only and complex_problem:
         raise SolverError(f"solver {name!r} needs real M, P, Q")
     if left == "auto":
         left = not all(memo[k] if k in memo else is_symmetric(A, sym_tol, norm=memo["fro"][k])
@@ -346,9 +348,9 @@ def solve_qep(M, P, Q, *, solver: str = "auto", sym_tol: float = 1e-13,
     # small problems on one BLAS thread: a second one only adds synchronization there (and on a
     # loaded machine milliseconds per call, more than the whole solve of a few coordinates)
     with small_blas(n):
-        if name == "qz":
+        if path.checks_regularity:
             check_regular(M, P, Q, norms)
-        sol = SOLVERS[name].kernel(M, P, Q, opts, name, reason, norms)
+        sol = path.kernel(M, P, Q, opts, name, reason, norms)
     bad = ~np.isfinite(sol.eigenvalues)
     if np.any(bad):
         raise SolverError(f"{name}: {int(bad.sum())} of {sol.eigenvalues.size} eigenvalues are not "
@@ -402,10 +404,13 @@ def dense_driver(problem, request) -> QEPSolution:
 
 register_family("dense", dense_driver)
 register("eigh", family="dense", needs="P = 0, M and Q symmetric, M positive definite",
-         kernel=solve_eigh, applies=structured_applies("eigh"))
+         kernel=solve_eigh, applies=structured_applies("eigh"), needs_definite_mass=True,
+         real_only=True)
 register("proportional", family="dense",
          needs="P = αM + βQ with M and Q symmetric, M positive definite",
-         kernel=solve_proportional, applies=structured_applies("proportional"))
+         kernel=solve_proportional, applies=structured_applies("proportional"),
+         needs_definite_mass=True, real_only=True)
 register("companion", family="dense", needs="M symmetric positive definite",
-         kernel=solve_companion)
-register("qz", family="dense", needs="nothing (any M, P, Q)", kernel=solve_qz)
+         kernel=solve_companion, needs_definite_mass=True, divides_by_mass=True)
+register(GENERAL, family="dense", needs="nothing (any M, P, Q)", kernel=solve_qz,
+         checks_regularity=True)
