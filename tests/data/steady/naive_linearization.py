@@ -29,15 +29,19 @@ q1, q2, q3, q4, q5, q6 = q = dynamicsymbols('q1:7')
 q1d, q2d, q3d, q4d, q5d, q6d = qd = [qi.diff(t) for qi in q]
 u1, u2, u3, u4, u5, u6 = u = dynamicsymbols('u1:7')
 u1d, u2d, u3d, u4d, u5d, u6d = [ui.diff(t) for ui in u]
-N = ReferenceFrame('N'); NO = Point('NO')
-A = N.orientnew('A', 'Axis', [q1, N.z]); B = A.orientnew('B', 'Axis', [q2, A.x])
+N = ReferenceFrame('N')
+NO = Point('NO')
+A = N.orientnew('A', 'Axis', [q1, N.z])
+B = A.orientnew('B', 'Axis', [q2, A.x])
 C = B.orientnew('C', 'Axis', [q3, B.y])
 CO = NO.locatenew('CO', q4 * N.x + q5 * N.y + q6 * N.z)
-w_c_n_qd = C.ang_vel_in(N); w_b_n_qd = B.ang_vel_in(N)
+w_c_n_qd = C.ang_vel_in(N)
+w_b_n_qd = B.ang_vel_in(N)
 C.set_ang_vel(N, u1 * B.x + u2 * B.y + u3 * B.z)
 v_co_n_qd = CO.pos_from(NO).dt(N)
 CO.set_vel(N, u4 * C.x + u5 * C.y + u6 * C.z)
-P = CO.locatenew('P', r * B.z); P.v2pt_theory(CO, N, C)
+P = CO.locatenew('P', r * B.z)
+P.v2pt_theory(CO, N, C)
 f_c = Matrix([q6 - dot(CO.pos_from(P), N.z)])
 f_v = Matrix([dot(P.vel(N), uv) for uv in C])
 kindiffs = Matrix([dot(w_c_n_qd - C.ang_vel_in(N), uv) for uv in B] +
@@ -60,7 +64,8 @@ qd_op = {q2d: 0, q4d: -r * (sin(q2) * q1d + q3d) * cos(q1),
 ud_op = {u1d: 4 * g * sin(q2) / (5 * r) + sin(2 * q2) * q1d**2 / 2 + 6 * cos(q2) * q1d * q3d / 5,
          u2d: 0, u3d: 0,
          u4d: r * (sin(q2) * sin(q3) * q1d * q3d + sin(q3) * q3d**2),
-         u5d: r * (4 * g * sin(q2) / (5 * r) + sin(2 * q2) * q1d**2 / 2 + 6 * cos(q2) * q1d * q3d / 5),
+         u5d: r * (4 * g * sin(q2) / (5 * r) + sin(2 * q2) * q1d**2 / 2
+                   + 6 * cos(q2) * q1d * q3d / 5),
          u6d: -r * (sin(q2) * cos(q3) * q1d * q3d + cos(q3) * q3d**2)}
 
 
@@ -78,7 +83,8 @@ def state_matrix(variant):
 variants = ('correct', 'drop_fv_q', 'drop_fa_q', 'drop_both')
 mats = {vname: state_matrix(vname) for vname in variants}
 upright = {q1d: 0, q2: 0, m: 1, r: 1, g: 1}
-print("== upright, m = r = g = 1, spin rate q3d (forward speed |q3d|*r); states [q1..q5, u1..u3] ==")
+print("== upright, m = r = g = 1, spin rate q3d (forward speed |q3d|*r); "
+      "states [q1..q5, u1..u3] ==")
 W = symbols('W')   # spin rate symbol; substitute q3d -> W BEFORE setting q3 = 0
 for vname in variants:
     Au = sm.simplify(mats[vname].subs(q3d, W).subs(upright).subs({q1: 0, q3: 0}))
@@ -90,22 +96,27 @@ for vname in variants:
         An = np.array(Au.subs(W, w).evalf(), dtype=float)
         e = np.linalg.eigvals(An)
         nz = sorted(e[np.abs(e) > 1e-7], key=lambda z: (z.real, z.imag))
-        print(f"  q3d = {float(w):.6f}: nonzero eigenvalues {['%.12f%+.12fj' % (z.real, z.imag) for z in nz]}")
+        print(f"  q3d = {float(w):.6f}: nonzero eigenvalues "
+              f"{[f'{z.real:.12f}{z.imag:+.12f}j' for z in nz]}")
     # invariance with respect to the (ignorable) angles q1, q3
-    An2 = np.array(mats[vname].subs(q3d, W).subs(upright).subs({q1: 0.3, q3: 0.7}).subs(W, 1 / np.sqrt(3)).evalf(), dtype=float)
-    print(f"  at q1 = 0.3, q3 = 0.7 (critical speed): {np.round(np.sort_complex(np.linalg.eigvals(An2)), 9)}")
+    An2 = np.array(mats[vname].subs(q3d, W).subs(upright).subs({q1: 0.3, q3: 0.7})
+                   .subs(W, 1 / np.sqrt(3)).evalf(), dtype=float)
+    print(f"  at q1 = 0.3, q3 = 0.7 (critical speed): "
+          f"{np.round(np.sort_complex(np.linalg.eigvals(An2)), 9)}")
 
-# ---- steady turn cross-check (disk, m=r=g=1, lean into turn beta = 0.3, contact-path radius 5) ----
+# ---- steady turn cross-check (disk, m=r=g=1, lean into turn beta = 0.3, contact-path radius 5) --
 print("\n== steady turn cross-check with this second formulation ==")
 for beta, Rc in ((0.3, 5.0), (0.1, 5.0)):
     Ro = Rc - np.sin(beta)
     Om = np.sqrt(4 * np.tan(beta) / (6 * Ro + np.sin(beta)))
-    w3 = -Om * Ro            # centre velocity -r*(sin q2 q1d + q3d) must be forward for q1d>0, lean q2=+beta
+    # centre velocity -r*(sin q2 q1d + q3d) must be forward for q1d>0, lean q2=+beta
+    w3 = -Om * Ro
     spin = w3 - np.sin(beta) * Om
     opn = {q1d: Om, q2: beta, m: 1, r: 1, g: 1}
     resid = float(ud_op[u1d].subs(q3d, spin).subs(opn))
-    An = np.array(mats['correct'].subs(q3d, W).subs(opn).subs({q1: 0, q3: 0}).subs(W, spin).evalf(), dtype=float)
+    An = np.array(mats['correct'].subs(q3d, W).subs(opn).subs({q1: 0, q3: 0}).subs(W, spin).evalf(),
+                  dtype=float)
     e = np.linalg.eigvals(An)
     nz = e[np.abs(e) > 1e-7]
     print(f"beta = {beta}, R_c = {Rc}: Omega = {Om:.15f}, steady-lean residual u1d = {resid:.1e}, "
-          f"nonzero eigenvalues {['%+.14f%+.14fj' % (z.real, z.imag) for z in nz]}")
+          f"nonzero eigenvalues {[f'{z.real:+.14f}{z.imag:+.14f}j' for z in nz]}")

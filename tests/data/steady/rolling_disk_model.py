@@ -30,17 +30,17 @@ def build():
     L = Y.orientnew('L', 'Axis', [q2, Y.x])
     R = L.orientnew('R', 'Axis', [q3, L.y])
 
-    O = me.Point('O')
-    O.set_vel(N, 0)
-    Cp = O.locatenew('Cp', q4 * N.x + q5 * N.y)          # contact point (geometric)
+    origin = me.Point('O')
+    origin.set_vel(N, 0)
+    Cp = origin.locatenew('Cp', q4 * N.x + q5 * N.y)          # contact point (geometric)
     D = Cp.locatenew('D', r * L.z)                       # disk centre
 
-    kd = [qi.diff(t) - ui for qi, ui in zip(q, u)]
-    kdd = {qi.diff(t): ui for qi, ui in zip(q, u)}
+    kd = [qi.diff(t) - ui for qi, ui in zip(q, u, strict=True)]
+    kdd = {qi.diff(t): ui for qi, ui in zip(q, u, strict=True)}
 
     # angular velocity and centre velocity in terms of u
     R.set_ang_vel(N, R.ang_vel_in(N).subs(kdd))
-    D.set_vel(N, D.pos_from(O).dt(N).subs(kdd))
+    D.set_vel(N, D.pos_from(origin).dt(N).subs(kdd))
     # material point of the disk at the contact
     P = D.locatenew('P', -r * L.z)
     P.v2pt_theory(D, N, R)
@@ -56,4 +56,4 @@ def build():
                         u_dependent=[u4, u5], velocity_constraints=f_v)
     fr, frstar = KM.kanes_equations([body], loads)
     return dict(KM=KM, q=list(q), u=list(u), f_v=f_v, syms=(m, r, g, Id, Ip),
-                frames=(N, Y, L, R), points=(O, Cp, D, P), t=t)
+                frames=(N, Y, L, R), points=(origin, Cp, D, P), t=t)

@@ -50,18 +50,22 @@ def canonical(p):
     IAxz = p['IHxz'] - mH * (xH - xA) * (zH - zA) + mF * (w - xA) * (rF + zA)
     IAzz = p['IHzz'] + IFzz + mH * (xH - xA)**2 + mF * (w - xA)**2
     uA = (xA - w - c) * mp.cos(lam) - zA * mp.sin(lam)
-    IAll = mA * uA**2 + IAxx * mp.sin(lam)**2 + 2 * IAxz * mp.sin(lam) * mp.cos(lam) + IAzz * mp.cos(lam)**2
+    IAll = (mA * uA**2 + IAxx * mp.sin(lam)**2 + 2 * IAxz * mp.sin(lam) * mp.cos(lam)
+            + IAzz * mp.cos(lam)**2)
     IAlx = -mA * uA * zA + IAxx * mp.sin(lam) + IAxz * mp.cos(lam)
     IAlz = mA * uA * xA + IAxz * mp.sin(lam) + IAzz * mp.cos(lam)
     mu = c / w * mp.cos(lam)
     SR, SF = IRyy / rR, IFyy / rF
     ST = SR + SF
     SA = mA * uA + mu * mT * xT
-    M = mp.matrix([[ITxx, IAlx + mu * ITxz], [IAlx + mu * ITxz, IAll + 2 * mu * IAlz + mu**2 * ITzz]])
+    M = mp.matrix([[ITxx, IAlx + mu * ITxz],
+                   [IAlx + mu * ITxz, IAll + 2 * mu * IAlz + mu**2 * ITzz]])
     K0 = mp.matrix([[mT * zT, -SA], [-SA, -SA * mp.sin(lam)]])
-    K2 = mp.matrix([[0, (ST - mT * zT) / w * mp.cos(lam)], [0, (SA + SF * mp.sin(lam)) / w * mp.cos(lam)]])
+    K2 = mp.matrix([[0, (ST - mT * zT) / w * mp.cos(lam)],
+                    [0, (SA + SF * mp.sin(lam)) / w * mp.cos(lam)]])
     C1 = mp.matrix([[0, mu * ST + SF * mp.cos(lam) + ITxz / w * mp.cos(lam) - mu * mT * zT],
-                    [-(mu * ST + SF * mp.cos(lam)), IAlz / w * mp.cos(lam) + mu * (SA + ITzz / w * mp.cos(lam))]])
+                    [-(mu * ST + SF * mp.cos(lam)),
+                     IAlz / w * mp.cos(lam) + mu * (SA + ITzz / w * mp.cos(lam))]])
     return M, C1, K0, K2
 
 
@@ -79,16 +83,28 @@ G = 9.81
 # from a third-party test transcription (OBD has -12.15861426576450); see README) ----
 TABLE2 = {
     0: [5.53094371765393, 3.13164324790656, -3.13164324790656, -5.53094371765393],
-    1: [3.52696170990070 + 0.80774027519930j, 3.52696170990070 - 0.80774027519930j, -3.13423125066578, -7.11008014637442],
-    2: [2.68234517512745 + 1.68066296590675j, 2.68234517512745 - 1.68066296590675j, -3.07158645641514, -8.67387984831735],
-    3: [1.70675605663975 + 2.31582447384325j, 1.70675605663975 - 2.31582447384325j, -2.63366137253667, -10.3510146724592],  # only 15 sig. digits in the transcriptions found
-    4: [0.41325331521125 + 3.07910818603206j, 0.41325331521125 - 3.07910818603206j, -1.42944427361326, -12.15861426576447],
-    5: [-0.77534188219585 + 4.46486771378823j, -0.77534188219585 - 4.46486771378823j, -0.32286642900409, -14.07838969279822],
-    6: [-1.52644486584142 + 5.87673060598709j, -1.52644486584142 - 5.87673060598709j, -0.00406690076970, -16.0853712309803],  # only 15 sig. digits in the transcriptions found
-    7: [-2.13875644258362 + 7.19525913329805j, -2.13875644258362 - 7.19525913329805j, 0.10268170574766, -18.15788466125262],
-    8: [-2.69348683581097 + 8.46037971396931j, -2.69348683581097 - 8.46037971396931j, 0.14327879765713, -20.27940894394569],
-    9: [-3.21675402252485 + 9.69377351531791j, -3.21675402252485 - 9.69377351531791j, 0.15790184030917, -22.43788559040858],
-    10: [-3.72016840437287 + 10.90681139476287j, -3.72016840437287 - 10.90681139476287j, 0.16105338653172, -24.62459635017404],
+    1: [3.52696170990070 + 0.80774027519930j, 3.52696170990070 - 0.80774027519930j,
+        -3.13423125066578, -7.11008014637442],
+    2: [2.68234517512745 + 1.68066296590675j, 2.68234517512745 - 1.68066296590675j,
+        -3.07158645641514, -8.67387984831735],
+    # 3: only 15 sig. digits in the transcriptions found
+    3: [1.70675605663975 + 2.31582447384325j, 1.70675605663975 - 2.31582447384325j,
+        -2.63366137253667, -10.3510146724592],
+    4: [0.41325331521125 + 3.07910818603206j, 0.41325331521125 - 3.07910818603206j,
+        -1.42944427361326, -12.15861426576447],
+    5: [-0.77534188219585 + 4.46486771378823j, -0.77534188219585 - 4.46486771378823j,
+        -0.32286642900409, -14.07838969279822],
+    # 6: only 15 sig. digits in the transcriptions found
+    6: [-1.52644486584142 + 5.87673060598709j, -1.52644486584142 - 5.87673060598709j,
+        -0.00406690076970, -16.0853712309803],
+    7: [-2.13875644258362 + 7.19525913329805j, -2.13875644258362 - 7.19525913329805j,
+        0.10268170574766, -18.15788466125262],
+    8: [-2.69348683581097 + 8.46037971396931j, -2.69348683581097 - 8.46037971396931j,
+        0.14327879765713, -20.27940894394569],
+    9: [-3.21675402252485 + 9.69377351531791j, -3.21675402252485 - 9.69377351531791j,
+        0.15790184030917, -22.43788559040858],
+    10: [-3.72016840437287 + 10.90681139476287j, -3.72016840437287 - 10.90681139476287j,
+         0.16105338653172, -24.62459635017404],
 }
 
 
@@ -129,7 +145,8 @@ def main():
     for name, X, Xp in (("M", Mc, M_p), ("C1", C1c, C1_p), ("K0", K0c, K0_p), ("K2", K2c, K2_p)):
         for i in range(2):
             for j in range(2):
-                print(f"{name}[{i}{j}] = {mp.nstr(X[i, j], 17):>22}   printed {float(Xp[i, j])!r:>20}   diff {float(X[i, j]) - Xp[i, j]:+.1e}")
+                print(f"{name}[{i}{j}] = {mp.nstr(X[i, j], 17):>22}   "
+                      f"printed {float(Xp[i, j])!r:>20}   diff {float(X[i, j]) - Xp[i, j]:+.1e}")
 
     print("\n== eigenvalues of A(v) from printed matrices vs Table 2 ==")
     worst = 0.0
@@ -144,15 +161,20 @@ def main():
               + f"   max|diff to Table 2| = {max(errs):.1e}")
     print(f"worst |numpy - Table 2| over v=0..10: {worst:.2e}")
 
-    print("\n== eigenvalues from Table 1 parameters in mpmath (40 digits), 15 decimals, vs Table 2 ==")
+    print("\n== eigenvalues from Table 1 parameters in mpmath (40 digits), 15 decimals, "
+          "vs Table 2 ==")
     worst = 0
     for v in range(11):
-        rts = mp.polyroots(char_coeffs(mp.mpf(v), Mc, C1c, K0c, K2c, P['g']), maxsteps=500, extraprec=300)
+        rts = mp.polyroots(char_coeffs(mp.mpf(v), Mc, C1c, K0c, K2c, P['g']),
+                           maxsteps=500, extraprec=300)
         rts = sorted(rts, key=lambda z: (-mp.re(z), -mp.im(z)))
         ref = np.array(TABLE2[v], dtype=complex)
         errs = [min(abs(complex(z) - r) for z in rts) for r in ref]
         worst = max(worst, max(errs))
-        print(f"v={v:2d}: " + ", ".join(f"{mp.nstr(mp.re(z), 17, min_fixed=-1, max_fixed=3)}{'+' if mp.im(z) >= 0 else '-'}{mp.nstr(abs(mp.im(z)), 17)}j" for z in rts)
+        print(f"v={v:2d}: "
+              + ", ".join(f"{mp.nstr(mp.re(z), 17, min_fixed=-1, max_fixed=3)}"
+                          f"{'+' if mp.im(z) >= 0 else '-'}{mp.nstr(abs(mp.im(z)), 17)}j"
+                          for z in rts)
               + f"   max|diff to Table 2| = {max(errs):.1e}")
     print(f"worst |mpmath(Table 1) - Table 2| over v=0..10: {worst:.2e}")
 
@@ -160,22 +182,26 @@ def main():
     vw = brentq(hurwitz3, 3.0, 5.0, args=mats_f, xtol=1e-15, rtol=4 * np.finfo(float).eps)
     vc = brentq(capsize_f, 5.0, 7.0, args=mats_f, xtol=1e-15, rtol=4 * np.finfo(float).eps)
     print("\n== critical speeds, float64 brentq on printed matrices ==")
-    print(f"v_w (weave)   = {vw:.15f}   eig imag at v_w: {np.abs(np.linalg.eigvals(state_matrix(vw)).imag).max():.14f}")
+    print(f"v_w (weave)   = {vw:.15f}   "
+          f"eig imag at v_w: {np.abs(np.linalg.eigvals(state_matrix(vw)).imag).max():.14f}")
     print(f"v_c (capsize) = {vc:.15f}")
 
     # mpmath, printed matrices taken as exact decimals
-    to_mp = lambda A: mp.matrix([[mp.mpf(repr(float(A[i, j]))) for j in range(2)] for i in range(2)])
+    def to_mp(A):
+        return mp.matrix([[mp.mpf(repr(float(A[i, j]))) for j in range(2)] for i in range(2)])
+
     mats_p = (to_mp(M_p), to_mp(C1_p), to_mp(K0_p), to_mp(K2_p), mp.mpf('9.81'))
     mats_c = (Mc, C1c, K0c, K2c, P['g'])
-    for label, mats in (("printed matrices", mats_p), ("Table 1 parameters (exact, lambda=pi/10)", mats_c)):
-        vw_m = mp.findroot(lambda v: hurwitz3(v, *mats), mp.mpf(vw))
-        vc_m = mp.findroot(lambda v: capsize_f(v, *mats), mp.mpf(vc))
+    for label, mats in (("printed matrices", mats_p),
+                        ("Table 1 parameters (exact, lambda=pi/10)", mats_c)):
+        vw_m = mp.findroot(lambda v, mats=mats: hurwitz3(v, *mats), mp.mpf(vw))
+        vc_m = mp.findroot(lambda v, mats=mats: capsize_f(v, *mats), mp.mpf(vc))
         # weave frequency at v_w: s^2 = -a1/a3
         a4, a3, a2, a1, a0 = char_coeffs(vw_m, *mats)
         om = mp.sqrt(a1 / a3)
         # bifurcation speed v_d: where the weave pair of real roots coalesces
         # (double root => discriminant of the quartic = 0); find via resultant
-        def disc(v):
+        def disc(v, mats=mats):
             c = char_coeffs(v, *mats)
             p = [c[0], c[1], c[2], c[3], c[4]]
             dp = [4 * c[0], 3 * c[1], 2 * c[2], c[3]]
@@ -192,9 +218,12 @@ def main():
         vd_m = mp.findroot(disc, mp.mpf('0.684'))
         cd = char_coeffs(vd_m, *mats)
         # the double root is a root of p'(s) = 4 a4 s^3 + 3 a3 s^2 + 2 a2 s + a1
-        sd = mp.findroot(lambda s: 4 * cd[0] * s**3 + 3 * cd[1] * s**2 + 2 * cd[2] * s + cd[3], mp.mpf('3.78'))
+        sd = mp.findroot(lambda s, cd=cd: (4 * cd[0] * s**3 + 3 * cd[1] * s**2 + 2 * cd[2] * s
+                                           + cd[3]),
+                         mp.mpf('3.78'))
         print(f"\n== mpmath (40 digits), {label} ==")
-        print(f"v_d (weave real-pair bifurcation) = {mp.nstr(vd_m, 20)}, double root = {mp.nstr(sd, 20)}")
+        print(f"v_d (weave real-pair bifurcation) = {mp.nstr(vd_m, 20)}, "
+              f"double root = {mp.nstr(sd, 20)}")
         print(f"v_w = {mp.nstr(vw_m, 20)}, weave frequency at v_w = {mp.nstr(om, 20)} rad/s")
         print(f"v_c = {mp.nstr(vc_m, 20)}")
 

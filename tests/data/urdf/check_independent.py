@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent
+GRAVITY = np.array([0, 0, -9.81])   # the gravity vector of the URDF world frame (m/s^2)
 
 
 def rpy(r, p, y):
@@ -49,20 +50,21 @@ def origin(el):
 class Robot:
     def __init__(self, path):
         root = ET.parse(path).getroot()
-        self.links = {l.get("name"): l for l in root.findall("link")}
+        self.links = {link.get("name"): link for link in root.findall("link")}
         self.joints = root.findall("joint")
         self.child_joint = {j.find("child").get("link"): j for j in self.joints}
-        roots = [l for l in self.links if l not in self.child_joint]
+        roots = [name for name in self.links if name not in self.child_joint]
         assert len(roots) == 1
         self.root = roots[0]
         self.mimic = {}
         for j in self.joints:
             m = j.find("mimic")
             if m is not None:
-                self.mimic[j.get("name")] = (m.get("joint"), float(m.get("multiplier", 1)), float(m.get("offset", 0)))
+                self.mimic[j.get("name")] = (m.get("joint"), float(m.get("multiplier", 1)),
+                                             float(m.get("offset", 0)))
 
     def full_q(self, names, q):
-        qf = dict(zip(names, q))
+        qf = dict(zip(names, q, strict=True))
         for n, (src, a, off) in self.mimic.items():
             if n not in qf:
                 qf[n] = a * qf[src] + off
@@ -76,7 +78,8 @@ class Robot:
         order = [self.root]
         i = 0
         while i < len(order):
-            parent = order[i]; i += 1
+            parent = order[i]
+            i += 1
             for j in self.joints:
                 if j.find("parent").get("link") != parent:
                     continue
@@ -88,7 +91,8 @@ class Robot:
                 anc = list(ancestors[parent])
                 if t in ("revolute", "continuous", "prismatic"):
                     ax = j.find("axis")
-                    a = np.array([float(v) for v in (ax.get("xyz") if ax is not None else "1 0 0").split()])
+                    xyz_axis = ax.get("xyz") if ax is not None else "1 0 0"
+                    a = np.array([float(v) for v in xyz_axis.split()])
                     a = a / np.linalg.norm(a)
                     aw = Rj @ a
                     jinfo[j.get("name")] = (t, aw, pj)
@@ -104,12 +108,13 @@ class Robot:
                 order.append(c)
         return pose, jinfo, ancestors
 
-    def M_g(self, names, q, G, gvec=np.array([0, 0, -9.81])):
+    def M_g(self, names, q, G, gvec=GRAVITY):
         qf = self.full_q(names, q)
         full = list(G.keys())
         pose, jinfo, anc = self.kinematics(qf)
         nf = len(full)
-        M = np.zeros((nf, nf)); g = np.zeros(nf)
+        M = np.zeros((nf, nf))
+        g = np.zeros(nf)
         for ln, el in self.links.items():
             ine = el.find("inertial")
             if ine is None:
@@ -124,14 +129,16 @@ class Robot:
             xyz, Ri = origin(ine)
             c = p + R @ xyz
             Iw = (R @ Ri) @ Ic @ (R @ Ri).T
-            Jv = np.zeros((3, nf)); Jw = np.zeros((3, nf))
+            Jv = np.zeros((3, nf))
+            Jw = np.zeros((3, nf))
             for jn in anc[ln]:
                 t, aw, pj = jinfo[jn]
                 k = full.index(jn)
                 if t == "prismatic":
                     Jv[:, k] = aw
                 else:
-                    Jv[:, k] = np.cross(aw, c - pj); Jw[:, k] = aw
+                    Jv[:, k] = np.cross(aw, c - pj)
+                    Jw[:, k] = aw
             M += m * Jv.T @ Jv + Jw.T @ Iw @ Jw
             g += -m * Jv.T @ gvec
         Gm = np.array([G[n] for n in full])
@@ -145,7 +152,8 @@ def main():
         rob = Robot(ROOT / r["urdf"].removeprefix("data/"))
         names = [c["name"] for c in r["coordinates"]]
         # G rows per full joint (v order of the URDF moving joints)
-        moving = [j.get("name") for j in rob.joints if j.get("type") in ("revolute", "continuous", "prismatic")]
+        moving = [j.get("name") for j in rob.joints
+                  if j.get("type") in ("revolute", "continuous", "prismatic")]
         G = {}
         for n in moving:
             row = np.zeros(len(names))
@@ -157,16 +165,20 @@ def main():
             G[n] = row
         if not r["mimic_as_constraint"]:
             rob.mimic = {}
-        q0 = np.array(r["q0"]); qs = np.array(r["equilibrium"]["q_star"]); K = np.diag(r["k"])
+        q0 = np.array(r["q0"])
+        qs = np.array(r["equilibrium"]["q_star"])
+        K = np.diag(r["k"])
         out = {}
         M0, _ = rob.M_g(names, q0, G)
-        out["M(q0)"] = np.max(np.abs(M0 - np.array(r["cases"]["no_gravity_d_uniform"]["M"]))) / np.max(np.abs(M0))
+        out["M(q0)"] = (np.max(np.abs(M0 - np.array(r["cases"]["no_gravity_d_uniform"]["M"])))
+                        / np.max(np.abs(M0)))
         Ms, gs = rob.M_g(names, qs, G)
-        out["M(q*)"] = np.max(np.abs(Ms - np.array(r["cases"]["gravity_d_uniform"]["M"]))) / np.max(np.abs(Ms))
+        out["M(q*)"] = (np.max(np.abs(Ms - np.array(r["cases"]["gravity_d_uniform"]["M"])))
+                        / np.max(np.abs(Ms)))
         out["K(q*-q0)+g(q*)"] = np.max(np.abs(K @ (qs - q0) + gs))
         h = 1e-6
-        dg = np.array([(rob.M_g(names, qs + h * e, G)[1] - rob.M_g(names, qs - h * e, G)[1]) / (2 * h)
-                       for e in np.eye(len(names))]).T
+        dg = np.array([(rob.M_g(names, qs + h * e, G)[1] - rob.M_g(names, qs - h * e, G)[1])
+                       / (2 * h) for e in np.eye(len(names))]).T
         Kt = np.array(r["cases"]["gravity_d_uniform"]["K_total"])
         out["K_total vs K+dg_fd"] = np.max(np.abs(Kt - K - 0.5 * (dg + dg.T))) / np.max(np.abs(Kt))
         print(f"{r['model']:14s} " + "  ".join(f"{k}: {v:.1e}" for k, v in out.items()))

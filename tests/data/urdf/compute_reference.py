@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
 import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -138,7 +137,8 @@ def fd_jac(f, q, h=1e-6):
     n = len(q)
     cols = []
     for i in range(n):
-        e = np.zeros(n); e[i] = h
+        e = np.zeros(n)
+        e[i] = h
         cols.append((f(q + e) - f(q - e)) / (2 * h))
     return np.array(cols).T
 
@@ -200,9 +200,9 @@ def eigenvalues(M, D, K):
     # make conjugate pairs exactly conjugate (the pencil is real)
     s_mp = sort_eigs(s_mp)
     # cross-check: scipy on the generalized pencil
-    Z, I = np.zeros((n, n)), np.eye(n)
-    Aa = np.block([[Z, I], [-K, -D]])
-    Bb = np.block([[I, Z], [Z, M]])
+    Z, eye = np.zeros((n, n)), np.eye(n)
+    Aa = np.block([[Z, eye], [-K, -D]])
+    Bb = np.block([[eye, Z], [Z, M]])
     s_sp = sort_eigs(sla.eig(Aa, Bb, right=False))
     # match scipy to mpmath greedily
     used, dev = set(), 0.0
@@ -231,11 +231,13 @@ def mimic_map(urdf: Path, full, red):
                                   float(m.get("offset", 0.0)))
     fn = [n for n, _ in coord_joints(full)]
     rn = [n for n, _ in coord_joints(red)]
-    G = np.zeros((len(fn), len(rn))); b = np.zeros(len(fn))
+    G = np.zeros((len(fn), len(rn)))
+    b = np.zeros(len(fn))
     for i, n in enumerate(fn):
         if n in mim:
             src, a, off = mim[n]
-            G[i, rn.index(src)] = a; b[i] = off
+            G[i, rn.index(src)] = a
+            b[i] = off
         else:
             G[i, rn.index(n)] = 1.0
     return G, b, mim
@@ -248,12 +250,13 @@ def inertia_checks(urdf: Path):
     for ln in root.findall("link"):
         ine = ln.find("inertial")
         if ine is None:
-            rows.append(dict(link=ln.get("name"), inertial=False)); continue
+            rows.append(dict(link=ln.get("name"), inertial=False))
+            continue
         m = float(ine.find("mass").get("value"))
         a = {k: float(v) for k, v in ine.find("inertia").attrib.items()}
-        I = np.array([[a["ixx"], a["ixy"], a["ixz"]], [a["ixy"], a["iyy"], a["iyz"]],
-                      [a["ixz"], a["iyz"], a["izz"]]])
-        ev = np.linalg.eigvalsh(I)
+        inertia = np.array([[a["ixx"], a["ixy"], a["ixz"]], [a["ixy"], a["iyy"], a["iyz"]],
+                            [a["ixz"], a["iyz"], a["izz"]]])
+        ev = np.linalg.eigvalsh(inertia)
         tri = bool(ev[0] + ev[1] >= ev[2] - 1e-12) if m > 0 else None
         rows.append(dict(link=ln.get("name"), inertial=True, mass=m,
                          principal_moments=ev.tolist(), positive=bool(ev[0] > 0) if m > 0 else None,
@@ -267,12 +270,15 @@ def urdf_features(urdf: Path):
     return dict(
         joints_by_type={t: [x.get("name") for x in j if x.get("type") == t]
                         for t in sorted({x.get("type") for x in j})},
-        mimic=[dict(mimic_joint=x.get("name"), **x.find("mimic").attrib) for x in j if x.find("mimic") is not None],
-        links_without_inertial=[ln.get("name") for ln in root.findall("link") if ln.find("inertial") is None],
+        mimic=[dict(mimic_joint=x.get("name"), **x.find("mimic").attrib) for x in j
+               if x.find("mimic") is not None],
+        links_without_inertial=[ln.get("name") for ln in root.findall("link")
+                                if ln.find("inertial") is None],
         links_with_zero_mass=[ln.get("name") for ln in root.findall("link")
                               if ln.find("inertial") is not None
                               and float(ln.find("inertial/mass").get("value")) == 0.0],
-        dynamics={x.get("name"): dict(x.find("dynamics").attrib) for x in j if x.find("dynamics") is not None},
+        dynamics={x.get("name"): dict(x.find("dynamics").attrib) for x in j
+                  if x.find("dynamics") is not None},
     )
 
 
@@ -338,12 +344,16 @@ def run_model(name, spec):
     g0 = gravity(mg, dg_, q0)
     checks["g_minus_rnea_q_0_0"] = float(np.max(np.abs(
         g0 - pin.rnea(mg, dg_, q0, np.zeros(n), np.zeros(n)))))
-    if mimic:   # computePotentialEnergy refuses mimic models: use the full model at q_full = G q + b
+    # computePotentialEnergy refuses mimic models: use the full model at q_full = G q + b
+    if mimic:
         mf_, df_ = build(urdf, False, True)
         Gm, bm, _ = mimic_map(urdf, mf_, mg)
-        V = lambda q: np.array([pin.computePotentialEnergy(mf_, df_, Gm @ q + bm)])
+
+        def V(q):
+            return np.array([pin.computePotentialEnergy(mf_, df_, Gm @ q + bm)])
     else:
-        V = lambda q: np.array([pin.computePotentialEnergy(mg, dg_, q)])
+        def V(q):
+            return np.array([pin.computePotentialEnergy(mg, dg_, q)])
     dVdq = fd_jac(V, q0)[0]
     checks["g_minus_dV_dq_fd"] = float(np.max(np.abs(g0 - dVdq)))
     checks["g_plus_dV_dq_fd"] = float(np.max(np.abs(g0 + dVdq)))
@@ -364,16 +374,16 @@ def run_model(name, spec):
         checks["mimic_M_minus_GtMG"] = float(np.max(np.abs(
             mass_matrix(mg, dg_, q0) - G.T @ mass_matrix(mf, df, qf) @ G)))
         checks["mimic_g_minus_Gtg"] = float(np.max(np.abs(g0 - G.T @ gravity(mf, df, qf))))
-        mimic_info = dict(G=G.tolist(), b=b.tolist(), full_joint_names=[x for x, _ in coord_joints(mf)],
-                          urdf_mimic=mim)
-        Dfull_urdf = np.diag(np.array(mf.damping))
+        mimic_info = dict(G=G.tolist(), b=b.tolist(),
+                          full_joint_names=[x for x, _ in coord_joints(mf)], urdf_mimic=mim)
     else:
         mimic_info = None
 
     # --- equilibrium with gravity
     qs, iters, res, hist = equilibrium(mg, dg_, q0, K)
-    eq = dict(q_star=qs.tolist(), newton_iterations=iters, residual_inf=res, newton_step_history=hist,
-              gravity_torque_at_q0=g0.tolist(), gravity_torque_at_q_star=gravity(mg, dg_, qs).tolist())
+    eq = dict(q_star=qs.tolist(), newton_iterations=iters, residual_inf=res,
+              newton_step_history=hist, gravity_torque_at_q0=g0.tolist(),
+              gravity_torque_at_q_star=gravity(mg, dg_, qs).tolist())
 
     cases = {}
 
@@ -427,7 +437,8 @@ def run_model(name, spec):
         model=name, urdf=spec["urdf"], urdf_sha256=sha256(urdf), mimic_as_constraint=mimic,
         versions=dict(pinocchio=pin.__version__, numpy=np.__version__, scipy=scipy.__version__,
                       mpmath=mp.__version__, python=sys.version.split()[0]),
-        convention=("M(q) q'' + C q' + g(q) = tau, g = computeGeneralizedGravity = rnea(q,0,0) = +dV/dq; "
+        convention=("M(q) q'' + C q' + g(q) = tau, "
+                    "g = computeGeneralizedGravity = rnea(q,0,0) = +dV/dq; "
                     "tau = -K (q - q0) - D q'; equilibrium K (q*-q0) + g(q*) = 0; "
                     "eigenproblem det(M(q*) s^2 + D s + K + dg/dq(q*)) = 0; fixed base; "
                     "gravity (0,0,-9.81) in the URDF root frame; SI units (rad, m, kg)."),
@@ -442,7 +453,8 @@ def run_model(name, spec):
 
 
 def table(res):
-    lines = [f"### {res['model']}  (`{res['urdf']}`, mimic as constraint: {res['mimic_as_constraint']})", ""]
+    lines = [f"### {res['model']}  (`{res['urdf']}`, "
+             f"mimic as constraint: {res['mimic_as_constraint']})", ""]
     names = [c["name"] for c in res["coordinates"]]
     lines.append("| coordinate | q0 | q* (gravity) | k | d | d_urdf |")
     lines.append("|---|---|---|---|---|---|")
@@ -452,11 +464,13 @@ def table(res):
     if res["allsprings_variant"]:
         a = res["allsprings_variant"]
         lines.append("")
-        lines.append("allsprings variant q* = [" + ", ".join(f"{x:.16e}" for x in a["q_star"]) + "]")
+        lines.append("allsprings variant q* = ["
+                     + ", ".join(f"{x:.16e}" for x in a["q_star"]) + "]")
     lines.append("")
     for cname, c in res["cases"].items():
         lines.append(f"**{cname}** — {c['note']}  (scipy vs mpmath max rel. dev. "
-                     f"{c['max_rel_dev_scipy_vs_mpmath']:.1e}, backward error {c['max_backward_error']:.1e})")
+                     f"{c['max_rel_dev_scipy_vs_mpmath']:.1e}, "
+                     f"backward error {c['max_backward_error']:.1e})")
         lines.append("")
         lines.append("```")
         lines.extend(c["eigenvalues_str"])
@@ -483,7 +497,8 @@ def main(names=()):
               f"res={res['equilibrium']['residual_inf']:.1e} checks=" +
               ", ".join(f"{k}={v:.1e}" for k, v in c.items()))
         for cname, cc in res["cases"].items():
-            print(f"   {cname}: dev={cc['max_rel_dev_scipy_vs_mpmath']:.1e} eta={cc['max_backward_error']:.1e} "
+            print(f"   {cname}: dev={cc['max_rel_dev_scipy_vs_mpmath']:.1e} "
+                  f"eta={cc['max_backward_error']:.1e} "
                   f"Kmin={cc['K_total_min_eig']:.3g}")
     if not names:
         (OUT / "TABLES.md").write_text("\n".join(md) + "\n")
