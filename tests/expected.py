@@ -27,4 +27,5 @@ def expected_omega_n(expected, params):
 def expected_eigenvalues(expected, params):
     if "eigenvalues" not in expected:
         return None
-    return np.array([complex(re, im) for re, im in _series(expected["eigenvalues"], params, ["re", "im"])])
+    return np.array([complex(re, im)
+                     for re, im in _series(expected["eigenvalues"], params, ["re", "im"])])

@@ -24,22 +24,30 @@ BAD = {
     "malformed TOML": (PENDULUM.replace("[parameters]", "[parameters"), "malformed TOML"),
     "unknown element type": (PENDULUM.replace('type = "distance"', 'type = "hinge"'),
                              "joints[0] 'rod': unknown joint type 'hinge'"),
-    "unknown force type": (PENDULUM + '\n[[forces]]\ntype = "magnet"\n', "forces[0]: unknown force type"),
+    "unknown force type": (PENDULUM + '\n[[forces]]\ntype = "magnet"\n',
+                           "forces[0]: unknown force type"),
     "missing point": (PENDULUM.replace('points = ["O", "P"]', 'points = ["O", "Q"]'),
                       "joints[0] 'rod': unknown point 'Q'"),
     "missing body": (PENDULUM + '\n[[joints]]\ntype = "attach"\npoint = "P"\nbody = "arm"\n',
                      "joints[1]: unknown body 'arm'"),
     "zero mass": (PENDULUM.replace('mass = "m"', "mass = 0"), "masses[0]: mass must be positive"),
-    "negative mass": (PENDULUM.replace('mass = "m"', "mass = -1.0"), "masses[0]: mass must be positive"),
-    "unsafe expression": (PENDULUM.replace('mass = "m"', "mass = \"__import__('os').system('echo hi')\""),
+    "negative mass": (PENDULUM.replace('mass = "m"', "mass = -1.0"),
+                      "masses[0]: mass must be positive"),
+    "unsafe expression": (PENDULUM.replace('mass = "m"',
+                                           "mass = \"__import__('os').system('echo hi')\""),
                           "masses[0].mass: function not allowed"),
-    "attribute access": (PENDULUM.replace('mass = "m"', 'mass = "m.__class__"'), "masses[0].mass: not allowed"),
-    "non-numeric": (PENDULUM.replace('mass = "m"', 'mass = "heavy"'), "masses[0].mass: unknown name 'heavy'"),
-    "typo in field": (PENDULUM.replace('mass = "m"', 'mass = "m"\nmas = 2'), "masses[0]: unknown field 'mas'"),
-    "wrong schema": (PENDULUM.replace("schema_version = 1", "schema_version = 7"), "case: schema_version must be 1"),
+    "attribute access": (PENDULUM.replace('mass = "m"', 'mass = "m.__class__"'),
+                         "masses[0].mass: not allowed"),
+    "non-numeric": (PENDULUM.replace('mass = "m"', 'mass = "heavy"'),
+                    "masses[0].mass: unknown name 'heavy'"),
+    "typo in field": (PENDULUM.replace('mass = "m"', 'mass = "m"\nmas = 2'),
+                      "masses[0]: unknown field 'mas'"),
+    "wrong schema": (PENDULUM.replace("schema_version = 1", "schema_version = 7"),
+                     "case: schema_version must be 1"),
     "inconsistent constraints": (
         PENDULUM + '\n[[points]]\nname = "F"\nposition = [5.0, 0.0]\nfixed = true\n'
-                   '\n[[joints]]\ntype = "distance"\nname = "too short"\npoints = ["F", "P"]\nlength = 1.0\n',
+                   '\n[[joints]]\ntype = "distance"\nname = "too short"\npoints = ["F", "P"]\n'
+                   'length = 1.0\n',
         ("no equilibrium", "the constraints cannot be satisfied")),
     "free fall": (PENDULUM[:PENDULUM.index("[[joints]]")] + PENDULUM[PENDULUM.index("[expected]"):],
                   ("equilibrium: no equilibrium after", "equilibrium: no static equilibrium")),
@@ -78,7 +86,8 @@ def test_bad_output_extension(capsys, tmp_path):
 def test_real_process_exit_code(tmp_path):
     """The installed entry point (python -m mbseig) exits 2 with one line and no traceback."""
     path = write_case(tmp_path, PENDULUM.replace('mass = "m"', "mass = 0"))
-    r = subprocess.run([sys.executable, "-m", "mbseig", "modes", str(path)], capture_output=True, text=True)
+    r = subprocess.run([sys.executable, "-m", "mbseig", "modes", str(path)], capture_output=True,
+                       text=True)
     assert r.returncode == 2
     assert r.stderr.count("\n") == 1 and "Traceback" not in r.stderr
     assert r.stdout == ""

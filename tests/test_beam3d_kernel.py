@@ -85,7 +85,7 @@ def test_batched_equals_each_element_alone(theory):
                                                                  "jacobians")}
         got["mass"] = [e.mass(q) for e in els]
         for e, g, m, h, (K, C) in zip(els, got["force"], got["mass"], got["velocity_terms"],
-                                      got["jacobians"]):
+                                      got["jacobians"], strict=True):
             assert _rel(g, e.force_reference(q, qd)) <= 1e-12
             assert _rel(m, e.mass_reference(q)) <= 1e-12
             assert _rel(h, e.velocity_terms_reference(q, qd)) <= 1e-11
@@ -204,10 +204,10 @@ def test_an_element_alone_and_in_its_batch_agree_exactly():
     q, qd = _state(q0, np.random.default_rng(7))
     for kind in ("force", "mass", "velocity_terms", "jacobians"):
         together = BatchGroup().evaluate_all(kind, els, q, qd)
-        for e, t in zip(els, together):
+        for e, t in zip(els, together, strict=True):
             alone = BatchGroup().evaluate_all(kind, [e], q, qd)[0]
             assert all(np.array_equal(a, b) for a, b in zip(np.atleast_1d(alone),
-                                                            np.atleast_1d(t)))
+                                                            np.atleast_1d(t), strict=True))
 
 
 def test_assembled_model_equals_element_by_element(monkeypatch):
@@ -230,5 +230,5 @@ def test_assembled_model_equals_element_by_element(monkeypatch):
         K, C = model.force_jacobians(q, qd, dense=False)
         out[batched] = (model.generalized_force(q, qd), model.mass_matrix(q).toarray(),
                         K.toarray(), C.toarray())
-    for a, b in zip(out[True], out[False]):
+    for a, b in zip(out[True], out[False], strict=True):
         assert _rel(a, b) <= 1e-12

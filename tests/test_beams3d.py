@@ -33,8 +33,9 @@ def _rayleigh(p, n_mode):
     source: a w² ∓ b w − c = 0)."""
     k = n_mode * np.pi / p["L"]
     A = np.pi * (p["d"] ** 2 - p["di"] ** 2) / 4
-    I = np.pi * (p["d"] ** 4 - p["di"] ** 4) / 64
-    a, b, c = p["rho"] * A + p["rho"] * I * k**2, 2 * p["rho"] * I * p["Omega"] * k**2, p["E"] * I * k**4
+    I_area = np.pi * (p["d"] ** 4 - p["di"] ** 4) / 64  # second moment of area
+    a, b, c = (p["rho"] * A + p["rho"] * I_area * k**2, 2 * p["rho"] * I_area * p["Omega"] * k**2,
+               p["E"] * I_area * k**4)
     root = np.sqrt(b * b + 4 * a * c)
     return (b + root) / (2 * a), (-b + root) / (2 * a)
 
@@ -64,7 +65,7 @@ def test_spinning_shaft_whirl_labels_and_richardson():
         assert abs(w16[k] - w_ref) <= 2e-5 * w_ref
         extrapolated = (16 * w16[k] - w8[k]) / 15
         assert abs(extrapolated - w_ref) <= tol * w_ref
-    torsion = [lab for w, lab in zip(w16, lab16) if 4000 < w < 6000]
+    torsion = [lab for w, lab in zip(w16, lab16, strict=True) if 4000 < w < 6000]
     assert torsion == ["none"]
 
 
@@ -91,10 +92,10 @@ def test_campbell_critical_speeds_closed_form():
     p = spec.build(n=8).parameters
     k = np.pi / p["L"]
     A = np.pi * (p["d"] ** 2 - p["di"] ** 2) / 4
-    I = np.pi * (p["d"] ** 4 - p["di"] ** 4) / 64
-    c = p["E"] * I * k**4
-    ref = {"forward": np.sqrt(c / (p["rho"] * A - p["rho"] * I * k**2)),
-           "backward": np.sqrt(c / (p["rho"] * A + 3 * p["rho"] * I * k**2))}
+    I_area = np.pi * (p["d"] ** 4 - p["di"] ** 4) / 64  # second moment of area
+    c = p["E"] * I_area * k**4
+    ref = {"forward": np.sqrt(c / (p["rho"] * A - p["rho"] * I_area * k**2)),
+           "backward": np.sqrt(c / (p["rho"] * A + 3 * p["rho"] * I_area * k**2))}
     got = {cs["whirl"]: cs["value"] for cs in res.critical_speeds}
     assert set(got) == {"forward", "backward"}
     for lab, v in ref.items():
@@ -127,7 +128,8 @@ def test_friswell_rotors_match_ross(example):
         assert mod.compare(ross, ours) <= 1e-6
 
 
-@pytest.mark.skipif(not Path(EXAMPLE).exists(), reason="the format examples are not beside this checkout")
+@pytest.mark.skipif(not Path(EXAMPLE).exists(),
+                    reason="the format examples are not beside this checkout")
 def test_overhung_example_runs_with_whirl():
     """The shared format example runs unchanged: exit 0, every mode with a whirl label."""
     out = subprocess.run([sys.executable, "-m", "mbseig", "modes", str(EXAMPLE), "--json"],
@@ -139,7 +141,8 @@ def test_overhung_example_runs_with_whirl():
     assert {"forward", "backward"} <= {m["whirl"] for m in res["modes"]}
 
 
-@pytest.mark.skipif(not Path(EXAMPLE).exists(), reason="the format examples are not beside this checkout")
+@pytest.mark.skipif(not Path(EXAMPLE).exists(),
+                    reason="the format examples are not beside this checkout")
 def test_bearing_table_interpolates_linearly():
     """Bearing 2 of the example at Omega = 250, halfway between the table's 0 and 500: the
     mean of the two entries (linear interpolation, exact)."""
@@ -173,7 +176,8 @@ ends = ["clamped", "free"]
 name = "bearing"
 type = "bushing"
 bodies = ["ground", "bar.s"]
-stiffness = {{ parameter = "Omega", at = [0.0, 50.0], values = [[1, 1, 1, 0, 0, 0], [2, 2, 2, 0, 0, 0]] }}
+stiffness = {{ parameter = "Omega", at = [0.0, 50.0], \
+values = [[1, 1, 1, 0, 0, 0], [2, 2, 2, 0, 0, 0]] }}
 """
 
 

@@ -120,14 +120,15 @@ def _shaft_roots(p, n_mode, kappa=None):
     2010 §5.4 in complex form), roots polished by Newton."""
     k = n_mode * np.pi / p["L"]
     A = np.pi * (p["d"] ** 2 - p["di"] ** 2) / 4
-    I = np.pi * (p["d"] ** 4 - p["di"] ** 4) / 64
+    I_area = np.pi * (p["d"] ** 4 - p["di"] ** 4) / 64  # second moment of area
     rho, E, Om = p["rho"], p["E"], p["Omega"]
     if kappa is None:
-        a, b, c = rho * A + rho * I * k**2, 2 * rho * I * Om * k**2, E * I * k**4
+        a, b, c = rho * A + rho * I_area * k**2, 2 * rho * I_area * Om * k**2, E * I_area * k**4
         root = np.sqrt(b * b + 4 * a * c)
         return (-b + root) / (2 * a), (b + root) / (2 * a)
     s = kappa * p["G"] * A
-    poly = np.polymul([-rho * A, 0.0, s * k * k], [-rho * I, 2 * rho * I * Om, E * I * k * k + s])
+    poly = np.polymul([-rho * A, 0.0, s * k * k],
+                      [-rho * I_area, 2 * rho * I_area * Om, E * I_area * k * k + s])
     poly[-1] -= (s * k) ** 2
     r = np.roots(poly).real
     out = []

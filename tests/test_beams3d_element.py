@@ -1,8 +1,8 @@
 """The local 3-D shaft element: sections, orientation, and the 12×12 matrices against ROSS.
 
 References: ROSS 2.3.0 ``ShaftElement`` matrices dumped by tests/data/ross (ROSS's
-scripts/01_shaft_element.py) (ROSS's axis is z; its DOFs per node are x, y, z, α, β, θ, which map onto
-this element's (v, w, u, θy, θz, θx): the cyclic relabelling z→x, x→y, y→z keeps spin senses);
+scripts/01_shaft_element.py) (ROSS's axis is z; its DOFs per node are x, y, z, α, β, θ, which map
+onto this element's (v, w, u, θy, θz, θx): the cyclic relabelling z→x, x→y, y→z keeps spin senses);
 Cowper 1966 (shear coefficients); Timoshenko & Goodier 1970 §109 table (rectangle torsion).
 """
 
@@ -23,7 +23,8 @@ from mbseig.model.beam3d import (
     section_properties,
 )
 
-ROSS = Path(__file__).resolve().parent / "data" / "ross"  # copied from ROSS 2.3.0 runs (data/ross/README.md)
+# copied from ROSS 2.3.0 runs (data/ross/README.md)
+ROSS = Path(__file__).resolve().parent / "data" / "ross"
 PERM = np.array([1, 2, 0, 4, 5, 3])  # ROSS DOF i is this element's DOF PERM[i]
 P12 = np.concatenate([PERM, PERM + 6])
 

@@ -85,8 +85,10 @@ def test_craig_bampton_converges_as_modes_are_added(tmp_path):
 def test_fe_body_3d_bad_input(tmp_path):
     export_fe_body(_free(tmp_path), ["A", "B"], tmp_path / "bar.npz")
     base = POINTS.format(fixed="\nfixed = true")
-    with pytest.raises(CaseError, match=r"fe_bodies\[0\] 'bar'.*neither \"free\", \"clamped\" nor a body"):
-        mbseig.load_case(write_case(tmp_path, base + FE.format(rotations='["clamped", "hub"]'), "a.toml"))
+    with pytest.raises(CaseError,
+                       match=r"fe_bodies\[0\] 'bar'.*neither \"free\", \"clamped\" nor a body"):
+        mbseig.load_case(write_case(tmp_path, base + FE.format(rotations='["clamped", "hub"]'),
+                                    "a.toml"))
     with pytest.raises(CaseError, match="interface_dofs must be 6"):
         mbseig.load_case(write_case(tmp_path, base + FE.format(rotations='["clamped", "free"]')
                                     + "interface_dofs = 3\n", "b.toml"))

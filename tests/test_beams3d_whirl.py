@@ -39,7 +39,7 @@ def test_sag_coupled_torsion_is_not_whirl():
     # Every mode is either bending (fraction near 1, labelled by its orbit) or coupled by the
     # sag (well below the threshold, "none"): nothing lies near the threshold.
     assert np.all((frac > 0.99) | (frac < NONE_FRACTION / 10))
-    for f, w in zip(frac, labels):
+    for f, w in zip(frac, labels, strict=True):
         assert (w == "none") == (f < NONE_FRACTION)
     # The two lowest (the disk's conical pair) keep their labels: backward below forward.
     assert labels[:2] == ["backward", "forward"]

@@ -12,7 +12,8 @@ def test_bench_quick_writes_report(tmp_path, capsys):
     assert main(["bench", "--quick", "--out", str(tmp_path), "--sections", "dense", "constraint",
                  "jacobians", "failures"]) == 0
     md = (tmp_path / "benchmarks.md").read_text()
-    for heading in ("## Targets", "## Dense eigensolvers", "## Jacobians", "## Stability where methods fail"):
+    for heading in ("## Targets", "## Dense eigensolvers", "## Jacobians",
+                    "## Stability where methods fail"):
         assert heading in md
     assert (tmp_path / "speed_accuracy.png").stat().st_size > 1000
     res = json.loads((tmp_path / "benchmarks.json").read_text())

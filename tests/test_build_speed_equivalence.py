@@ -88,7 +88,9 @@ def _close(a, b, what):
 def test_batch_reader_builds_the_member_readers_model(tmp_path, monkeypatch):
     taken = []
     for cls, name in ((SpatialBuilder, "_bodies"), (SpatialElementReaders, "bushings")):
-        def spy(*args, _f=getattr(cls, name), _name=name):
+        original = getattr(cls, name)
+
+        def spy(*args, _f=original, _name=name):
             out = _f(*args)
             taken.append((_name, out))
             return out

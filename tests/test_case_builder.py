@@ -56,7 +56,8 @@ def test_round_trip_edge_values():
     }
     back = tomllib.loads(to_toml(case))
     assert back == case
-    assert all(repr(x) == repr(y) for x, y in zip(back["floats"], case["floats"]))  # bit-exact
+    assert all(repr(x) == repr(y)  # bit-exact
+               for x, y in zip(back["floats"], case["floats"], strict=True))
 
 
 def test_inline_point_reference_written_inline():
@@ -76,8 +77,13 @@ def four_bar_builder() -> CaseBuilder:
     """cases/four_bar.toml written with CaseBuilder (its numbers and expressions as in the file)."""
     c = CaseBuilder(
         dimension=2, title="Four-bar linkage, elbow-up, crank spring, gravity",
-        description="Ground pivots A = (0, 0) and D = (1, 0) m. Uniform slender bars: crank AB 0.3 m 1 kg, coupler BC 1.0 m 2 kg, rocker DC 0.8 m 1.5 kg (I_G = m L^2 / 12), elbow-up. Torsional spring 50 N m/rad between ground and crank, zero torque at crank angle 60 deg. Gravity g along -y.",
-        source="independent check: tests/test_four_bar.py derives the 1-DOF reduction in the crank angle (potential energy and generalized mass from loop closure) and compares.",
+        description="Ground pivots A = (0, 0) and D = (1, 0) m. Uniform slender bars: "
+                    "crank AB 0.3 m 1 kg, coupler BC 1.0 m 2 kg, rocker DC 0.8 m 1.5 kg "
+                    "(I_G = m L^2 / 12), elbow-up. Torsional spring 50 N m/rad between ground "
+                    "and crank, zero torque at crank angle 60 deg. Gravity g along -y.",
+        source="independent check: tests/test_four_bar.py derives the 1-DOF reduction in the "
+               "crank angle (potential energy and generalized mass from loop closure) and "
+               "compares.",
         gravity=[0.0, "-g"])
     c.parameters(g=9.81, k_crank=50.0, theta0="deg(60)")
     c.point("A", [0.0, 0.0], fixed=True).point("D", [1.0, 0.0], fixed=True)
@@ -98,8 +104,13 @@ def four_bar() -> CaseBuilder:
     """cases/four_bar.toml written with CaseBuilder (its numbers and expressions as in the file)."""
     c = CaseBuilder(
         dimension=2, title="Four-bar linkage, elbow-up, crank spring, gravity",
-        description="Ground pivots A = (0, 0) and D = (1, 0) m. Uniform slender bars: crank AB 0.3 m 1 kg, coupler BC 1.0 m 2 kg, rocker DC 0.8 m 1.5 kg (I_G = m L^2 / 12), elbow-up. Torsional spring 50 N m/rad between ground and crank, zero torque at crank angle 60 deg. Gravity g along -y.",
-        source="independent check: tests/test_four_bar.py derives the 1-DOF reduction in the crank angle (potential energy and generalized mass from loop closure) and compares.",
+        description="Ground pivots A = (0, 0) and D = (1, 0) m. Uniform slender bars: "
+                    "crank AB 0.3 m 1 kg, coupler BC 1.0 m 2 kg, rocker DC 0.8 m 1.5 kg "
+                    "(I_G = m L^2 / 12), elbow-up. Torsional spring 50 N m/rad between ground "
+                    "and crank, zero torque at crank angle 60 deg. Gravity g along -y.",
+        source="independent check: tests/test_four_bar.py derives the 1-DOF reduction in the "
+               "crank angle (potential energy and generalized mass from loop closure) and "
+               "compares.",
         gravity=[0.0, "-g"])
     c.parameters(g=9.81, k_crank=50.0, theta0="deg(60)")
     c.point("A", [0.0, 0.0], fixed=True).point("D", [1.0, 0.0], fixed=True)
@@ -193,7 +204,8 @@ def test_guide_examples_run(tmp_path, monkeypatch, capsys):
     text = (Path(__file__).resolve().parent.parent / "docs" / "urdf.md").read_text()
     monkeypatch.chdir(tmp_path)
     (tmp_path / "tests" / "data").mkdir(parents=True)
-    (tmp_path / "tests" / "data" / "urdf").symlink_to(Path(__file__).resolve().parent / "data" / "urdf")
+    (tmp_path / "tests" / "data" / "urdf").symlink_to(
+        Path(__file__).resolve().parent / "data" / "urdf")
     shutil.copy(Path(__file__).resolve().parent / "data" / "urdf" / "arm" / "two_link_arm.urdf",
                 tmp_path)
     blocks = re.findall(r"```python\n(.*?)```", text, re.DOTALL)

@@ -51,7 +51,8 @@ def test_free_free(n):
     assert md.kind.count("rigid-body") == 1 and md.kind[0] == "rigid-body"
     assert md.omega_n[0] <= md.tolerance[0]
     j = np.arange(1, n)
-    np.testing.assert_allclose(md.omega_n[1:], 2 * np.sqrt(K / M_) * np.sin(j * np.pi / (2 * n)), rtol=1e-10)
+    np.testing.assert_allclose(md.omega_n[1:], 2 * np.sqrt(K / M_) * np.sin(j * np.pi / (2 * n)),
+                               rtol=1e-10)
     assert len(md) == n
 
 

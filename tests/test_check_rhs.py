@@ -30,7 +30,8 @@ def _states(a, count, scale=1e-3):
     return [q0 + scale * a.model.length_scale * rng.standard_normal(q0.size) for _ in range(count)]
 
 
-@pytest.fixture(scope="module", params=["cantilever_3d_oblique.toml", "overhung_rotor_friswell.toml"])
+@pytest.fixture(scope="module",
+                params=["cantilever_3d_oblique.toml", "overhung_rotor_friswell.toml"])
 def case(request):
     params = {"n": 2} if "cantilever" in request.param else None
     a = analyze(CASES / request.param, params=params)

@@ -91,7 +91,8 @@ def test_param_override(capsys):
     out = json.loads(capsys.readouterr().out)
     assert out["dof"] == 3 and out["parameters"]["n"] == 3
     # closed form, n = 3: omega_1 = 2 sqrt(1000) sin(pi/8)
-    assert out["modes"][0]["omega_n"] == pytest.approx(2 * np.sqrt(1000) * np.sin(np.pi / 8), rel=1e-12)
+    assert out["modes"][0]["omega_n"] == pytest.approx(2 * np.sqrt(1000) * np.sin(np.pi / 8),
+                                                       rel=1e-12)
 
 
 def test_executable_prompt_exit_delivers_the_whole_output(tmp_path):

@@ -43,7 +43,8 @@ def test_pairs_match_scipy_eig_and_direct_measures(symmetric):
     mu = sla.eig(A, right=False)
     # reference 1: scipy.linalg.eig of the same companion matrix, same LAPACK driver: the
     # eigenvalues in the same order (to 1e-12 relative: our copy of A may round differently)
-    np.testing.assert_allclose(sol.eigenvalues, g * mu, rtol=1e-12, atol=1e-12 * np.abs(g * mu).max())
+    np.testing.assert_allclose(sol.eigenvalues, g * mu, rtol=1e-12,
+                               atol=1e-12 * np.abs(g * mu).max())
     s = sol.eigenvalues
     assert np.sum(s.imag > 0) == np.sum(s.imag < 0) > 0 and np.any((s.imag == 0) & (s.real > 0))
     assert sol.details["measured_columns"] == np.sum(s.imag >= 0) < s.size

@@ -187,7 +187,7 @@ def test_pendulum_under_horizontal_load_branch(tmp_path):
     case = write_case(tmp_path, PENDULUM_PUSHED)
     values = np.linspace(0.0, 40.0, 5)
     res = run_sweep(case, [("F", values)], jobs=1)
-    for F, pt in zip(values, res.points[0]):
+    for F, pt in zip(values, res.points[0], strict=True):
         assert pt["statics"] == "continuation" and pt["error"] is None
         theta = math.atan2(pt["q"][0], -pt["q"][1])
         assert abs(theta - math.atan(F / 9.81)) < 1e-10
@@ -206,7 +206,7 @@ def test_column_buckles_onto_its_post_buckled_branch(tmp_path):
     assert "switched" in bps[0]["branch"]
     div = [b for b in res.boundaries if b["event"] == "branch point"]
     assert len(div) == 1 and div[0]["kind"] == "divergence" and div[0]["stability"] == "loss"
-    for P, pt in zip(values, res.points[0]):
+    for P, pt in zip(values, res.points[0], strict=True):
         theta = math.atan2(pt["q"][0], pt["q"][1])
         if P < 1.0:
             assert abs(theta) < 1e-12
@@ -233,7 +233,7 @@ def test_von_mises_truss_fold(tmp_path):
     b = folds[0]
     assert b["value"] == pytest.approx(F_max, rel=1e-10)
     assert b["kind"] == "divergence" and b["stability"] == "loss" and b["branch"] == "turns back"
-    for F, pt in zip(values, res.points[0]):
+    for F, pt in zip(values, res.points[0], strict=True):
         y = pt["q"][1]
         load = 2 * k * y * (L0 / math.hypot(a, y) - 1)
         assert load == pytest.approx(F, rel=1e-9, abs=1e-9)
@@ -255,7 +255,7 @@ def test_driven_four_bar_turns_at_its_dead_point(tmp_path):
     assert len(folds) == 1 and folds[0]["value"] == pytest.approx(phi_star, rel=1e-10)
     assert folds[0]["branch"] == "turns back" and folds[0]["dof"] == 0
     assert res.boundaries == []  # no degree of freedom: no eigenvalue crosses
-    for phi, pt in zip(values, res.points[0]):
+    for phi, pt in zip(values, res.points[0], strict=True):
         if phi < phi_star:
             assert pt["error"] is None
         else:

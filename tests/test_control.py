@@ -428,8 +428,8 @@ def test_signal_units_label_the_bode_plot(tmp_path):
 
     m = mbseig.load_case(CASE)
     lin = mbseig.linearize(m, mbseig.equilibrium(m))
-    units = dict(zip(lin.input_names, lin.input_units))
+    units = dict(zip(lin.input_names, lin.input_units, strict=True))
     assert units == {"actuator force": "N", "MCP torque": "N m"}
-    assert dict(zip(lin.output_names, lin.output_units))["MCP angle"] == "rad"
+    assert dict(zip(lin.output_names, lin.output_units, strict=True))["MCP angle"] == "rad"
     fig = bode_figure(frf(lin, "actuator force", "MCP angle", freq_hz=[1.0, 10.0]))
     assert fig.axes[0].get_ylabel().endswith("[rad/N]")

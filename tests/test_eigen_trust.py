@@ -65,7 +65,7 @@ def assert_within_tolerance(md, ref, *, complex_problem=False):
     and |Re s − Re s_ref| ≤ tolerance (the δ tolerance, which the structured paths sharpen)."""
     safety = md.tolerances["safety"]
     cand = ref if complex_problem else np.concatenate([ref, np.conj(ref)])
-    for s, err, tol in zip(md.eigenvalues, md.error_estimate, md.tolerance):
+    for s, err, tol in zip(md.eigenvalues, md.error_estimate, md.tolerance, strict=True):
         d = np.abs(cand - s)
         j = int(np.argmin(d))
         assert d[j] <= max(safety * err, 1e-300), (s, d[j], safety * err)
@@ -156,7 +156,8 @@ def test_power_plant_complex_listed_in_full():
 # 4. partial spectrum with a target: shift-invert where it ranks
 # ---------------------------------------------------------------------------------------------
 def _chain_with_divergence(n=150):
-    K = sp.diags([-1000.0 * np.ones(n - 1), 2000.0 * np.ones(n), -1000.0 * np.ones(n - 1)], [-1, 0, 1])
+    K = sp.diags([-1000.0 * np.ones(n - 1), 2000.0 * np.ones(n), -1000.0 * np.ones(n - 1)],
+                 [-1, 0, 1])
     Kd = sp.block_diag([K, sp.csr_matrix([[-400.0]])]).tocsr()  # ẍ − 400x = 0: s = ±20
     C = sp.block_diag([sp.diags(np.r_[5.0, np.zeros(n - 2), 0.3]), sp.csr_matrix([[0.0]])]).tocsr()
     return sp.identity(n + 1, format="csr"), C, Kd
@@ -244,7 +245,8 @@ def test_bordered_proportional_with_stiffness_damping(tmp_path):
     lin = mbseig.linearize(model, mbseig.equilibrium(model), sparse=True)
     md = mbseig.modes(lin.M, lin.P, lin.Q, constraints=lin.constraint_jacobian, n_modes=6)
     assert md.solver == "partial-proportional"
-    n, w = 120, 2 * np.sqrt(1000.0) * np.sin(np.arange(1, 7) * np.pi / (2 * 121))
+    n = 120  # the masses of INCLINED
+    w = 2 * np.sqrt(1000.0) * np.sin(np.arange(1, 7) * np.pi / (2 * (n + 1)))
     s = (-0.01 * w**2 + 1j * w * np.sqrt(4 - (0.01 * w) ** 2)) / 2
     np.testing.assert_allclose(md.eigenvalues, s, rtol=1e-9)
     assert np.all(md.backward_error <= 1e-12) and md.verdict == "stable"
@@ -256,7 +258,8 @@ def test_bordered_hanging_chain_vectors_purified(tmp_path):
     reduction (rtol 1e-8)."""
     from test_sparse import LINK_CHAIN
 
-    model = mbseig.load_case(write_case(tmp_path, LINK_CHAIN.replace('damping = 0.01', 'damping = 0.0')))
+    model = mbseig.load_case(write_case(tmp_path,
+                                        LINK_CHAIN.replace('damping = 0.01', 'damping = 0.0')))
     eq = mbseig.equilibrium(model)
     dense = mbseig.linearize(model, eq)
     d = mbseig.modes(dense.M, dense.P, dense.Q)
@@ -324,7 +327,8 @@ def test_badly_scaled_chain_path_and_bound():
     assert md.solver == "qz" and "cond(M)" in md.solver_reason
     exact, _ = reference_eigenvalues(M, C, K, dps=40)
     assert_within_tolerance(md, exact)
-    rel = [np.min(np.abs(exact - s)) / abs(exact[np.argmin(np.abs(exact - s))].real) for s in md.eigenvalues]
+    rel = [np.min(np.abs(exact - s)) / abs(exact[np.argmin(np.abs(exact - s))].real)
+           for s in md.eigenvalues]
     assert max(rel) <= 1e-5
     i = int(np.argmin(md.delta))
     assert md.verdict == "stable" and md.delta[i] >= 100 * md.tolerance[i]
@@ -458,7 +462,8 @@ def _unimodular(n, coeffs):
     return U @ L
 
 
-@settings(max_examples=int(__import__("os").environ.get("MBSEIG_PROPERTY_EXAMPLES", 60)), deadline=None, suppress_health_check=[HealthCheck.too_slow],
+@settings(max_examples=int(__import__("os").environ.get("MBSEIG_PROPERTY_EXAMPLES", 60)),
+          deadline=None, suppress_health_check=[HealthCheck.too_slow],
           derandomize=not __import__("os").environ.get("MBSEIG_PROPERTY_EXAMPLES"))
 @given(kinds=st.lists(st.sampled_from(KINDS), min_size=2, max_size=3),
        ds=st.lists(DYADIC, min_size=3, max_size=3), cu=UNIMODULAR, cv=UNIMODULAR,
@@ -472,7 +477,8 @@ def test_verdicts_against_50_digit_references(kinds, ds, cu, cv, solver):
     exact one, (b) never call a system stable with an exact Re s ≥ 0, nor unstable without an
     exact Re s > 0, and (c) never classify an exact Re s > tolerance as critical or rigid-body."""
     n = len(kinds)
-    blocks = [_block(k, d) for k, d in zip(kinds, ds)]
+    # ds always draws 3 values, kinds 2 or 3: the blocks use the first len(kinds) of ds
+    blocks = [_block(k, d) for k, d in zip(kinds, ds, strict=False)]
     M0 = np.diag([b[0][0] for b in blocks])
     P0 = np.diag([b[0][1] for b in blocks])
     Q0 = np.diag([b[0][2] for b in blocks])
@@ -488,7 +494,8 @@ def test_verdicts_against_50_digit_references(kinds, ds, cu, cv, solver):
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # no numpy/scipy warning leaks from valid real input;
         # mbseig's own flag of a pair above eta_warn (also in md.flags) is a signal, not a leak
-        warnings.filterwarnings("ignore", message=".*backward-error target", category=RuntimeWarning)
+        warnings.filterwarnings("ignore", message=".*backward-error target",
+                                category=RuntimeWarning)
         md = mbseig.modes(M, P, Q, solver=solver)
     assert np.all(np.isfinite(md.tolerance))
     assert_within_tolerance(md, exact)
@@ -499,6 +506,7 @@ def test_verdicts_against_50_digit_references(kinds, ds, cu, cv, solver):
         assert truth == "unstable", (planted, md.eigenvalues)
     for lam in exact[exact.real > 0]:
         k = int(np.argmin(np.abs(np.where(md.eigenvalues.imag >= 0, md.eigenvalues,
-                                          np.conj(md.eigenvalues)) - (lam if lam.imag >= 0 else np.conj(lam)))))
+                                          np.conj(md.eigenvalues))
+                                 - (lam if lam.imag >= 0 else np.conj(lam)))))
         if lam.real > md.tolerance[k]:
             assert md.stability[k] == "unstable" and md.kind[k] != "rigid-body", (lam, md.table())

@@ -15,11 +15,13 @@ from conftest import write_case
 
 from mbseig.studies import analyze
 
-HEAD = "schema_version = 1\n[expected]\nsource = \"closed form in tests/test_elements_closed_form.py\"\n"
+HEAD = ("schema_version = 1\n[expected]\n"
+        "source = \"closed form in tests/test_elements_closed_form.py\"\n")
 
 
 def run(tmp_path, body, **params):
-    return analyze(write_case(tmp_path, HEAD.replace("[expected]", body + "\n[expected]")), params=params)
+    return analyze(write_case(tmp_path, HEAD.replace("[expected]", body + "\n[expected]")),
+                   params=params)
 
 
 @pytest.mark.parametrize("direction", [[1.0, 0.0], [0.6, 0.8], [-1.0, 2.0]])

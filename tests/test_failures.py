@@ -1,8 +1,9 @@
 """Stability where methods fail: each case names the naive method that gets the verdict wrong
 (for the badly scaled chain: the damping, off by more than δ, so that its verdict's sign is
-rounding's and differs between BLAS kernels) and checks mbseig's answer against the reference stated in mbseig/failcases.py (closed forms:
-pendulum ω = √(g/l); Ziegler's flutter load F_cr = (7/2 − √2) c/l; chain ω_j; static
-condensation of a massless point; the dissipation theorem for M, K, C positive definite).
+rounding's and differs between BLAS kernels) and checks mbseig's answer against the reference
+stated in mbseig/failcases.py (closed forms: pendulum ω = √(g/l); Ziegler's flutter load
+F_cr = (7/2 − √2) c/l; chain ω_j; static condensation of a massless point; the dissipation
+theorem for M, K, C positive definite).
 """
 
 import numpy as np
@@ -15,7 +16,8 @@ from mbseig.bench import failcases as fc
 @pytest.mark.parametrize("case", fc.ALL, ids=lambda f: f.__name__)
 def test_naive_wrong_mbseig_right(case):
     c = case()
-    assert c.naive_wrong, f"{c.name}: the naive method ({c.naive_method}) was expected to fail: {c.naive}"
+    assert c.naive_wrong, (f"{c.name}: the naive method ({c.naive_method}) was expected to fail: "
+                           f"{c.naive}")
     assert c.mbseig_right, f"{c.name}: mbseig answered {c.mbseig}; reference: {c.reference}"
 
 
@@ -38,7 +40,8 @@ def test_large_undamped_critical_with_recorded_tolerance():
     assert np.all(np.abs(md.delta) <= md.tolerance)
     assert np.all(md.tolerance <= 1e-9 * md.omega_n)
     j = np.arange(1, n + 1)
-    np.testing.assert_allclose(md.omega_n, 2 * np.sqrt(1000.0) * np.sin(j * np.pi / (2 * (n + 1))), rtol=1e-10)
+    np.testing.assert_allclose(md.omega_n, 2 * np.sqrt(1000.0) * np.sin(j * np.pi / (2 * (n + 1))),
+                               rtol=1e-10)
 
 
 def test_defective_double_root_listed_twice():

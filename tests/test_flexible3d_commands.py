@@ -143,9 +143,9 @@ def test_campbell_of_a_spinning_shaft_from_rest():
     assert {"forward", "backward"} <= set(res.whirl[-1])
     rho, E, d, di, L = 7810.0, 2.11e11, 0.05, 0.03, 1.0
     A = math.pi * (d**2 - di**2) / 4
-    I = math.pi * (d**4 - di**4) / 64
+    I_area = math.pi * (d**4 - di**4) / 64  # second moment of area
     k = math.pi / L
-    a, c, g = rho * A + rho * I * k**2, E * I * k**4, 2 * rho * I * k**2
+    a, c, g = rho * A + rho * I_area * k**2, E * I_area * k**4, 2 * rho * I_area * k**2
     want = {"forward": math.sqrt(c / (a - g)), "backward": math.sqrt(c / (a + g))}
     got = {cs["whirl"]: cs["value"] for cs in res.critical_speeds if cs["value"] < 900}
     assert set(got) == {"forward", "backward"}

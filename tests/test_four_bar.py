@@ -19,7 +19,7 @@ from mbseig.studies import analyze
 
 A_LEN, B_LEN, C_LEN = 0.3, 1.0, 0.8
 MASS = (1.0, 2.0, 1.5)  # crank, coupler, rocker
-INERTIA = tuple(m * L**2 / 12 for m, L in zip(MASS, (A_LEN, B_LEN, C_LEN)))
+INERTIA = tuple(m * L**2 / 12 for m, L in zip(MASS, (A_LEN, B_LEN, C_LEN), strict=True))
 K_SPRING, THETA0 = 50.0, np.radians(60.0)
 D = np.array([1.0, 0.0])
 J = np.array([[0.0, -1.0], [1.0, 0.0]])
@@ -60,9 +60,11 @@ def reduced(theta, g):
     G = [(B / 2, B1 / 2, B2 / 2), ((B + C) / 2, (B1 + C1) / 2, (B2 + C2) / 2),
          ((D + C) / 2, C1 / 2, C2 / 2)]
     phi1 = [1.0, angle_rate(C - B, C1 - B1), angle_rate(C - D, C1)]
-    dV = K_SPRING * (theta - THETA0) + g * sum(m * Gk[1][1] for m, Gk in zip(MASS, G))
-    d2V = K_SPRING + g * sum(m * Gk[2][1] for m, Gk in zip(MASS, G))
-    m_eff = sum(m * Gk[1] @ Gk[1] for m, Gk in zip(MASS, G)) + sum(I * p**2 for I, p in zip(INERTIA, phi1))
+    dV = (K_SPRING * (theta - THETA0)
+          + g * sum(m * Gk[1][1] for m, Gk in zip(MASS, G, strict=True)))
+    d2V = K_SPRING + g * sum(m * Gk[2][1] for m, Gk in zip(MASS, G, strict=True))
+    m_eff = (sum(m * Gk[1] @ Gk[1] for m, Gk in zip(MASS, G, strict=True))
+             + sum(inertia * p**2 for inertia, p in zip(INERTIA, phi1, strict=True)))
     return dV, d2V, m_eff
 
 
@@ -84,7 +86,8 @@ def test_angle_rate2_matches_difference():
     h = 1e-5
     B, B1, B2, C, C1, C2 = closure(th)
     num = (angle_rate(*[closure(th + h)[i] - closure(th + h)[j] for i, j in ((3, 0), (4, 1))])
-           - angle_rate(*[closure(th - h)[i] - closure(th - h)[j] for i, j in ((3, 0), (4, 1))])) / (2 * h)
+           - angle_rate(*[closure(th - h)[i] - closure(th - h)[j]
+                          for i, j in ((3, 0), (4, 1))])) / (2 * h)
     assert angle_rate2(C - B, C1 - B1, C2 - B2) == pytest.approx(num, rel=1e-6)
 
 

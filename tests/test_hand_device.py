@@ -61,7 +61,8 @@ def test_C4_holds_the_position_command():
     for f in (0.0, 1.0, 2.0):
         eq = mbseig.equilibrium(mbseig.load_case(CASE, config="C4", f=f))
         rec = eq.model.drivers[0]
-        assert rec["sets"][0]["free_length"] == l0 and rec["unloaded"] == ["forces[4] 'tendon load'"]
+        assert rec["sets"][0]["free_length"] == l0
+        assert rec["unloaded"] == ["forces[4] 'tendon load'"]
         mcp = next(p for p in posture(eq.model, eq.q) if p["name"] == "MCP")["angle_deg"]
         assert (abs(mcp - 45.0) > 1.0) == (f >= 1.0)
     assert not any("lock" in c.name for c in eq.model.constraints)
@@ -113,7 +114,7 @@ def test_C4_sweep_every_point_and_the_flutter_loads():
                     config="C4", jobs=1, curves=False)
     for line in res.points:
         assert all(pt["error"] is None for pt in line)
-        for f, pt in zip(values, line):
+        for f, pt in zip(values, line, strict=True):
             assert pt["out_of_range"] == (["PIP"] if f > 2.35 else [])
     damped = [b for b in res.boundaries if b["fixed"]["damping_scale"] == 1.0]
     undamped = [b for b in res.boundaries if b["fixed"]["damping_scale"] == 0.0]
@@ -183,7 +184,8 @@ def test_constraint_stiffness_matters_in_C3():
     model = mbseig.load_case(CASE, config="C3")
     eq = mbseig.equilibrium(model)
     s_with = mbseig.modes(*_mpq(mbseig.linearize(model, eq))).all_eigenvalues
-    s_wo = mbseig.modes(*_mpq(mbseig.linearize(model, eq, constraint_stiffness=False))).all_eigenvalues
+    lin_wo = mbseig.linearize(model, eq, constraint_stiffness=False)
+    s_wo = mbseig.modes(*_mpq(lin_wo)).all_eigenvalues
     assert np.abs(eq.lam).max() > 100
     d = [np.min(np.abs(s_wo - s)) / abs(s) for s in s_with]
     assert max(d) > 0.1
@@ -235,7 +237,8 @@ def test_angle_driver_derivatives_central_differences():
     hess = np.array([(jac_local(x0 + h * e) - jac_local(x0 - h * e)) / (2 * h)
                      for e in np.eye(idx.size)])
     lam = np.array([0.7])
-    np.testing.assert_allclose(d.hess(q, lam), 0.7 * hess, rtol=1e-5, atol=1e-5 * np.abs(hess).max())
+    np.testing.assert_allclose(d.hess(q, lam), 0.7 * hess, rtol=1e-5,
+                               atol=1e-5 * np.abs(hess).max())
     qd = np.zeros_like(q)
     qd[idx] = rng.standard_normal(idx.size)
     assert d.gamma(q, qd)[0] == pytest.approx(-(qd[idx] @ hess @ qd[idx]), rel=1e-5)
@@ -250,11 +253,13 @@ def test_driver_naming_unknown_element_is_a_case_error(tmp_path):
 
 
 def test_negative_damping_needs_active_flag(tmp_path):
-    """A passive spring_damper must dissipate; the actuator is marked active so c_a < 0 is allowed."""
+    """A passive spring_damper must dissipate; the actuator is marked active so c_a < 0 is
+    allowed."""
     assert mbseig.load_case(CASE, config="C2", c_a=-5.0).parameters["c_a"] == -5.0
     text = CASE.read_text().replace("active = true ", "active = false ")
     p = tmp_path / "passive.toml"
     p.write_text(text)
     with pytest.raises(CaseError, match="damping must not be negative"):
         mbseig.load_case(p, c_a=-5.0)
-    assert math.isfinite(reactions(mbseig.load_case(CASE), mbseig.equilibrium(mbseig.load_case(CASE)))["actuator"][0]["tension"])
+    table = reactions(mbseig.load_case(CASE), mbseig.equilibrium(mbseig.load_case(CASE)))
+    assert math.isfinite(table["actuator"][0]["tension"])

@@ -286,7 +286,7 @@ def test_watched_stage_turns_overflow_into_one_error():
     with warnings.catch_warnings(record=True) as caught:  # other warnings pass through
         warnings.simplefilter("always")
         with watched("check", "x"):
-            warnings.warn("not numerical", UserWarning)
+            warnings.warn("not numerical", UserWarning, stacklevel=1)
     assert [str(w.message) for w in caught] == ["not numerical"]
 
 

@@ -87,7 +87,8 @@ def test_torsional_between_bodies(sense, seed):
     p = [free_point(2 * k, 2) for k in range(4)]  # body 1: p0-p1, body 2: p2-p3
     d1 = body_direction(p[0], p[1], (1.0, 0.0), 1.0)
     d2 = body_direction(p[2], p[3], (1.0, 0.0), 1.0)
-    el = TorsionalSpringDamper("t", combine([(1.0, d1), (1.0, d2)], stack=True), 2.0, 0.3, 0.4, sense)
+    el = TorsionalSpringDamper("t", combine([(1.0, d1), (1.0, d2)], stack=True), 2.0, 0.3, 0.4,
+                               sense)
     check_force(el, 8, rng)
 
 
@@ -95,7 +96,8 @@ def test_torsional_to_ground():
     rng = np.random.default_rng(3)
     ground = Affine.constant([1.0, 0.0])
     body = body_direction(Affine.constant([0.0, 0.0]), free_point(0, 2), (1.0, 0.0), 1.0)
-    el = TorsionalSpringDamper("t", combine([(1.0, ground), (1.0, body)], stack=True), 2.0, 0.3, 1.0, -1.0)
+    el = TorsionalSpringDamper("t", combine([(1.0, ground), (1.0, body)], stack=True), 2.0, 0.3,
+                               1.0, -1.0)
     check_force(el, 2, rng)
 
 
@@ -148,4 +150,5 @@ def test_assembled_model_jacobians(cases_dir):
     assert_jac(K.toarray(), -central(lambda x: model.generalized_force(x, qd), q), fs)
     assert_jac(C.toarray(), -central(lambda v: model.generalized_force(q, v), qd), fs)
     assert_jac(model.phi_q(q).toarray(), central(model.phi, q))
-    assert_jac(model.constraint_hessian(q, lam).toarray(), central(lambda x: model.phi_q(x).T @ lam, q))
+    assert_jac(model.constraint_hessian(q, lam).toarray(),
+               central(lambda x: model.phi_q(x).T @ lam, q))

@@ -117,21 +117,21 @@ def _sweeps(device, monkeypatch, config, axes):
 def _compare(lean, general):
     assert len(lean.points) == len(general.points)
     worst = 0.0
-    for la, ga in zip(lean.points, general.points):
-        for a, b in zip(la, ga):
+    for la, ga in zip(lean.points, general.points, strict=True):
+        for a, b in zip(la, ga, strict=True):
             assert a.get("error") == b.get("error")
             assert a["verdict"] == b["verdict"] and a["static"] == b["static"]
             sa, sb = np.sort_complex(a["eigenvalues"]), np.sort_complex(b["eigenvalues"])
             assert sa.shape == sb.shape
             worst = max(worst, float(np.max(np.abs(sa - sb) / np.abs(sb))))
     assert worst <= 1e-12
-    for S, T in zip(lean.tracks, general.tracks):
+    for S, T in zip(lean.tracks, general.tracks, strict=True):
         assert S.shape == T.shape
         np.testing.assert_allclose(S, T, rtol=1e-12, atol=0)
     xtol = general.tolerances["xtol"]
     assert [(b["kind"], b["stability"], b["line"]) for b in lean.boundaries] == \
         [(b["kind"], b["stability"], b["line"]) for b in general.boundaries]
-    for a, b in zip(lean.boundaries, general.boundaries):
+    for a, b in zip(lean.boundaries, general.boundaries, strict=True):
         assert abs(a["value"] - b["value"]) <= xtol
 
 

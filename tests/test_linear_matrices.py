@@ -20,7 +20,8 @@ CASE = """
 schema_version = 1
 kind = "linear"
 title = "rotating mass from files"
-source = "closed form: s = +/- i |omega0 - Omega|, +/- i (omega0 + Omega) with omega0 = 2, Omega = 3"
+source = "closed form: s = +/- i |omega0 - Omega|, +/- i (omega0 + Omega) \
+with omega0 = 2, Omega = 3"
 [matrices]
 M = {{ file = "{m}", key = "M" }}
 P = {{ file = "{p}", key = "P" }}
@@ -135,7 +136,8 @@ def test_bad_mtx_files(tmp_path, capsys, kind, needle):
     elif kind == "nonsquare":
         scipy.io.mmwrite(str(f), np.ones((2, 3)))
     elif kind == "huge":  # a header claiming 1e9 rows: refused before any allocation
-        f.write_text("%%MatrixMarket matrix coordinate real general\n1000000000 1000000000 1\n1 1 1.0\n")
+        f.write_text("%%MatrixMarket matrix coordinate real general\n"
+                     "1000000000 1000000000 1\n1 1 1.0\n")
     refused(write(tmp_path, files="bad.mtx"), capsys, "bad.mtx", needle)
 
 

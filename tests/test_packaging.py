@@ -13,7 +13,8 @@ ROOT = Path(__file__).resolve().parent.parent
 def test_every_subpackage_is_listed_in_pyproject():
     cfg = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
     listed = set(cfg["packages"])
-    found = {".".join(p.parent.relative_to(ROOT).parts) for p in (ROOT / "mbseig").rglob("__init__.py")}
+    found = {".".join(p.parent.relative_to(ROOT).parts)
+             for p in (ROOT / "mbseig").rglob("__init__.py")}
     assert found - listed == set()
     assert cfg["package-dir"]["mbseig.bundled_cases"] == "cases"
     assert "mbseig.bundled_cases" in listed

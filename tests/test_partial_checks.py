@@ -114,7 +114,7 @@ def test_eta_kappa_in_one_pass_is_the_two_steps(monkeypatch, left, block):
         np.testing.assert_allclose(got[1], kappa, rtol=1e-12)
         assert np.array_equal(got[2], xn)
     else:
-        for a, b in zip(got, (eta, kappa, xn)):
+        for a, b in zip(got, (eta, kappa, xn), strict=True):
             assert np.array_equal(a, b)
 
 
@@ -160,10 +160,10 @@ def test_passed_partner_map_is_the_found_one_bitwise():
                            1e-6, "test", 1e-13, True)
     found = general_pairs({"s": s, "X1": Xall, "X2": Xall}, (M, P, Q), norms, n, 0, 1e-6, "test",
                           1e-13, True)
-    for a, b in zip(passed[:5], found[:5]):
+    for a, b in zip(passed[:5], found[:5], strict=True):
         assert np.array_equal(a, b)
     idx = np.arange(10)
-    for a, b in zip(passed[5](idx), found[5](idx)):
+    for a, b in zip(passed[5](idx), found[5](idx), strict=True):
         assert np.array_equal(a, b)
 
 
@@ -174,7 +174,7 @@ def test_modal_forms_batched_equal_column_by_column():
     cand = np.array([k for k in range(20) if k not in (5, 13)])
     got = modal_forms(X, cand, M, P)  # large and sparse: the blocked products
     assert 60000 * cand.size > FORM_BLOCK
-    for (mx, px, xx), k in zip(got, cand):
+    for (mx, px, xx), k in zip(got, cand, strict=True):
         x = X[:, k]
         np.testing.assert_allclose(mx, abs(np.vdot(x, M @ x)), rtol=1e-13)
         np.testing.assert_allclose(px, abs(np.vdot(x, P @ x)), rtol=1e-13)

@@ -21,7 +21,8 @@ from mbseig.studies.periodic_check import check_floquet
 from mbseig.studies.periodic_sweep import periodic_sweep
 
 # the format examples of DESIGN §8 (../shared/examples beside the checkout)
-EXAMPLE = str(Path(__file__).resolve().parents[2] / "shared" / "examples" / "driven_slider_crank.toml")
+EXAMPLE = str(Path(__file__).resolve().parents[2] / "shared" / "examples"
+              / "driven_slider_crank.toml")
 HANGING = CASES / "pendulum_shaken_pivot.toml"
 INVERTED = CASES / "inverted_pendulum_shaken_pivot.toml"
 G, L, A = 9.81, 1.0, 0.1
@@ -38,7 +39,8 @@ def inverted():
     return periodic_analysis(read_case(INVERTED))  # w = 50 > w* = 44.39
 
 
-@pytest.mark.skipif(not Path(EXAMPLE).exists(), reason="the format examples are not beside this checkout")
+@pytest.mark.skipif(not Path(EXAMPLE).exists(),
+                    reason="the format examples are not beside this checkout")
 def test_slider_crank_example_gives_the_floquet_object(capsys):
     """The §8 example runs unchanged; its JSON has the §8 keys; 6 coordinates − 5 constraints
     leave 1 DOF, hence 2 multipliers (none spurious from the constraints); period 2π/w (closed
@@ -60,7 +62,7 @@ def test_slider_crank_example_gives_the_floquet_object(capsys):
     np.testing.assert_allclose([abs(complex(*m)) for m in fl["multipliers"]],
                                exp["multiplier_modulus"], rtol=exp["rtol"])
     # exponents: ln(mu)/T with the imaginary part in (-pi/T, pi/T]
-    for mu, ex in zip(fl["multipliers"], fl["exponents"]):
+    for mu, ex in zip(fl["multipliers"], fl["exponents"], strict=True):
         assert ex[0] == pytest.approx(math.log(abs(complex(*mu))) / fl["period"], rel=1e-12)
         assert abs(ex[1]) <= math.pi / fl["period"] * (1 + 1e-12)
 

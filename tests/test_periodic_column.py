@@ -76,7 +76,7 @@ def test_case_states_closed_form_values():
     beta = PT / (2 * (PCR - P0))
     bolotin = [2 * W1 * math.sqrt(1 - beta), 2 * W1 * math.sqrt(1 + beta)]
     np.testing.assert_allclose(exp["bolotin_boundaries"], bolotin, rtol=1e-10)
-    assert max(abs(b / e - 1) for b, e in zip(bolotin, (lo, hi))) < beta ** 2
+    assert max(abs(b / e - 1) for b, e in zip(bolotin, (lo, hi), strict=True)) < beta ** 2
 
 
 def test_column_modes_against_mathieu(modes_json):
@@ -95,7 +95,7 @@ def test_column_modes_against_mathieu(modes_json):
     assert fl["error_bound"] < 1e-3 * fl["decided_by"]["margin"]
     others = [abs(complex(*m)) for m in fl["multipliers"][1:5]]
     bounds = fl["error_bounds"][1:5]
-    assert all(abs(m - 1) <= b for m, b in zip(others, bounds))
+    assert all(abs(m - 1) <= b for m, b in zip(others, bounds, strict=True))
     # the pair μ, 1/μ of an undamped Mathieu mode (Liouville: det = 1)
     assert abs(complex(*fl["multipliers"][5]) * mu - 1) < 1e-7
 

@@ -136,7 +136,7 @@ def rotating_wire(Omega, *, k=1.0, c=0.0, mass=1.0):
 G, L = 9.81, 1.0
 
 
-# ---- closed forms ---------------------------------------------------------------------------------
+# ---- closed forms --------------------------------------------------------------------------------
 def test_constant_matrix_monodromy_is_expm():
     """Constant A: Φ = expm(A T) (closed form), to 1e-12 relative; exponents = eig(A)."""
     rng = np.random.default_rng(1)
@@ -193,7 +193,7 @@ def test_json_has_design_fields():
     assert isinstance(out["error_bound"], float)
 
 
-# ---- driven pendulum ------------------------------------------------------------------------------
+# ---- driven pendulum -----------------------------------------------------------------------------
 def test_hanging_pendulum_tongue_in_frequency():
     """First tongue of the hanging pendulum (q = 2A/l = 0.2): ω = 2ω₀/√a on a = b_1(q) and
     a = a_1(q) (scipy mathieu_b / mathieu_a), both flips, located to 1e-8 relative."""
@@ -205,7 +205,7 @@ def test_hanging_pendulum_tongue_in_frequency():
     found = verdict_changes(lambda w: pendulum_pivot(w, amplitude=A), grid)
     assert [b.kind for b in found] == ["flip", "flip"]
     assert [b.stability for b in found] == ["loss", "recovery"]
-    for b, r in zip(found, ref):
+    for b, r in zip(found, ref, strict=True):
         assert abs(b.value / r - 1) < 1e-8, (b, r)
 
 
@@ -325,9 +325,9 @@ def test_pendulum_in_natural_coordinates_matches_angle_form():
 
 def test_bolotin_column_principal_resonance():
     """Pinned column, P(t) = P0 + Pt cos θt, first Galerkin mode (the modes decouple exactly;
-    M q̈ + K(t) q = 0 in first-order form): the principal region of mode 1 between θ = 2Ω₁/√a with a = b_1(βa) and
-    a = a_1(βa) (exact, brentq on scipy's characteristic values), 1e-8; Bolotin's
-    θ* = 2Ω₁√(1 ± β) within β² (its error is O(β²))."""
+    M q̈ + K(t) q = 0 in first-order form): the principal region of mode 1 between θ = 2Ω₁/√a
+    with a = b_1(βa) and a = a_1(βa) (exact, brentq on scipy's characteristic values), 1e-8;
+    Bolotin's θ* = 2Ω₁√(1 ± β) within β² (its error is O(β²))."""
     PE = math.pi ** 2
     P0, Pt = 0.3 * PE, 0.2 * PE
     beta = Pt / (2 * (PE - P0))
@@ -346,12 +346,12 @@ def test_bolotin_column_principal_resonance():
 
     found = verdict_changes(build, np.linspace(0.8 * 2 * Om, 1.2 * 2 * Om, 5))
     assert [b.kind for b in found] == ["flip", "flip"]
-    for b, e, approx in zip(found, exact, bolotin):
+    for b, e, approx in zip(found, exact, bolotin, strict=True):
         assert abs(b.value / e - 1) < 1e-8
         assert abs(approx / e - 1) < beta ** 2
 
 
-# ---- shooting ----------------------------------------------------------------------------------------
+# ---- shooting ------------------------------------------------------------------------------------
 def _duffing(c=0.2, beta=0.1, F=0.3, w=1.2):
     """x'' + c x' + x + β x³ = F cos ωt.  β = 0.1: one periodic response (the backbone
     ω² ≈ 1 + ¾βX² reaches ω = 1.2 at X ≈ 2.4, beyond the linear peak F/(cω) = 1.25); with
@@ -396,7 +396,7 @@ def test_shooting_failure_says_what_from_where_residual():
     assert "shooting" in msg and "[0.5]" in msg and "‖x(T) − x(0)‖ = 2" in msg
 
 
-# ---- partial method, chart, bad input -----------------------------------------------------------------
+# ---- partial method, chart, bad input ------------------------------------------------------------
 def test_arnoldi_largest_multipliers_match_full():
     """20 damped Mathieu oscillators (n = 40) mixed by an orthogonal similarity: the 2 largest
     |μ| by Arnoldi on the monodromy operator equal those of the full monodromy, 1e-8."""

@@ -25,7 +25,7 @@ def test_flip_multipliers_listed_once_with_tolerance_and_condition(capsys):
     assert all(mu.imag == 0 and mu.real < 0 for mu in mus)
     assert math.isclose(mus[0].real * mus[1].real, 1.0, rel_tol=1e-9)
     T = fl["period"]
-    for m, mu in zip(modes, mus):
+    for m, mu in zip(modes, mus, strict=True):
         b = fl["error_bounds"][[complex(*x) for x in fl["multipliers"]].index(mu)]
         assert math.isclose(m["tolerance"], b / (abs(mu) * T), rel_tol=1e-15)
         assert math.isfinite(m["condition"]) and m["condition"] >= 1.0

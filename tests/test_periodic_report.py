@@ -55,7 +55,7 @@ def test_periodic_report(tmp_path, capsys):
     assert f"|μ| = {d['modulus']:.10f} ± {d['bound']:.1e}" in md
     # every multiplier with its bound in the table; a part within its bound of 0 reads 0 (the
     # zero rule: here Im μ of the two real multipliers of the flip tongue)
-    for m, b in zip(fl["multipliers"], fl["error_bounds"]):
+    for m, b in zip(fl["multipliers"], fl["error_bounds"], strict=True):
         parts = ["0" if abs(x) <= b else f"{x:+.10f}" for x in m]
         assert f"| {parts[0]} | {parts[1]} | {abs(complex(*m)):.10f} | {b:.1e} |" in md
     assert "+0.0000000000" not in md

@@ -118,7 +118,8 @@ def test_turning_anchors_do_not_make_the_time_sampling_fail(tmp_path):
     end = text.index("[[forces]]", start)
     path = tmp_path / "no_frame.toml"
     path.write_text(text[:start] + text[end:])
-    spec, ref_spec = read_case(path), read_case(CASES / "asymmetric_rotor_anisotropic_bearings.toml")
+    spec = read_case(path)
+    ref_spec = read_case(CASES / "asymmetric_rotor_anisotropic_bearings.toml")
     timed, _ = timed_model(spec)
     assert timed.samples < 512 and timed.interpolation_error <= 1e-12
     a, b = periodic_analysis(spec).floquet, periodic_analysis(ref_spec).floquet

@@ -58,7 +58,7 @@ def test_interpolants_reproduce_the_projected_system(case):
     system = periodic_linearization(read_case(case)).system.system
     cheb, record = chebyshev_system(system)
     assert record["evaluations"] >= 13 * len(system.segments)
-    for (t0, t1, A), (_, _, C) in zip(system.segments, cheb.segments):
+    for (t0, t1, A), (_, _, C) in zip(system.segments, cheb.segments, strict=True):
         for frac in (0.013, 0.37, 0.71, 0.994):
             t = t0 + frac * (t1 - t0)
             exact = A(t)
@@ -111,7 +111,7 @@ def test_sparse_constraint_jacobian_gives_the_dense_null_space_path(chain_file):
                             lin.timed.period, start=path.bases[0])
     assert sp.issparse(J(0.1))
     for t in (0.05, 0.4, 0.93 * lin.timed.period):
-        for a, b in zip(path.derivative(t), dense.derivative(t)):
+        for a, b in zip(path.derivative(t), dense.derivative(t), strict=True):
             assert np.max(np.abs(a - b)) <= 1e-12 * max(1.0, np.abs(b).max())
 
 

@@ -25,7 +25,8 @@ def linked_chain(n, every=10, k=1000.0, c_ground=0.5, beta=2e-4):
     (constraint rows x_{i+1} − x_i = 0), grounded dashpots on every 7th mass plus βK
     (non-proportional, symmetric positive semidefinite)."""
     i = np.arange(n)
-    K = sp.diags([2 * k * np.ones(n), -k * np.ones(n - 1), -k * np.ones(n - 1)], [0, 1, -1], format="csr")
+    K = sp.diags([2 * k * np.ones(n), -k * np.ones(n - 1), -k * np.ones(n - 1)], [0, 1, -1],
+                 format="csr")
     cd = np.zeros(n)
     cd[::7] = c_ground
     C = (sp.diags(cd) + beta * K).tocsr()

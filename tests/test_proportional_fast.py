@@ -68,7 +68,7 @@ def test_structured_measures_are_the_definitions(name, M, P, Q):
     assert np.all(sol.condition >= kappa_d * (1 - 1e-12))
     assert np.all(sol.condition <= kappa_d * (1 + 1e-9))
     ref = solve_qep(M, P, Q, solver="companion").eigenvalues
-    for sk, kk, ek in zip(s, sol.condition, sol.backward_error):
+    for sk, kk, ek in zip(s, sol.condition, sol.backward_error, strict=True):
         assert np.min(np.abs(ref - sk)) <= 10 * kk * max(ek, EPS) + 1e-13 * abs(sk)
 
 
@@ -85,7 +85,8 @@ def test_rayleigh_fit_residual_is_the_entrywise_norm():
     M, K = _dense(30, 3)
     for P in (0.3 * M + 2e-3 * K, 0.3 * M + 2e-3 * K + 1e-14 * np.eye(30)[::-1], 0.3 * M):
         a, b, r = measures.rayleigh_fit(M, P, K, 1e-12, residual=True)
-        assert r == pytest.approx(np.linalg.norm(P - a * M - b * K), abs=4 * EPS * np.linalg.norm(P))
+        assert r == pytest.approx(np.linalg.norm(P - a * M - b * K),
+                                  abs=4 * EPS * np.linalg.norm(P))
         assert measures.rayleigh_fit(M, P, K, 1e-12) == (a, b)
     assert measures.rayleigh_fit(M, np.zeros_like(M), K, 1e-12, residual=True) == (0.0, 0.0, 0.0)
     assert measures.rayleigh_fit(M, np.eye(30)[::-1] + 0.0, K, 1e-12, residual=True) is None

@@ -2,8 +2,9 @@
 
 ``mbseig report`` (the fastest options: no time-domain check, studies or sensitivities) writes
 report.html for the hand-rehabilitation device (planar, three modes: the case the reports are
-for) and a small spatial case (the spherical pendulum, three modes).  Each page is opened in headless Chromium through
-chromedriver's WebDriver protocol (W3C WebDriver, plain HTTP: no client package needed), and
+for) and a small spatial case (the spherical pendulum, three modes).  Each page is opened in
+headless Chromium through chromedriver's WebDriver protocol (W3C WebDriver, plain HTTP: no client
+package needed), and
 
 - the page's own script context decodes every gallery animation (``ImageDecoder``, the browser's
   GIF decoder): an embedded ``data:image/gif`` with natural size > 0, more than one frame, a

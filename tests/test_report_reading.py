@@ -43,7 +43,7 @@ def values_text(md):
                 continue
             if MEASURES.search(cells[0]):
                 continue
-            out += [c for h, c in zip(header, cells) if not MEASURES.search(h)]
+            out += [c for h, c in zip(header, cells, strict=True) if not MEASURES.search(h)]
         else:
             header = None
             out += [t for t in re.split(r"(?<=[.;])\s", ln) if not MEASURES.search(t)]
@@ -83,7 +83,7 @@ def test_rigid_rotor_report_prints_no_number_below_its_bound(rigid_rotor_report,
     head, rows = table_after(md, "### Modes — verdict: critical")
     assert len(rows) == len(raw["modes"])
     col = {h: i for i, h in enumerate(head)}
-    for row, m in zip(rows, raw["modes"]):
+    for row, m in zip(rows, raw["modes"], strict=True):
         re_s, tol = m["eigenvalue"][0], m["tolerance"]
         zero = abs(re_s) <= tol
         assert zero  # an undamped rotor: every δ is rounding residue (cy = cz = 0)
@@ -152,7 +152,8 @@ def test_one_page_style_for_every_motion(three_pages):
     the same order (the reference state named for its motion)."""
     styles = {k: re.search(r"<style>(.*?)</style>", html, re.S).group(1)
               for k, (_, _, html) in three_pages.items()}
-    assert styles["rest"] == styles["steady"] == styles["periodic"] and "@media print" in styles["rest"]
+    assert styles["rest"] == styles["steady"] == styles["periodic"]
+    assert "@media print" in styles["rest"]
     reference = {"rest": "Equilibrium", "steady": "Steady motion", "periodic": "Reference motion"}
     for kind, (_, md, html) in three_pages.items():
         heads = re.findall(r"^(##+) (.*)$", md, flags=re.M)

@@ -80,7 +80,8 @@ def _rigid_closed_form(w, me, ky=KY, kz=KZ, cy=0.0, cz=0.0):
 
 def _amplitudes(row, key):
     a, ph = row[f"amplitude_{key}"], row[f"phase_{key}"]
-    return [None if x is None else x * np.exp(1j * math.radians(p)) for x, p in zip(a, ph)]
+    return [None if x is None else x * np.exp(1j * math.radians(p))
+            for x, p in zip(a, ph, strict=True)]
 
 
 def _check_rigid(out, me, **damping):

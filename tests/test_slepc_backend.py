@@ -6,10 +6,10 @@ every 10th spring replaced by a rigid link (39 constraint rows x_{i+1} − x_i =
 dashpots on every 7th mass plus stiffness-proportional damping: non-proportional, so the general
 path runs.  Reference: ``partial-companion`` (ARPACK shift-invert Arnoldi, independent code and
 factorization).  Tolerance 1e-9 relative on each eigenvalue: both paths verify η ≤ 1e-8 on the
-bordered pencil; SLEPc's own stopping test is η ≤ 1e-14 (its norms), and κ of these modes is below 1e3, so
-agreement to ~1e-10 is expected and 1e-9 leaves a margin without hiding a wrong mode (the modes
-are separated by > 1e-2 relative).  Skipped where slepc4py cannot be imported by any candidate
-Python (mbseig.eigen.slepc.slepc_python).
+bordered pencil; SLEPc's own stopping test is η ≤ 1e-14 (its norms), and κ of these modes is
+below 1e3, so agreement to ~1e-10 is expected and 1e-9 leaves a margin without hiding a wrong
+mode (the modes are separated by > 1e-2 relative).  Skipped where slepc4py cannot be imported
+by any candidate Python (mbseig.eigen.slepc.slepc_python).
 """
 
 import os
@@ -27,7 +27,8 @@ from mbseig.errors import SolverError
 def _chain(n=400, every=10):
     i = np.arange(n)
     k = 1000.0
-    K = sp.diags([2 * k * np.ones(n), -k * np.ones(n - 1), -k * np.ones(n - 1)], [0, 1, -1], format="csr")
+    K = sp.diags([2 * k * np.ones(n), -k * np.ones(n - 1), -k * np.ones(n - 1)], [0, 1, -1],
+                 format="csr")
     cd = np.zeros(n)
     cd[::7] = 0.05
     C = (sp.diags(cd) + (0.002 / k) * K).tocsr()
@@ -58,7 +59,8 @@ def test_slepc_matches_scipy_partial_path():
     # mode shapes in full coordinates: the same up to a unit complex factor (MAC ≈ 1)
     ia, ib = np.argsort(ref.eigenvalues.imag), np.argsort(got.eigenvalues.imag)
     Xa, Xb = ref.vectors[:, ia], got.vectors[:, ib]
-    mac = np.abs(np.sum(Xa.conj() * Xb, axis=0)) ** 2 / (np.sum(np.abs(Xa) ** 2, axis=0) * np.sum(np.abs(Xb) ** 2, axis=0))
+    mac = np.abs(np.sum(Xa.conj() * Xb, axis=0)) ** 2 / (np.sum(np.abs(Xa) ** 2, axis=0)
+                                                          * np.sum(np.abs(Xb) ** 2, axis=0))
     assert np.all(mac > 1 - 1e-8)
     # the constraints hold on the returned modes: G x = 0 to rounding
     assert np.max(np.abs(G @ got.vectors)) <= 1e-10

@@ -71,7 +71,10 @@ def assert_same(fused, general):
     assert fused.verdict == general.verdict
     assert np.array_equal(fused.multiplicity, general.multiplicity)
     assert fused.accounting == general.accounting
-    names = lambda md: [[n for n, _ in d] for d in md.dominant]
+
+    def names(md):
+        return [[n for n, _ in d] for d in md.dominant]
+
     assert names(fused) == names(general)
     assert fused.flags == general.flags
     numeric = {k: v for k, v in fused.tolerances.items() if k != "implementation"}
@@ -154,7 +157,8 @@ def test_diagonal_mass_and_badly_scaled():
     rng = np.random.default_rng(3)
     n = 5
     M = np.diag(10.0 ** rng.uniform(-6, 0, n))
-    K = np.diag(np.full(n, 2e6)) - np.diag(np.full(n - 1, 1e6), 1) - np.diag(np.full(n - 1, 1e6), -1)
+    K = (np.diag(np.full(n, 2e6)) - np.diag(np.full(n - 1, 1e6), 1)
+         - np.diag(np.full(n - 1, 1e6), -1))
     C = 1e-3 * K + np.diag(rng.uniform(0, 1e-3, n))
     for P in (np.zeros((n, n)), C):
         a, b = _both(M, P, K)

@@ -19,7 +19,8 @@ from mbseig.errors import CaseError, SolverError
 
 
 def chain(n, k=1000.0, m=1.0):
-    K = sp.diags([-k * np.ones(n - 1), 2 * k * np.ones(n), -k * np.ones(n - 1)], [-1, 0, 1], format="csr")
+    K = sp.diags([-k * np.ones(n - 1), 2 * k * np.ones(n), -k * np.ones(n - 1)], [-1, 0, 1],
+                 format="csr")
     return sp.identity(n, format="csr") * m, K
 
 
@@ -86,7 +87,7 @@ def test_partial_companion_nonsymmetric_left_vectors():
     Q = (K + R).tocsr()
     md = mbseig.modes(M, C, Q, n_modes=5)
     d = _dense_listing(M, C, Q)
-    for s, kap in zip(md.eigenvalues, md.condition):
+    for s, kap in zip(md.eigenvalues, md.condition, strict=True):
         i = np.argmin(np.abs(d.eigenvalues - s))
         assert abs(d.eigenvalues[i] - s) <= 1e-9 * abs(s)
         assert kap == pytest.approx(d.condition[i], rel=1e-6)
@@ -115,7 +116,8 @@ def test_free_free_rigid_mode_partial():
     md = mbseig.modes(lin.M, lin.P, lin.Q, n_modes=4)
     assert md.kind[0] == "rigid-body" and md.kind.count("rigid-body") == 1
     j = np.arange(1, 4)
-    np.testing.assert_allclose(md.omega_n[1:], 2 * np.sqrt(1000.0) * np.sin(j * np.pi / 400), rtol=1e-9)
+    np.testing.assert_allclose(md.omega_n[1:], 2 * np.sqrt(1000.0) * np.sin(j * np.pi / 400),
+                               rtol=1e-9)
 
 
 LINK_CHAIN = """
@@ -154,7 +156,8 @@ damping = 0.01
 
 def test_bordered_pencil_equals_null_space_reduction(tmp_path):
     """Constraint rows kept in the pencil (no null-space basis): the 5 lowest modes of a hanging
-    12-link chain agree with the dense reduction Nᵀ(·)N (rtol 1e-8), constraint stiffness included."""
+    12-link chain agree with the dense reduction Nᵀ(·)N (rtol 1e-8), constraint stiffness
+    included."""
     path = write_case(tmp_path, LINK_CHAIN)
     model = mbseig.load_case(path)
     eq = mbseig.equilibrium(model)
@@ -254,7 +257,8 @@ def test_batch_equals_per_element(tmp_path, monkeypatch, text, params):
     Ks, Cs = slow.force_jacobians(q, qd)
     for a, b in ((fast.mass, slow.mass), (Kf, Ks), (Cf, Cs)):
         np.testing.assert_allclose(a.toarray(), b.toarray(), rtol=1e-14, atol=1e-12)
-    np.testing.assert_allclose(fast.generalized_force(q, qd), slow.generalized_force(q, qd), rtol=1e-13)
+    np.testing.assert_allclose(fast.generalized_force(q, qd), slow.generalized_force(q, qd),
+                               rtol=1e-13)
     np.testing.assert_allclose(fast.q_init, slow.q_init)
     assert set(fast.points) == set(slow.points)
     name = fast.coordinate_names[2].split(".")[0]
@@ -269,9 +273,11 @@ def test_batch_jacobians_central_differences(tmp_path):
     qd = rng.normal(size=model.n)
     K, C = model.force_jacobians(q, qd)
     h = 1e-6
-    Kn = np.column_stack([-(model.generalized_force(q + h * e, qd) - model.generalized_force(q - h * e, qd)) / (2 * h)
+    Kn = np.column_stack([-(model.generalized_force(q + h * e, qd)
+                            - model.generalized_force(q - h * e, qd)) / (2 * h)
                           for e in np.eye(model.n)])
-    Cn = np.column_stack([-(model.generalized_force(q, qd + h * e) - model.generalized_force(q, qd - h * e)) / (2 * h)
+    Cn = np.column_stack([-(model.generalized_force(q, qd + h * e)
+                            - model.generalized_force(q, qd - h * e)) / (2 * h)
                           for e in np.eye(model.n)])
     np.testing.assert_allclose(K.toarray(), Kn, rtol=1e-6, atol=1e-6 * np.abs(Kn).max())
     np.testing.assert_allclose(C.toarray(), Cn, rtol=1e-6, atol=1e-6 * np.abs(Cn).max())
@@ -298,11 +304,12 @@ def test_lightly_damped_large_chain_is_stable():
     up to ~10 ε|β|‖Q‖₂/‖M‖₂ ≈ 4e-15 (sign and size set by the BLAS kernel's summation order:
     from −5.9e-15 to +2.0e-15 over five OpenBLAS kernels and one or two threads), which moves
     every δ by α/2, up to 4.8e-7 of δ₁: no relative tolerance on δ₁ holds that a priori (the
-    former rtol 1e-7 held on one kernel only).  The bound that does is the path's own bound on Re s (proportional_real_error):
-    |β||s|κη + κ|s|‖E‖_F/w(s) + ε|α + βω²|, E = P − αM − βQ, whose fit term is ≈ ‖E‖_F/2 here
-    (κ ≈ w(s)/2|s|) and so covers the fitted α (M = I puts |α|√n into ‖E‖_F).  The verdict's
-    tolerance is ``safety`` times that bound (the 1e-12|s| floor is far below it), so the closed
-    form must lie within tolerance/safety; measured 95–1100× inside on those kernels."""
+    former rtol 1e-7 held on one kernel only).  The bound that does is the path's own bound on
+    Re s (proportional_real_error): |β||s|κη + κ|s|‖E‖_F/w(s) + ε|α + βω²|, E = P − αM − βQ,
+    whose fit term is ≈ ‖E‖_F/2 here (κ ≈ w(s)/2|s|) and so covers the fitted α (M = I puts
+    |α|√n into ‖E‖_F).  The verdict's tolerance is ``safety`` times that bound (the 1e-12|s|
+    floor is far below it), so the closed form must lie within tolerance/safety; measured
+    95–1100× inside on those kernels."""
     model = mbseig.load_case(CASES / "chain_damped.toml", n=20000)
     lin = mbseig.linearize(model, mbseig.equilibrium(model))
     md = mbseig.modes(lin.M, lin.P, lin.Q, n_modes=5)

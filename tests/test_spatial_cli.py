@@ -104,16 +104,19 @@ BAD = {
                                      'at = [0.0, 0.0, -1.5]\nstiffness = [1.0, 2.0]'},
         "forces[0]: stiffness must be 6 numbers or a 6x6 matrix"),
     "rotor on an unknown body": (
-        {"kind": "spherical", "extra": '[[forces]]\ntype = "rotor"\nbody = "d"\naxis = [0.0, 0.0, 1.0]\n'
-                                     'polar_inertia = 1.0\nspeed = 10.0'},
+        {"kind": "spherical", "extra": '[[forces]]\ntype = "rotor"\nbody = "d"\n'
+                                     'axis = [0.0, 0.0, 1.0]\npolar_inertia = 1.0\nspeed = 10.0'},
         "forces[0]: unknown body 'd'"),
     "torsional on a spherical joint": (
-        {"kind": "spherical", "extra": '[[forces]]\ntype = "torsional"\njoint = "j"\nstiffness = 1.0'},
+        {"kind": "spherical",
+         "extra": '[[forces]]\ntype = "torsional"\njoint = "j"\nstiffness = 1.0'},
         "forces[0]: joint 'j' is not a revolute or cylindrical joint declared before"),
 }
 BAD_INERTIA = {
-    "not positive definite": ("[1.0, -1.0, 1.0]", "bodies[0] 'b': inertia tensor must be positive definite"),
-    "triangle inequality": ("[1.0, 1.0, 3.0]", "bodies[0] 'b': principal moments 1, 1, 3 violate the triangle"),
+    "not positive definite": ("[1.0, -1.0, 1.0]",
+                              "bodies[0] 'b': inertia tensor must be positive definite"),
+    "triangle inequality": ("[1.0, 1.0, 3.0]",
+                            "bodies[0] 'b': principal moments 1, 1, 3 violate the triangle"),
     "not symmetric": ("[[1.0, 0.2, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]",
                       "bodies[0] 'b': inertia tensor must be symmetric"),
     "wrong shape": ("[1.0, 2.0]", "bodies[0] 'b': inertia must be 3 numbers or a 3x3 matrix"),

@@ -80,10 +80,10 @@ def test_inline_ends_move_with_the_body(tmp_path):
     names = list(model.coordinate_names)
     # rotate the bob by 90° about x: u stays, v → z, w → −y; its CoM (origin) to (0, 1, 0),
     # so the end (0, 0.1, 0) from the CoM goes to (0, 1, 0) + 0.1 z
-    for axis, value in zip("xyz", (0.0, 1.0, 0.0)):
+    for axis, value in zip("xyz", (0.0, 1.0, 0.0), strict=True):
         q[names.index(f"bob.{axis}")] = value
     for vec, value in (("v", (0.0, 0.0, 1.0)), ("w", (0.0, -1.0, 0.0))):
-        for axis, x in zip("xyz", value):
+        for axis, x in zip("xyz", value, strict=True):
             q[names.index(f"bob.{vec}.{axis}")] = x
     np.testing.assert_allclose(end(q), [0.0, 1.0, 0.1], atol=1e-15)
 

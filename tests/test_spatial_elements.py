@@ -73,13 +73,13 @@ def random_body(rng):
 def test_mass_matrix_kinetic_energy(seed):
     """½ żᵀ M ż = ½ m v_G² + ½ ωᵀ (R I_G Rᵀ) ω for a random body, rotation, ω and ṙ₀."""
     rng = np.random.default_rng(seed)
-    m, xg, I = random_body(rng)
-    M = spatial_mass_matrix(m, xg, I)
+    m, xg, I_G = random_body(rng)
+    M = spatial_mass_matrix(m, xg, I_G)
     R = Rotation.random(random_state=seed).as_matrix()
     w, v0 = rng.normal(size=3), rng.normal(size=3)
     zdot = np.concatenate([v0] + [np.cross(w, R[:, k]) for k in range(3)])
     vG = v0 + np.cross(w, R @ xg)
-    T_ref = 0.5 * m * vG @ vG + 0.5 * w @ (R @ I @ R.T) @ w
+    T_ref = 0.5 * m * vG @ vG + 0.5 * w @ (R @ I_G @ R.T) @ w
     assert 0.5 * zdot @ M @ zdot == pytest.approx(T_ref, rel=1e-12)
     # the CoM: ∫C dm = m C(ξ_G), i.e. the first block row of M is m C(ξ_G)
     np.testing.assert_allclose(M[:3], m * point_matrix(xg), rtol=1e-14, atol=1e-14)
@@ -192,7 +192,8 @@ def test_angle_driver_and_torsional_derivatives():
         return J
 
     close(jac_full(q), central(lambda x: drv.phi(x), q), CD_RTOL)
-    close(scatter_full(drv, drv.hess(q, lam), n), central(lambda x: jac_full(x).T @ lam, q), CD_RTOL)
+    close(scatter_full(drv, drv.hess(q, lam), n), central(lambda x: jac_full(x).T @ lam, q),
+          CD_RTOL)
     close(drv.gamma(q, qd), -central(lambda x: jac_full(x) @ qd, q) @ qd, CD_RTOL)
     el = SpatialTorsional("k", dirs, 3.0, 0.4, 0.2, rows=rows)
     check_force(el, n, rng, diff=central, rtol=CD_RTOL)

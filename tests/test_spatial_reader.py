@@ -42,7 +42,8 @@ def hinge_angle(model, q):
 
 @pytest.mark.parametrize("follower", ["false", "true"])
 def test_torque_against_torsional_spring(follower, tmp_path):
-    extra = f'[[forces]]\ntype = "torque"\nbody = "arm"\nvector = [0.0, 0.0, 6.0]\nfollower = {follower}'
+    extra = ('[[forces]]\ntype = "torque"\nbody = "arm"\nvector = [0.0, 0.0, 6.0]\n'
+             f'follower = {follower}')
     model = mbseig.load_case(write_case(tmp_path, HINGE.format(extra=extra)))
     eq = mbseig.equilibrium(model)
     assert hinge_angle(model, eq.q) == pytest.approx(6.0 / 40.0, rel=1e-10)
@@ -62,7 +63,8 @@ def test_angle_driver_sets_a_spring(tmp_path):
     spring's free length set and no driver in the final model; the spring balances the
     torsional spring there (k_t θ = F × lever)."""
     extra = ('[[forces]]\nname = "actuator"\ntype = "spring"\n'
-             'points = [{ body = "ground", at = [0.5, 1.0, 0.0] }, { body = "arm", at = [0.5, 0.0, 0.0] }]\n'
+             'points = [{ body = "ground", at = [0.5, 1.0, 0.0] }, '
+             '{ body = "arm", at = [0.5, 0.0, 0.0] }]\n'
              'stiffness = 500.0\n'
              '[[joints]]\ntype = "angle_driver"\njoint = "hinge"\nangle = 0.3\nsets = "actuator"')
     model = mbseig.load_case(write_case(tmp_path, HINGE.format(extra=extra)))

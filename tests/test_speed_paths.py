@@ -95,7 +95,8 @@ def test_probe_rayleigh_fit_never_misses_what_lstsq_finds():
     for _ in range(40):
         n = int(rng.integers(2, 400))
         off = rng.standard_normal(n - 1) * 10.0 ** int(rng.integers(-30, 30))
-        K = sp.diags([off, rng.uniform(1.0, 3.0, n) * max(1.0, abs(off).max()), off], [-1, 0, 1]).tocsr()
+        K = sp.diags([off, rng.uniform(1.0, 3.0, n) * max(1.0, abs(off).max()), off],
+                     [-1, 0, 1]).tocsr()
         M = sp.diags(rng.uniform(0.5, 2.0, n)).tocsr()
         a, b = rng.standard_normal(2) * 10.0 ** rng.integers(-4, 4, 2)
         for P in (a * M + b * K, a * M + b * K + 1e-6 * abs(a) * sp.eye(n, k=1),
@@ -159,7 +160,8 @@ def test_row_blocks_agree_with_one_block(monkeypatch):
     blocked = run()
     assert np.array_equal(one[2], blocked[2])  # η_c: a maximum, no summation
     assert np.array_equal(one[4], blocked[4]) and one[6] == blocked[6]  # same halves kept
-    for a, b in zip(one[:2] + one[3:4] + one[5:6], blocked[:2] + blocked[3:4] + blocked[5:6]):
+    for a, b in zip(one[:2] + one[3:4] + one[5:6], blocked[:2] + blocked[3:4] + blocked[5:6],
+                    strict=True):
         np.testing.assert_allclose(b, a, rtol=1e-14, atol=0)
     # and against the definitions, dense and direct (module docstring of measures)
     Md, Pd, Kd = (A.toarray() for A in ops)
@@ -174,8 +176,9 @@ def test_lazy_package_exports_every_name():
     for name in mbseig.__all__:
         obj = getattr(mbseig, name)
         assert obj is not None
-    for name, module in (("write_report", "mbseig.studies.report_data"), ("check_modes", "mbseig.check"),
-                         ("run_sweep", "mbseig.studies"), ("modes", "mbseig.modal")):
+    for name, module in (("write_report", "mbseig.studies.report_data"),
+                         ("check_modes", "mbseig.check"), ("run_sweep", "mbseig.studies"),
+                         ("modes", "mbseig.modal")):
         assert getattr(mbseig, name) is getattr(importlib.import_module(module), name)
     assert {"write_report", "check_modes", "run_sweep"} <= set(mbseig.__all__) <= set(dir(mbseig))
     with pytest.raises(AttributeError):

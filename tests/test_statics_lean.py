@@ -75,7 +75,7 @@ def test_step_scales_of_equals_fresh(name):
     if fresh.D is not None:
         assert (kept.D != fresh.D).nnz == 0 and np.array_equal(kept.inv_len, fresh.inv_len)
     if built.constraints == model.constraints and all(
-            a is b for a, b in zip(built.constraints, model.constraints)):
+            a is b for a, b in zip(built.constraints, model.constraints, strict=True)):
         assert StepScales.of(built) is kept
 
 

@@ -115,9 +115,11 @@ def test_derivatives_by_complex_step(disk_wheel, seed):
     q, qd, _, _, spin = _moving_state(seed)
     mu, lam = np.array([0.3, -1.1]), np.array([2.0, -0.4])
     tol = {"rtol": 1e-12, "atol": 1e-13}
-    np.testing.assert_allclose(_cs(lambda x: w.velocity_rows(x, qd, spin), q), w.rows_q(q, qd), **tol)
+    np.testing.assert_allclose(_cs(lambda x: w.velocity_rows(x, qd, spin), q), w.rows_q(q, qd),
+                               **tol)
     np.testing.assert_allclose(_cs(lambda x: w.velocity_rows(q, x, spin), qd), w.rows(q), **tol)
-    np.testing.assert_allclose(_cs(lambda x: w.rows(x).T @ mu, q), w.multiplier_stiffness(mu), **tol)
+    np.testing.assert_allclose(_cs(lambda x: w.rows(x).T @ mu, q), w.multiplier_stiffness(mu),
+                               **tol)
     c = w.holonomic()
     np.testing.assert_allclose(_cs(c.phi, q), c.jac(q), **tol)
     np.testing.assert_allclose(_cs(lambda x: c.jac(x).T @ lam, q), c.hess(q, lam), **tol)

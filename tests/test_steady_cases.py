@@ -34,7 +34,8 @@ def test_steady_case_expected_values(path, capsys):
     params = out["parameters"]
     rtol, atol = exp.get("rtol", 1e-10), exp.get("atol", 0.0)
     got = np.array([complex(*m["eigenvalue"]) for m in out["modes"]])
-    ref = np.array([complex(re, im) for re, im in _series(exp["steady_modes"], params, ["re", "im"])])
+    ref = np.array([complex(re, im)
+                    for re, im in _series(exp["steady_modes"], params, ["re", "im"])])
     assert got.size == ref.size
     # each within the case's tolerance plus its own stated error bound τ (an eigenvalue whose
     # reference is 0 and which is not a declared direction is computed, not deflated: its

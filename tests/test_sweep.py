@@ -108,8 +108,9 @@ def test_identical_on_every_runner(tmp_path):
     assert serial == procs
     import distributed
 
-    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
-                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+    with (distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                   dashboard_address=None) as cluster,
+          distributed.Client(cluster) as client):
         dask = run_sweep(case, axes, scheduler=client)
         assert dask.runner == "dask"
         assert json.dumps(dask.to_json()) == serial
@@ -123,8 +124,8 @@ def test_cli_two_parameter_map(tmp_path, capsys):
     # a second (dummy-free) axis: sweep c and the damper on nothing else → use Q via a parameter
     text = FLUTTER.replace("c = 1.0", "c = 1.0\nk2 = 9.0").replace("[1.0, 9.0]", '[1.0, "k2"]')
     case2 = _case(tmp_path, text, "map.toml")
-    rc = main(["sweep", str(case2), "--param", "c=1:-1:3", "--param", "k2=8:10:2", "--out", str(out),
-               "--jobs", "1"])
+    rc = main(["sweep", str(case2), "--param", "c=1:-1:3", "--param", "k2=8:10:2",
+               "--out", str(out), "--jobs", "1"])
     assert rc == 0
     for name in ("sweep.json", "tracks.csv", "boundaries.csv", "root_locus.png",
                  "modes_vs_parameter.png", "stability_map.png"):

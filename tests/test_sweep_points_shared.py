@@ -66,9 +66,9 @@ def _lines(spec, config, axis, values, lines, share):
 
 
 def _assert_equal_lines(shared, alone):
-    for s, a in zip(shared, alone):
+    for s, a in zip(shared, alone, strict=True):
         assert len(s["points"]) == len(a["points"])
-        for p, r in zip(s["points"], a["points"]):
+        for p, r in zip(s["points"], a["points"], strict=True):
             _same_point(p, r)
         assert s["record"] == a["record"]
         assert [e["type"] for e in s["events"]] == [e["type"] for e in a["events"]]
@@ -117,8 +117,8 @@ def test_run_sweep_general_path_shares_nothing(device, follows):
         assert len(follows) == 3
         lean = run_sweep(device, axes, jobs=1, progress=False, curves=False)
     assert len(follows) == 4
-    for lg, ll in zip(general.points, lean.points):
-        for a, b in zip(lg, ll):
+    for lg, ll in zip(general.points, lean.points, strict=True):
+        for a, b in zip(lg, ll, strict=True):
             assert a["verdict"] == b["verdict"]
             sa, sb = np.sort_complex(a["eigenvalues"]), np.sort_complex(b["eigenvalues"])
             assert np.max(np.abs(sa - sb) / np.abs(sb)) <= 1e-12

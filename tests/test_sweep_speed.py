@@ -40,7 +40,8 @@ def test_csr_from_triplets_equals_scipy(n_rows, n_cols, count, seed):
     assert ours.shape == ref.shape
     assert ours.has_sorted_indices
     scale = np.abs(v).sum() + 1.0
-    assert np.max(np.abs(ours.toarray() - ref.toarray()), initial=0.0) <= 4 * np.finfo(float).eps * scale
+    assert (np.max(np.abs(ours.toarray() - ref.toarray()), initial=0.0)
+            <= 4 * np.finfo(float).eps * scale)
 
 
 def test_csr_from_triplets_refuses_indices_outside():
@@ -56,12 +57,14 @@ def test_dense_assembly_equals_csr(n_rows, n_cols, count, seed):
     rng = np.random.default_rng(seed)
     blocks = []
     for _ in range(count):
-        r, c = rng.integers(0, n_rows, rng.integers(1, 4)), rng.integers(0, n_cols, rng.integers(1, 4))
+        r = rng.integers(0, n_rows, rng.integers(1, 4))
+        c = rng.integers(0, n_cols, rng.integers(1, 4))
         blocks.append((r, c, rng.standard_normal((r.size, c.size))))
     trip = [(rng.integers(0, n_rows, 6), rng.integers(0, n_cols, 6), rng.standard_normal(6))
             for _ in range(count)]
     scale = sum(np.abs(b[2]).sum() for b in blocks) + sum(np.abs(t[2]).sum() for t in trip) + 1.0
-    for dense, csr in ((scatter(n_rows, n_cols, blocks, dense=True), scatter(n_rows, n_cols, blocks)),
+    for dense, csr in ((scatter(n_rows, n_cols, blocks, dense=True),
+                        scatter(n_rows, n_cols, blocks)),
                        (coo_sum(n_rows, n_cols, trip, dense=True), coo_sum(n_rows, n_cols, trip))):
         assert isinstance(dense, np.ndarray) and dense.shape == (n_rows, n_cols)
         assert np.max(np.abs(dense - csr.toarray()), initial=0.0) <= 4 * np.finfo(float).eps * scale
@@ -112,7 +115,7 @@ def test_difference_tangents_reach_the_same_equilibria(monkeypatch):
     fast = _line(values)
     assert fast["record"]["tangents_by_difference"] >= 3  # the fast path was taken
     slow = _line(values, monkeypatch, exact=True)
-    for a, b in zip(fast["points"], slow["points"]):
+    for a, b in zip(fast["points"], slow["points"], strict=True):
         assert a["error"] is None and b["error"] is None
         assert np.max(np.abs(a["q"] - b["q"])) <= 1e-9
         sa, sb = np.sort_complex(a["eigenvalues"]), np.sort_complex(b["eigenvalues"])

@@ -49,7 +49,7 @@ def test_double_pendulum_undamped_over_20_periods():
     a, r = run_check(CASES / "double_pendulum.toml")
     w = np.sqrt(G * np.array([2 - math.sqrt(2), 2 + math.sqrt(2)]))  # closed form, l = 1
     assert len(r.modes) == 2
-    for m, wk in zip(r.modes, w):
+    for m, wk in zip(r.modes, w, strict=True):
         assert m.periods >= 20
         assert abs(m.measured_delta) <= 1e-5 * wk
         assert abs(m.measured_omega - wk) <= 1e-4 * wk
@@ -107,11 +107,11 @@ def test_inverted_pendulum_divergence_rate():
     assert div[0].measured_delta == pytest.approx(div[0].predicted_delta, rel=1e-2)
 
 
-def ziegler_eigenvalue(p, k=1.0, m=1.0, l=1.0):
+def ziegler_eigenvalue(p, k=1.0, m=1.0, length=1.0):
     """Flutter eigenvalue (Re s > 0) of Ziegler's pendulum past p_cr: w = s²·(−m l²/k) solves
     2w² − (7 − 2p)w + 1 = 0 (cases/ziegler_pendulum.toml)."""
     w = (7 - 2 * p + np.sqrt(complex((7 - 2 * p) ** 2 - 8))) / 4
-    s = np.sqrt(-w * k / (m * l * l))
+    s = np.sqrt(-w * k / (m * length * length))
     return complex(abs(s.real), abs(s.imag))
 
 
@@ -145,7 +145,7 @@ def test_linear_gyroscopic_case():
     p = a.model.parameters
     w = sorted([abs(p["omega0"] - p["Omega"]), p["omega0"] + p["Omega"]])
     assert r.passed and [m.index for m in r.modes] == [1, 2]
-    for m, wk in zip(r.modes, w):
+    for m, wk in zip(r.modes, w, strict=True):
         assert m.measured_omega == pytest.approx(wk, rel=1e-4)
         assert abs(m.measured_delta) <= 1e-5 * wk
 

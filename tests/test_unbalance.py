@@ -89,10 +89,10 @@ def run_json(capsys, argv):
 @pytest.mark.filterwarnings("ignore::UserWarning")
 def test_unbalance_command_matches_jeffcott_closed_form(tmp_path, capsys):
     """Amplitude and phase at the disk and at the bearing station against the closed form at
-    five speeds (0 to 600 rad/s) through the critical speed sqrt(k/m) ≈ 316 rad/s (asserted 1e-8 relative on the
-    complex amplitude: measured ≤ 1e-9, the shaft's flexibility and rounding); the second
-    lateral component is X2 = −i X1 (a forward circle); the unbalance angle rotates the
-    response by itself; the named output z = −x1 (e1 = −z) follows."""
+    five speeds (0 to 600 rad/s) through the critical speed sqrt(k/m) ≈ 316 rad/s (asserted 1e-8
+    relative on the complex amplitude: measured ≤ 1e-9, the shaft's flexibility and rounding);
+    the second lateral component is X2 = −i X1 (a forward circle); the unbalance angle rotates
+    the response by itself; the named output z = −x1 (e1 = −z) follows."""
     path = write_case(tmp_path, JEFFCOTT_3D)
     me, angle = 2e-3, 30.0
     out = run_json(capsys, ["unbalance", str(path), "--param", "Omega=0:500:2", "--param",
@@ -193,7 +193,8 @@ def test_report_rotor_section_from_the_command_line(tmp_path, capsys):
                  "--out", str(out)]) == 0
     md = (out / "report.md").read_text()
     assert "Campbell diagram and critical speeds" in md
-    assert "m·e = 0.0002 kg m" in md and (out / "rigid_rotor_rotor_Omega" / "unbalance.csv").exists()
+    assert "m·e = 0.0002 kg m" in md
+    assert (out / "rigid_rotor_rotor_Omega" / "unbalance.csv").exists()
     # Ω = 0 (no force: exactly 0) and 400 rad/s = √(2kz/m) (undamped critical speed, driven: a
     # resonance, blank and flagged) are on the grid; tests/test_resonance.py checks the values
     assert "Resonance at Omega = 400 rad/s" in md
@@ -219,7 +220,8 @@ def _csv_rows(response, path):
 def _rotor_study_case(tmp_path, unbalance, sweep="Omega"):
     text = (CASES / "rigid_rotor.toml").read_text() + (
         f'\n[[report.studies]]\ntitle = "speed"\nsweep = "{sweep}"\n'
-        f'range = [100.0, 700.0]\ncount = 4\n' + (f"unbalance = {unbalance}\n" if unbalance else ""))
+        f'range = [100.0, 700.0]\ncount = 4\n'
+        + (f"unbalance = {unbalance}\n" if unbalance else ""))
     return str(write_case(tmp_path, text.replace("cy = 0.0 ", "cy = 400.0 ").replace(
         "cz = 0.0", "cz = 600.0"), name="rotor.toml"))
 

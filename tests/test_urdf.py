@@ -143,7 +143,9 @@ def test_rpy_convention():
     assert np.allclose(rpy_matrix([0, 0, math.pi / 2]) @ [1, 0, 0], [0, 1, 0], atol=1e-15)
     assert np.allclose(rpy_matrix([math.pi / 2, 0, 0]) @ [0, 1, 0], [0, 0, 1], atol=1e-15)
     r, p, y = 0.3, -0.2, 0.5
-    Rx = rpy_matrix([r, 0, 0]); Ry = rpy_matrix([0, p, 0]); Rz = rpy_matrix([0, 0, y])
+    Rx = rpy_matrix([r, 0, 0])
+    Ry = rpy_matrix([0, p, 0])
+    Rz = rpy_matrix([0, 0, y])
     assert np.allclose(rpy_matrix([r, p, y]), Rz @ Ry @ Rx, atol=1e-15)
 
 
@@ -303,7 +305,8 @@ def test_case_table_errors(tmp_path):
     where = tmp_path / "c.toml"
     for table, message in [({"file": "r.urdf", "colour": 1}, "urdf: unknown field 'colour'"),
                            ({"file": "r.urdf", "positions": {"x": 1.0}}, "urdf: unknown joint 'x'"),
-                           ({"file": "r.urdf", "positions": {"j": "a"}}, "j must be a finite number"),
+                           ({"file": "r.urdf", "positions": {"j": "a"}},
+                            "j must be a finite number"),
                            ({"file": "r.urdf", "stiffness": {"j": -1.0}}, "stiffness.j must be"),
                            ({"file": "r.urdf", "damping": "pinocchio"}, "damping must be a table"),
                            ({"file": "r.urdf", "floating": 1}, "floating must be true or false"),
@@ -366,18 +369,19 @@ def urdf_table(ref, variant, urdf):
     except in the "allsprings" variants, where ``default`` reaches it as it reaches every
     moving joint (docs/urdf.md, "Springs on mimic joints")."""
     names = [c["name"] for c in ref["coordinates"]]
-    table = {"file": str(urdf), "positions": dict(zip(names, ref["q0"]))}
+    table = {"file": str(urdf), "positions": dict(zip(names, ref["q0"], strict=True))}
     if variant.startswith("allsprings"):
         full = ref["mimic"]["full_joint_names"]
-        table["stiffness"] = dict(zip(full, ref["allsprings_variant"]["k_full"]))
+        table["stiffness"] = dict(zip(full, ref["allsprings_variant"]["k_full"], strict=True))
         table["damping"] = {"default": ref["d_uniform"][0]}
         return table
     followers = {j: 0.0 for j in (ref["mimic"] or {}).get("full_joint_names", []) if j not in names}
-    table["stiffness"] = {**dict(zip(names, ref["k"])), **followers}
+    table["stiffness"] = {**dict(zip(names, ref["k"], strict=True)), **followers}
     if variant.endswith("d_urdf"):
-        table["damping"] = {**dict(zip(names, ref["d_urdf"])), **followers} if followers else "urdf"
+        table["damping"] = ({**dict(zip(names, ref["d_urdf"], strict=True)), **followers}
+                            if followers else "urdf")
     else:
-        table["damping"] = {**dict(zip(names, ref["d_uniform"])), **followers}
+        table["damping"] = {**dict(zip(names, ref["d_uniform"], strict=True)), **followers}
     return table
 
 

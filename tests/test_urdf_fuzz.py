@@ -149,8 +149,8 @@ def outcome(file: Path):
             raise AssertionError(f"{type(exc).__name__}: {exc}") from exc
     assert "\n" not in line, line
     assert line.startswith(f"{file}: "), line
-    assert re.search(r"(link|joint) '|(link|joint): a <(link|joint)> without a name|malformed XML|xacro|"
-                     r"robot: |no <link>|root element", line), line
+    assert re.search(r"(link|joint) '|(link|joint): a <(link|joint)> without a name|"
+                     r"malformed XML|xacro|robot: |no <link>|root element", line), line
     return line
 
 

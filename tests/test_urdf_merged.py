@@ -76,7 +76,7 @@ def test_same_joints_merged_inertias_and_link_frames(model):
     centre and inertia; every link is the body of the joint Pinocchio hangs its frame on."""
     ref = reference(model)
     names = [c["name"] for c in ref["coordinates"]]
-    t = urdf_tables(read_urdf(MERGED[model]), positions=dict(zip(names, ref["q0"])))
+    t = urdf_tables(read_urdf(MERGED[model]), positions=dict(zip(names, ref["q0"], strict=True)))
     moved = {j["name"]: j["bodies"][1] for j in t["joints"] if j["type"] == "revolute"}
     assert sorted(moved) == sorted(names)
     bodies = {b["name"]: b for b in t["bodies"]}
@@ -84,14 +84,15 @@ def test_same_joints_merged_inertias_and_link_frames(model):
         b = bodies[moved[pb["joint"]]]
         scale = np.max(np.abs(pb["inertia"]))
         assert abs(b["mass"] - pb["mass"]) <= 1e-13 * pb["mass"]
-        assert np.max(np.abs(np.subtract(b["com"], pb["com"]))) <= 1e-13 * max(1.0, np.max(np.abs(pb["com"])))
+        assert (np.max(np.abs(np.subtract(b["com"], pb["com"])))
+                <= 1e-13 * max(1.0, np.max(np.abs(pb["com"]))))
         assert np.max(np.abs(np.subtract(b["inertia"], pb["inertia"]))) <= 1e-13 * scale
     root = next(j["bodies"][1] for j in t["joints"] if j["type"] == "weld")
     body_of = {**{n: n for n in bodies}, **{f["name"]: f["body"] for f in t["frames"]}}
     for frame, pjoint in ref["frame_joint"].items():
         assert body_of[frame] == (root if pjoint == "universe" else moved[pjoint]), frame
-    point_masses = [n for n, l in read_urdf(MERGED[model]).links.items()
-                    if l.mass > 0 and not np.any(l.inertia)]
+    point_masses = [n for n, link in read_urdf(MERGED[model]).links.items()
+                    if link.mass > 0 and not np.any(link.inertia)]
     assert point_masses and all(n not in bodies for n in point_masses)  # merged, not bodies
 
 
@@ -102,7 +103,7 @@ def test_talos_through_the_command_line(tmp_path, capsys):
     out = tmp_path / "talos.toml"
     argv = ["import-urdf", MERGED["talos_left_arm"], "--out", out, "--stiffness", "default=300",
             "--damping", "default=2"]
-    argv += [a for n, q in zip([c["name"] for c in ref["coordinates"]], ref["q0"])
+    argv += [a for n, q in zip([c["name"] for c in ref["coordinates"]], ref["q0"], strict=True)
              for a in ("--position", f"{n}={q!r}")]
     code, text, err = cli(capsys, *argv)
     assert code == 0 and err == "" and "note:" not in text

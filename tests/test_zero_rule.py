@@ -44,7 +44,7 @@ def test_modes_table_prints_no_number_below_its_bound(case, capsys):
     text = capsys.readouterr().out
     rows = [ln.split() for ln in text.splitlines() if re.match(r"^\s*\d+\s", ln)]
     assert len(rows) == len(raw["modes"])
-    for row, m in zip(rows, raw["modes"]):
+    for row, m in zip(rows, raw["modes"], strict=True):
         re_tok = row[1]
         if abs(m["eigenvalue"][0]) <= m["tolerance"]:
             assert re_tok == "0", (row, m["eigenvalue"], m["tolerance"])
@@ -80,7 +80,7 @@ def test_small_rotation_of_a_triad_reads_as_its_angles():
         idx = [names.index(f"rotor.{e}.{a}") for a in "xyz"]
         dq[idx] = np.cross(theta, q[idx])
     dq[[names.index(f"rotor.{a}") for a in "xyz"]] = shift
-    got = dict(zip(dmap.names, dmap.apply(dq)))
+    got = dict(zip(dmap.names, dmap.apply(dq), strict=True))
     np.testing.assert_allclose([got[f"rotor θ{a}"] for a in "xyz"], theta, rtol=1e-14, atol=0)
     np.testing.assert_allclose([got[f"rotor {a}"] for a in "xyz"], shift, rtol=0, atol=0)
 
@@ -91,10 +91,10 @@ def test_sensitivity_within_its_bound_of_the_closed_form():
     h²/6 |s'''(l)| (h = REL_STEP·l, s''' = −(15/8) i √g l^(−7/2))."""
     path = CASES / "pendulum.toml"
     vals, bounds = eigen_sensitivities(path, with_bounds=True)
-    g, l = 9.81, 1.0
-    exact = -0.5j * math.sqrt(g) * l ** -1.5
-    h = REL_STEP * l
-    trunc = h * h / 6 * 15 / 8 * math.sqrt(g) * l ** -3.5
+    g, length = 9.81, 1.0
+    exact = -0.5j * math.sqrt(g) * length ** -1.5
+    h = REL_STEP * length
+    trunc = h * h / 6 * 15 / 8 * math.sqrt(g) * length ** -3.5
     assert abs(vals["l"][0] - exact) <= bounds["l"][0] + trunc
     assert bounds["l"][0] < 1e-5 * abs(exact)  # and the bound is informative
 
