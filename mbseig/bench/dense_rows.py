@@ -22,7 +22,8 @@ def capped_threads(n):
     try:
         from threadpoolctl import threadpool_limits
     except ImportError:  # pragma: no cover - optional
-        warnings.warn("threadpoolctl not installed: BLAS threads not capped", RuntimeWarning)
+        warnings.warn("threadpoolctl not installed: BLAS threads not capped", RuntimeWarning,
+                      stacklevel=2)
         return nullcontext()
     return threadpool_limits(limits=n)
 
@@ -60,7 +61,8 @@ def rel_error(s, exact):
     ex = np.sort_complex(exact)
     order = np.argsort(ex.imag)
     ex = ex[order]
-    pos = np.clip(np.searchsorted(ex.imag, s.imag), 1, ex.size - 1) if ex.size > 1 else np.zeros(s.size, int)
+    pos = (np.clip(np.searchsorted(ex.imag, s.imag), 1, ex.size - 1) if ex.size > 1
+           else np.zeros(s.size, int))
     cand = np.stack([ex[np.maximum(pos - 1, 0)], ex[pos]])
     d = np.abs(cand - s[None, :]) / np.abs(cand)
     return float(np.max(np.min(d, axis=0))) if s.size else math.nan
@@ -85,22 +87,26 @@ def bench_dense(sizes, repeats, qz_max, naive_max, general_max, log):
         A, g = _floor_companion(M, C, K)
         fns = {}
         if n <= general_max:
-            fns["LAPACK geev (floor)"] = lambda: g * sla.eig(A, check_finite=False)[0]
-            fns["mbseig companion"] = lambda: solve(Problem(M, C, K), Request("companion"))
+            fns["LAPACK geev (floor)"] = lambda g=g, A=A: g * sla.eig(A, check_finite=False)[0]
+            fns["mbseig companion"] = lambda M=M, C=C, K=K: solve(Problem(M, C, K),
+                                                                  Request("companion"))
         if n <= naive_max:
-            fns["naive companion"] = lambda: _naive_with_vectors(M, C, K)
+            fns["naive companion"] = lambda M=M, C=C, K=K: _naive_with_vectors(M, C, K)
         if n <= qz_max:
-            fns["QZ unscaled"] = lambda: solve(Problem(M, C, K), Request("qz", options={"scale": False}))
-            fns["QZ scaled"] = lambda: solve(Problem(M, C, K), Request("qz"))
-        fns["mbseig default"] = lambda: solve(Problem(M, C, K), Request())
+            fns["QZ unscaled"] = lambda M=M, C=C, K=K: solve(
+                Problem(M, C, K), Request("qz", options={"scale": False}))
+            fns["QZ scaled"] = lambda M=M, C=C, K=K: solve(Problem(M, C, K), Request("qz"))
+        fns["mbseig default"] = lambda M=M, C=C, K=K: solve(Problem(M, C, K), Request())
         t, out = median_times(fns, reps)
         for name, res in out.items():
             s = res if isinstance(res, np.ndarray) else res.eigenvalues
             eta = math.nan if isinstance(res, np.ndarray) else float(np.max(res.backward_error))
             solver = name if isinstance(res, np.ndarray) else res.solver
-            rows.append({"section": "dense", "method": name, "n": n, "time": t[name], "repeats": reps,
-                         "error": rel_error(s, exact), "eta": eta, "solver": solver})
-            log(f"dense n={n:5d} {name:22s} {t[name]:9.4f} s  err {rows[-1]['error']:.1e}  η {eta:.1e}")
+            rows.append({"section": "dense", "method": name, "n": n, "time": t[name],
+                         "repeats": reps, "error": rel_error(s, exact), "eta": eta,
+                         "solver": solver})
+            log(f"dense n={n:5d} {name:22s} {t[name]:9.4f} s  err {rows[-1]['error']:.1e}  "
+                f"η {eta:.1e}")
     return rows
 
 
@@ -114,8 +120,10 @@ def _naive_with_vectors(M, C, K):
 def bench_left_vectors(n, repeats, log):
     """Cost of LAPACK's left eigenvectors on the dense companion path (non-symmetric P)."""
     M, C, K = chain_matrices(n)
-    fns = {"right only": lambda: solve(Problem(M, C, K), Request("companion", options={"left": False})),
-           "left and right": lambda: solve(Problem(M, C, K), Request("companion", options={"left": True}))}
+    fns = {"right only": lambda: solve(Problem(M, C, K),
+                                       Request("companion", options={"left": False})),
+           "left and right": lambda: solve(Problem(M, C, K),
+                                           Request("companion", options={"left": True}))}
     t, _ = median_times(fns, repeats)
     log(f"left vectors n={n}: {t}")
     return {"n": n, **t}
@@ -127,9 +135,11 @@ def bench_structured(sizes, repeats, general_max, log):
         for damped, label in ((False, "eigh"), (True, "proportional")):
             M, C, K = chain_matrices(n, damped=damped)
             exact = chain_exact(n, damped=damped)
-            fns = {"floor": lambda: sla.eigh(K, M, check_finite=False), label: lambda: solve(Problem(M, C, K), Request())}
+            fns = {"floor": lambda K=K, M=M: sla.eigh(K, M, check_finite=False),
+                   label: lambda M=M, C=C, K=K: solve(Problem(M, C, K), Request())}
             if n <= general_max:
-                fns["general"] = lambda: solve(Problem(M, C, K), Request("companion"))
+                fns["general"] = lambda M=M, C=C, K=K: solve(Problem(M, C, K),
+                                                             Request("companion"))
             t, out = median_times(fns, repeats if n <= 1000 else 1)
             row = {"section": "structured", "method": f"mbseig {label}", "n": n, "time": t[label],
                    "error": rel_error(out[label].eigenvalues, exact),
@@ -140,7 +150,8 @@ def bench_structured(sizes, repeats, general_max, log):
                 row["general_time"] = t["general"]
                 row["speedup"] = t["general"] / t[label]
             rows.append(row)
-            log(f"structured n={n:5d} {label:13s} {t[label]:.4f} s  general {t.get('general', math.nan):.3f} s")
+            log(f"structured n={n:5d} {label:13s} {t[label]:.4f} s  "
+                f"general {t.get('general', math.nan):.3f} s")
     return rows
 
 
@@ -158,8 +169,8 @@ def bench_pipeline(sizes, repeats, log, case="chain_damped"):
         a = analyze(spec, params={"n": n})
         M, K = (A.toarray() if hasattr(A, "toarray") else np.asarray(A)
                 for A in (a.linear.M, a.linear.Q))
-        t, _ = median_times({"floor": lambda: sla.eigh(K, M, check_finite=False),
-                             "pipeline": lambda: analyze(spec, params={"n": n})},
+        t, _ = median_times({"floor": lambda K=K, M=M: sla.eigh(K, M, check_finite=False),
+                             "pipeline": lambda n=n: analyze(spec, params={"n": n})},
                             max(repeats, 5))
         ratio = t["pipeline"] / t["floor"]
         rows.append({"section": "structured", "method": "mbseig whole pipeline", "n": n,

@@ -55,11 +55,13 @@ def pendulum_constraint_stiffness():
     exact = np.sqrt(9.81 / 1.0)
     return FailCase(
         "pendulum: constraint-force stiffness", "linearize without Σλ∇²Φ",
-        f"ω = {mw.omega_n[0]:.3g} rad/s ({mw.kind[0]})", f"ω = {mr.omega_n[0]:.10g} rad/s ({mr.kind[0]})",
+        f"ω = {mw.omega_n[0]:.3g} rad/s ({mw.kind[0]})",
+        f"ω = {mr.omega_n[0]:.10g} rad/s ({mr.kind[0]})",
         f"ω = √(g/l) = {exact:.10g} rad/s (closed form)",
         naive_wrong=abs(mw.omega_n[0] - exact) > 0.5 * exact,
         mbseig_right=abs(mr.omega_n[0] - exact) <= 1e-10 * exact,
-        data={"omega_naive": float(mw.omega_n[0]), "omega_mbseig": float(mr.omega_n[0]), "exact": exact})
+        data={"omega_naive": float(mw.omega_n[0]), "omega_mbseig": float(mr.omega_n[0]),
+              "exact": exact})
 
 
 def four_bar_constraint_stiffness():
@@ -78,7 +80,7 @@ def four_bar_constraint_stiffness():
         data={"omega_naive": float(ww), "omega_mbseig": float(wr), "shift": float(shift)})
 
 
-def ziegler_matrices(load, c=1.0, l=1.0, m=1.0):
+def ziegler_matrices(load, c=1.0, l=1.0, m=1.0):  # noqa: E741 - public keyword (length)
     """Ziegler's double pendulum (masses 2m, m; springs c; follower force at the tip):
 
         M = m l² [[3, 1], [1, 1]],   Q = [[2c − F l, F l − c], [−c, c]]   (non-symmetric)
@@ -175,7 +177,8 @@ def large_undamped(n=120):
     n_pos = int(np.sum(s_naive.real > 0))
     return FailCase(
         f"undamped chain, n = {n} (general companion path)", "naive companion + Re s > 0 rule",
-        f"{naive_verdict(s_naive)} ({n_pos} eigenvalues with Re s > 0, max {s_naive.real.max():.2g})",
+        f"{naive_verdict(s_naive)} ({n_pos} eigenvalues with Re s > 0, "
+        f"max {s_naive.real.max():.2g})",
         f"{md.verdict} (|δ| ≤ tol, largest tol {md.tolerance.max():.2g} rad/s)",
         "critical: undamped, ω_j = 2√(k/m) sin(jπ/(2(n+1))) (closed form)",
         naive_wrong=naive_verdict(s_naive) != "critical", mbseig_right=md.verdict == "critical",
@@ -212,12 +215,15 @@ def repeated_and_defective():
     except np.linalg.LinAlgError:
         naive_singular = "LinAlgError: singular M"
     out["singular_mass"] = (len(md), list(md.omega_n), md.n_infinite, md.solver)
-    ok_sing = len(md) == 2 and np.allclose(md.omega_n, [np.sqrt(1.5 - 0.5), np.sqrt(1.5 + 0.5)], rtol=1e-10)
+    ok_sing = len(md) == 2 and np.allclose(md.omega_n, [np.sqrt(1.5 - 0.5), np.sqrt(1.5 + 0.5)],
+                                           rtol=1e-10)
     return FailCase(
         "repeated, defective, rigid-body, massless point", "naive companion / counting",
-        f"rigid chain: {out['rigid'][2]} (s = 0 split into ±real); massless point: {naive_singular}",
+        f"rigid chain: {out['rigid'][2]} (s = 0 split into ±real); massless point: "
+        f"{naive_singular}",
         f"ω = 2 twice; s = −1 twice (overdamped, stable); 1 rigid-body + 2 modes; "
-        f"massless point: 2 modes, {out['singular_mass'][2]} infinite dropped ({out['singular_mass'][3]})",
+        f"massless point: 2 modes, {out['singular_mass'][2]} infinite dropped "
+        f"({out['singular_mass'][3]})",
         "closed forms: ω = √(k/m) double; s = −1 double; ω = 0, 1, √3; ω² = k/m, 2k/m",
         naive_wrong=out["rigid"][2] != "critical" or naive_singular != "ran",
         mbseig_right=ok_rep and ok_def and ok_rig and ok_sing, data=out)
@@ -250,15 +256,19 @@ def dissipative_integrator(steps_per_period=10, periods=20):
     res = check_modes(model, eq, lin, md)
     flut = [m for m in res.modes if m.predicted_delta < 0 and not m.skipped]
     measured = flut[0].measured_delta if flut else float("nan")
-    td = f"δ measured {measured:+.4g} (predicted {flut[0].predicted_delta:+.4g}): unstable" if flut else "no flutter mode checked"
+    td = (f"δ measured {measured:+.4g} (predicted {flut[0].predicted_delta:+.4g}): unstable"
+          if flut else "no flutter mode checked")
     right = bool(flut) and measured < 0 and flut[0].passed
     return FailCase(
-        "time domain: Ziegler pendulum past the flutter load", "backward Euler, 10 steps per period",
-        f"response ×{growth:.2g} after {periods} periods (apparent δ = {naive_delta:+.3g}): looks stable",
+        "time domain: Ziegler pendulum past the flutter load",
+        "backward Euler, 10 steps per period",
+        f"response ×{growth:.2g} after {periods} periods (apparent δ = {naive_delta:+.3g}): "
+        "looks stable",
         f"mbseig check (DOP853, rtol 1e-10): {td}",
         f"flutter, Re s = {s.real:+.4g} (eigenvalue of the linear model)",
         naive_wrong=growth < 1, mbseig_right=right,
-        data={"growth": float(growth), "naive_delta": float(naive_delta), "measured_delta": float(measured)})
+        data={"growth": float(growth), "naive_delta": float(naive_delta),
+              "measured_delta": float(measured)})
 
 
 def driven_pendulum_frozen_time():

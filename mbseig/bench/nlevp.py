@@ -44,7 +44,8 @@ def qep2(q_scale=1.0):
         ev = [1.0, 1.0, 1.0, -1.0, 1j, -1j]
     else:
         r = math.sqrt(q_scale)
-        ev = [r, -r, 1j * r, -1j * r, complex(1, math.sqrt(q_scale - 1)), complex(1, -math.sqrt(q_scale - 1))]
+        ev = [r, -r, 1j * r, -1j * r, complex(1, math.sqrt(q_scale - 1)),
+              complex(1, -math.sqrt(q_scale - 1))]
     return M, P, Q, {"eigenvalues": ev, "n_infinite": 0, "verdict": "unstable",
                      "source": "NLEVP qep2: det Q(s) = (s − 1)³(s + 1)(s² + 1)"}
 
@@ -119,7 +120,8 @@ def rotating_mass(omega0=2.0, Omega=3.0, q=None, p_entry=None):
 
 PROBLEMS = {
     "qep1": qep1, "qep2": qep2, "qep3": qep3, "power_plant": power_plant,
-    "bicycle v=2 (below weave)": lambda: bicycle(2.0), "bicycle v=5 (self-stable)": lambda: bicycle(5.0),
+    "bicycle v=2 (below weave)": lambda: bicycle(2.0),
+    "bicycle v=5 (self-stable)": lambda: bicycle(5.0),
     "qep2, Q × 1e300": lambda: qep2(1e300),
     "rotating mass, Q = −1e300 I": lambda: rotating_mass(q=-1e300),
     "rotating mass, P₀₀ = 1e300": lambda: rotating_mass(p_entry=((0, 0), 1e300)),

@@ -124,7 +124,8 @@ def _exudyn_spatial(name, p):
     ep = exu.NodeType.RotationEulerParameters
 
     def body(mass, J, com, at):
-        inertia = RigidBodyInertia(mass=mass, inertiaTensor=np.diag(J), com=com, inertiaTensorAtCOM=True)
+        inertia = RigidBodyInertia(mass=mass, inertiaTensor=np.diag(J), com=com,
+                                   inertiaTensorAtCOM=True)
         return mbs.CreateRigidBody(referencePosition=at, inertia=inertia, gravity=grav, nodeType=ep)
 
     if name == "pendulum":
@@ -135,7 +136,8 @@ def _exudyn_spatial(name, p):
                                         damping=np.diag([0.0, 0.0, 0.0, p["cx"], p["cy"], p["cz"]]))
     else:
         upper = body(p["m1"], [p["J1"], p["J1"], p["Ja"]], [0.0, 0.0, -p["c1"]], [0.0, 0.0, 0.0])
-        lower = body(p["m2"], [p["J2"], p["J2"], p["Ja"]], [0.0, 0.0, -p["c2"]], [0.0, 0.0, -p["l1"]])
+        lower = body(p["m2"], [p["J2"], p["J2"], p["Ja"]], [0.0, 0.0, -p["c2"]],
+                     [0.0, 0.0, -p["l1"]])
         mbs.CreateSphericalJoint(itemNumbers=[ground, upper], position=[0.0, 0.0, 0.0])
         mbs.CreateSphericalJoint(itemNumbers=[upper, lower], position=[0.0, 0.0, -p["l1"]])
     mbs.Assemble()
@@ -225,7 +227,8 @@ def bench_peer(sizes, repeats, log, n_check=20):
     small = bench_small_stages(max(repeats, SMALL_MIN_REPEATS), log)
     if not exudyn_available():
         log("peer: exudyn not installed (pip install exudyn): section skipped")
-        return small, "EXUDYN not installed (`pip install exudyn`, part of the `bench` extra): not run"
+        return small, ("EXUDYN not installed (`pip install exudyn`, part of the `bench` extra): "
+                       "not run")
     rows = small + chain_rows(sizes, repeats, log, n_check)
     rows += bench_peer_spatial(max(repeats, SPATIAL_MIN_REPEATS), log)[0]
     return rows, ""
@@ -254,16 +257,18 @@ def bench_peer_spatial(repeats, log, models=tuple(SPATIAL_MODELS)):
             SC, mbs = _exudyn_spatial(key, p)
             s_stock = _exudyn_stock(mbs)
             t_m, t_e, (lin, md), s_e = interleaved(
-                repeats, lambda: linearized_modes(model, eq, linearize, modes),
+                repeats, lambda model=model, eq=eq: linearized_modes(model, eq, linearize, modes),
                 lambda m=mbs: _exudyn_eigenvalues(m))
             s_m = np.asarray(md.eigenvalues)
             s_m = np.concatenate([s_m, np.conj(s_m[np.abs(s_m.imag) > 0])])  # listed once per pair
             ref = exact(p)
             scale = float(np.min(np.abs(ref[np.abs(ref) > 0])))
-            M, C, K = (np.asarray(A.toarray() if hasattr(A, "toarray") else A) for A in (lin.M, lin.P, lin.Q))
+            M, C, K = (np.asarray(A.toarray() if hasattr(A, "toarray") else A)
+                       for A in (lin.M, lin.P, lin.Q))
             tm, te = float(np.median(t_m)), float(np.median(t_e))
-            row = {"section": "peer", "method": f"EXUDYN vs mbseig (spatial: {label})", "model": label,
-                   "spatial": True, "n": int(lin.M.shape[0]), "n_coordinates": len(lin.coordinate_names),
+            row = {"section": "peer", "method": f"EXUDYN vs mbseig (spatial: {label})",
+                   "model": label, "spatial": True, "n": int(lin.M.shape[0]),
+                   "n_coordinates": len(lin.coordinate_names),
                    "exudyn_coordinates": int(mbs.systemData.ODE2Size()), "time": tm,
                    "mbseig_time": tm, "exudyn_time": te, "ratio": tm / te,
                    "mbseig_error": _scaled_set_distance(s_m, ref, scale),
@@ -278,9 +283,11 @@ def bench_peer_spatial(repeats, log, models=tuple(SPATIAL_MODELS)):
                    "exudyn_count": int(s_e.size), "repeats": repeats,
                    "exudyn_version": getattr(exu, "__version__", "?"),
                    **{k: [[float(z.real), float(z.imag)] for z in np.sort_complex(v)] for k, v in
-                      (("mbseig_eigenvalues", s_m), ("exudyn_eigenvalues", s_e), ("reference", ref))}}
+                      (("mbseig_eigenvalues", s_m), ("exudyn_eigenvalues", s_e),
+                       ("reference", ref))}}
             rows.append(row)
-            log(f"peer spatial {label}: mbseig {tm * 1e3:.2f} ms ({md.solver}) err {row['mbseig_error']:.1e} | "
+            log(f"peer spatial {label}: mbseig {tm * 1e3:.2f} ms ({md.solver}) "
+                f"err {row['mbseig_error']:.1e} | "
                 f"EXUDYN {te * 1e3:.2f} ms err {row['exudyn_error']:.1e} (stock call "
                 f"{row['exudyn_stock_error']:.1e}) | ratio {row['ratio']:.2f} | sets differ by "
                 f"{row['set_distance']:.1e}")
@@ -302,10 +309,12 @@ def peer_lines(rows, note):
           "|s|‖C‖ + ‖K‖) by SVD, worst of the 20 smallest |s| — a reference independent of both "
           "solvers. Times: medians of interleaved runs."), ""]
     if chain:
-        L += ["| n | mbseig | EXUDYN | mbseig / EXUDYN | mbseig η(s) | EXUDYN η(s) | sets differ by | runs |",
+        L += ["| n | mbseig | EXUDYN | mbseig / EXUDYN | mbseig η(s) | EXUDYN η(s) "
+              "| sets differ by | runs |",
               "|---|---|---|---|---|---|---|---|"]
         for r in chain:
-            L.append(f"| {r['n']} | {r['mbseig_time']:.3f} s ({r['mbseig_solver']}) | {r['exudyn_time']:.3f} s | "
+            L.append(f"| {r['n']} | {r['mbseig_time']:.3f} s ({r['mbseig_solver']}) | "
+                     f"{r['exudyn_time']:.3f} s | "
                      f"{r['ratio']:.2f} | {r['mbseig_eta']:.0e} | {r['exudyn_eta']:.0e} | "
                      f"{r['set_distance']:.0e} | {r['repeats']} |")
     else:

@@ -89,7 +89,8 @@ def _exudyn_model(n, k=1000.0, c=0.5, c0=2.0):
         markers.append(mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nd, coordinate=0)))
     chain = [mg] + markers + [mg]
     for i in range(n + 1):
-        mbs.AddObject(CoordinateSpringDamper(markerNumbers=[chain[i], chain[i + 1]], stiffness=k, damping=c))
+        mbs.AddObject(CoordinateSpringDamper(markerNumbers=[chain[i], chain[i + 1]], stiffness=k,
+                                             damping=c))
     mbs.AddObject(CoordinateSpringDamper(markerNumbers=[mg, markers[0]], stiffness=0.0, damping=c0))
     mbs.Assemble()
     return SC, mbs
@@ -129,10 +130,11 @@ def chain_rows(sizes, repeats, log, n_check=20):
             eq = equilibrium(model)
             SC, mbs = _exudyn_model(n)
             t_m, t_e, (lin, md), ev = interleaved(
-                repeats, lambda: linearized_modes(model, eq, linearize, modes),
+                repeats, lambda model=model, eq=eq: linearized_modes(model, eq, linearize, modes),
                 lambda m=mbs: exu.solver.ComputeODE2Eigenvalues(m, computeComplexEigenvalues=True,
                                                                 useAbsoluteValues=False))
-            M, C, K = (np.asarray(A.toarray() if hasattr(A, "toarray") else A) for A in (lin.M, lin.P, lin.Q))
+            M, C, K = (np.asarray(A.toarray() if hasattr(A, "toarray") else A)
+                       for A in (lin.M, lin.P, lin.Q))
             s_m = np.asarray(md.eigenvalues)
             s_m = np.concatenate([s_m, np.conj(s_m[np.abs(s_m.imag) > 0])])  # listed once per pair
             s_e = np.asarray(ev[0], complex)
@@ -143,11 +145,13 @@ def chain_rows(sizes, repeats, log, n_check=20):
             tm, te = float(np.median(t_m)), float(np.median(t_e))
             row = {"section": "peer", "method": "EXUDYN vs mbseig (general damping)", "n": n,
                    "time": tm, "mbseig_time": tm, "exudyn_time": te, "ratio": tm / te,
-                   "mbseig_eta": eta_m, "exudyn_eta": eta_e, "set_distance": _set_distance(s_m, s_e),
+                   "mbseig_eta": eta_m, "exudyn_eta": eta_e,
+                   "set_distance": _set_distance(s_m, s_e),
                    "mbseig_solver": md.solver, "exudyn_count": int(s_e.size), "repeats": repeats,
                    "exudyn_version": getattr(exu, "__version__", "?")}
             rows.append(row)
-            log(f"peer n={n:5d} mbseig {tm:.3f} s ({md.solver}) η(s) {eta_m:.1e} | EXUDYN {te:.3f} s "
-                f"η(s) {eta_e:.1e} | ratio {tm / te:.2f} | sets differ by {row['set_distance']:.1e}")
+            log(f"peer n={n:5d} mbseig {tm:.3f} s ({md.solver}) η(s) {eta_m:.1e} | "
+                f"EXUDYN {te:.3f} s η(s) {eta_e:.1e} | ratio {tm / te:.2f} | "
+                f"sets differ by {row['set_distance']:.1e}")
             del SC, mbs
     return rows

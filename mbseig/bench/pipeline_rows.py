@@ -1,4 +1,5 @@
-"""Whole-pipeline rows of the benchmark: sweeps in points a second, assembly of Jacobians, the constraint-force stiffness and the time-domain check."""
+"""Whole-pipeline rows of the benchmark: sweeps in points a second, assembly of Jacobians, the
+constraint-force stiffness and the time-domain check."""
 
 from __future__ import annotations
 
@@ -56,7 +57,8 @@ def bench_sweeps(lines, points, log, case="hand_device"):
     base = med["k_a"]
     total = lines * points
     for key, method in (("k_a", "in-process"),
-                        ("k_a general", "in-process, general path (built and resolved at every k_a)"),
+                        ("k_a general",
+                         "in-process, general path (built and resolved at every k_a)"),
                         ("load", "in-process, C4 load f × c_a (command reused)"),
                         ("load general", "in-process, C4 load, general path (built at every f)")):
         t = med[key]
@@ -77,7 +79,8 @@ def bench_sweeps(lines, points, log, case="hand_device"):
         log("sweeps: dask.distributed not installed: Dask rows skipped")
         return rows
     for w in range(1, cores + 1):
-        with LocalCluster(n_workers=w, threads_per_worker=1, processes=True, dashboard_address=None) as cl, \
+        with LocalCluster(n_workers=w, threads_per_worker=1, processes=True,
+                          dashboard_address=None) as cl, \
                 Client(cl) as client:
             timed(scheduler=client)  # workers import mbseig once
             t = timed(scheduler=client)
@@ -121,7 +124,7 @@ def bench_small_stages(repeats, log, cases=SMALL_CASES):
             Minv = np.linalg.inv(M)
             sla.eig(np.block([[np.zeros((d, d)), np.eye(d)], [-Minv @ Q, -Minv @ P]]))
             t6 = time.perf_counter()
-            for k, v in zip(stages, (t1 - t0, t2 - t1, t3 - t2, t4 - t3, t6 - t5)):
+            for k, v in zip(stages, (t1 - t0, t2 - t1, t3 - t2, t4 - t3, t6 - t5), strict=True):
                 stages[k].append(v)
         med = {k: float(np.median(v)) for k, v in stages.items()}
         total = med["build"] + med["equilibrium"] + med["linearize"] + med["modes"]
@@ -183,24 +186,32 @@ def bench_jacobians(sizes, repeats, log, tmpdir):
         rng = np.random.default_rng(0)
         q = model.q_init + 0.02 * rng.normal(size=model.n)
         n = model.n
-        g = lambda x: model.generalized_force(x)
+
+        def g(x, model=model):
+            return model.generalized_force(x)
+
         gc = _complex_g(model)
         E = np.eye(n)
-        fd_h, cd_h, cs_h = 1e-7 * max(1.0, np.abs(q).max()), 1e-5 * max(1.0, np.abs(q).max()), 1e-30
-        fns = {
-            "analytic": lambda: model.force_jacobians(q)[0].toarray(),
-            "forward differences": lambda: -np.column_stack([(g(q + fd_h * e) - g0) / fd_h for e in E]),
-            "central differences": lambda: -np.column_stack([(g(q + cd_h * e) - g(q - cd_h * e)) / (2 * cd_h) for e in E]),
-            "complex step": lambda: -np.column_stack([gc(q + 1j * cs_h * e).imag / cs_h for e in E]),
-        }
+        fd_h, cd_h, cs_h = (1e-7 * max(1.0, np.abs(q).max()), 1e-5 * max(1.0, np.abs(q).max()),
+                            1e-30)
         g0 = g(q)
+        fns = {
+            "analytic": lambda model=model, q=q: model.force_jacobians(q)[0].toarray(),
+            "forward differences": lambda g=g, q=q, fd_h=fd_h, g0=g0, E=E: -np.column_stack(
+                [(g(q + fd_h * e) - g0) / fd_h for e in E]),
+            "central differences": lambda g=g, q=q, cd_h=cd_h, E=E: -np.column_stack(
+                [(g(q + cd_h * e) - g(q - cd_h * e)) / (2 * cd_h) for e in E]),
+            "complex step": lambda gc=gc, q=q, cs_h=cs_h, E=E: -np.column_stack(
+                [gc(q + 1j * cs_h * e).imag / cs_h for e in E]),
+        }
         t, out = median_times(fns, repeats)
         ref = out["complex step"]
         scale = np.abs(ref).max()
         for name in fns:
             err = float(np.abs(out[name] - ref).max() / scale) if name != "complex step" else \
                 float(np.abs(out[name] - out["analytic"]).max() / scale)
-            rows.append({"section": "jacobians", "method": name, "n": n, "time": t[name], "error": err})
+            rows.append({"section": "jacobians", "method": name, "n": n, "time": t[name],
+                         "error": err})
             log(f"jacobian n={n:5d} {name:20s} {t[name]:.5f} s  rel err {err:.1e}")
     return rows
 
@@ -210,16 +221,19 @@ def bench_constraint_stiffness(repeats, log):
     for case, exact in (("pendulum", math.sqrt(9.81)), ("four_bar", None)):
         model = load_case(case_path(case))
         eq = equilibrium(model)
-        fns = {"with Σλ∇²Φ": lambda: linearize(model, eq),
-               "without Σλ∇²Φ": lambda: linearize(model, eq, constraint_stiffness=False)}
+        fns = {"with Σλ∇²Φ": lambda model=model, eq=eq: linearize(model, eq),
+               "without Σλ∇²Φ": lambda model=model, eq=eq: linearize(model, eq,
+                                                                    constraint_stiffness=False)}
         t, out = median_times(fns, repeats)
         w = {k: float(modes(v.M, v.P, v.Q).omega_n[0]) for k, v in out.items()}
         ref = exact if exact is not None else w["with Σλ∇²Φ"]
         for k in fns:
-            rows.append({"section": "constraint", "method": f"{case} {k}", "n": model.n, "time": t[k],
-                         "omega": w[k], "error": abs(w[k] - ref) / ref,
-                         "reference": "√(g/l)" if exact else "mbseig with Σλ∇²Φ (independent reduction in tests)"})
-            log(f"constraint {case:9s} {k:15s} ω = {w[k]:.6g}  rel err {rows[-1]['error']:.1e}  {t[k]:.5f} s")
+            rows.append({"section": "constraint", "method": f"{case} {k}", "n": model.n,
+                         "time": t[k], "omega": w[k], "error": abs(w[k] - ref) / ref,
+                         "reference": "√(g/l)" if exact
+                         else "mbseig with Σλ∇²Φ (independent reduction in tests)"})
+            log(f"constraint {case:9s} {k:15s} ω = {w[k]:.6g}  rel err {rows[-1]['error']:.1e}  "
+                f"{t[k]:.5f} s")
     return rows
 
 
@@ -243,8 +257,9 @@ def bench_timedomain(log):
         for mc in res.modes:
             if mc.skipped:
                 continue
-            rows.append({"section": "timedomain", "method": label, "n": int(mc.index), "time": res.elapsed,
-                         "error": float(mc.rel_error_delta), "predicted_delta": float(mc.predicted_delta),
+            rows.append({"section": "timedomain", "method": label, "n": int(mc.index),
+                         "time": res.elapsed, "error": float(mc.rel_error_delta),
+                         "predicted_delta": float(mc.predicted_delta),
                          "measured_delta": float(mc.measured_delta), "passed": bool(mc.passed),
                          "nfev": int(mc.nfev)})
             log(f"timedomain {label:34s} mode {mc.index}: δ pred {mc.predicted_delta:+.4g} meas "

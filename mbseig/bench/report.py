@@ -49,12 +49,14 @@ def _targets(res):
     if fl and co:
         ratio = co["time"] / fl["time"]
         out.append(("dense damped n = 1000, all modes with vectors: mbseig companion / geev floor",
-                    f"{ratio:.2f} ({co['time']:.2f} s / {fl['time']:.2f} s)", "≤ 1.1", ratio <= 1.1))
+                    f"{ratio:.2f} ({co['time']:.2f} s / {fl['time']:.2f} s)", "≤ 1.1",
+                    ratio <= 1.1))
     for r in _rows(res, "structured"):
         if r["n"] == 1000 and "floor_ratio" in r:
-            out.append((f"{r['method']} n = 1000, all modes with vectors / eigh(Q, M) with vectors",
-                        f"{r['floor_ratio']:.2f} ({r['time']:.3f} s / {r['floor_time']:.3f} s)", "≤ 1.15",
-                        r["floor_ratio"] <= 1.15))
+            out.append((f"{r['method']} n = 1000, all modes with vectors / eigh(Q, M) with "
+                        "vectors",
+                        f"{r['floor_ratio']:.2f} ({r['time']:.3f} s / {r['floor_time']:.3f} s)",
+                        "≤ 1.15", r["floor_ratio"] <= 1.15))
     for r in _rows(res, "structured"):
         if r["n"] == 600 and "pipeline_ratio" in r:
             out.append(("whole pipeline on the damped chain n = 600 (build, equilibrium and its "
@@ -64,7 +66,8 @@ def _targets(res):
     for r in _rows(res, "structured"):
         if r["n"] == 3000 and "speedup" in r:
             out.append((f"{r['method']} n = 3000 vs dense general path", f"{r['speedup']:.0f}× "
-                        f"({r['time']:.2f} s vs {r['general_time']:.1f} s)", "≥ 20×", r["speedup"] >= 20))
+                        f"({r['time']:.2f} s vs {r['general_time']:.1f} s)", "≥ 20×",
+                        r["speedup"] >= 20))
     part = [r for r in _rows(res, "partial") if r["method"] == "partial proportional"]
     big = [r for r in part if r["n"] == 1_000_000]
     if big:
@@ -82,15 +85,17 @@ def _targets(res):
             p = float(np.polyfit(logn, logt, 1)[0])
             p2 = math.log(b[key] / a[key]) / math.log(b["n"] / a["n"])
             out.append((f"growth of the {key} time, n = {a['n']:.0e} … {b['n']:.0e} "
-                        f"(least-squares slope over {len(part)} sizes; end points alone n^{p2:.2f})",
+                        f"(least-squares slope over {len(part)} sizes; end points alone "
+                        f"n^{p2:.2f})",
                         f"n^{p:.2f}", "≤ n^1.15", p <= 1.15))
     large = _rows(res, "large")
     big = {r["method"]: r for r in large if r["n"] == 1_000_000}
     for kind in ("partial-projected", "partial-companion", "partial-slepc"):
         if kind in big:
             r = big[kind]
-            out.append((f"lowest 20 modes, 10⁶ coordinates, 10⁵ constraints, general damping ({kind}, "
-                        f"eigen stage)", f"{r['time']:.0f} s, {r['rss_mb'] / 1024:.2f} GB, "
+            out.append(("lowest 20 modes, 10⁶ coordinates, 10⁵ constraints, general damping "
+                        f"({kind}, eigen stage)",
+                        f"{r['time']:.0f} s, {r['rss_mb'] / 1024:.2f} GB, "
                         f"{r['ratio']:.1f}× the eigsh floor", "< 60 s, < 4 GB, ≤ 3×",
                         r["time"] < 60 and r["rss_mb"] < 4096 and r["ratio"] <= 3))
     sizes = sorted({r["n"] for r in large})
@@ -98,7 +103,8 @@ def _targets(res):
         for kind in ("partial-projected", "partial-companion", "partial-slepc"):
             pts = sorted((r["n"], r["time"]) for r in large if r["method"] == kind)
             if len(pts) >= 2:
-                p = float(np.polyfit(np.log([a for a, _ in pts]), np.log([b for _, b in pts]), 1)[0])
+                p = float(np.polyfit(np.log([a for a, _ in pts]), np.log([b for _, b in pts]),
+                                     1)[0])
                 out.append((f"growth of the general partial path ({kind}), n = {pts[0][0]:.0e} … "
                             f"{pts[-1][0]:.0e}", f"n^{p:.2f}", "≤ n^1.15", p <= 1.15))
     sw = {r["method"]: r for r in _rows(res, "sweeps") if r.get("workers") == 1}
@@ -116,7 +122,8 @@ def _targets(res):
             ratio = r["time"] / pr["exudyn_time"]
             out.append((f"small model {r['method']}: build + equilibrium + linearize + modes / "
                         f"EXUDYN's eigen call on the same system",
-                        f"{ratio:.1f} ({r['time'] * 1e3:.2f} ms / {pr['exudyn_time'] * 1e3:.2f} ms)",
+                        f"{ratio:.1f} ({r['time'] * 1e3:.2f} ms / "
+                        f"{pr['exudyn_time'] * 1e3:.2f} ms)",
                         "≤ 1.0", ratio <= 1.0))
     out += slepc_targets(_rows(res, "slepc"))
     for r in _rows(res, "spatial"):
@@ -133,11 +140,12 @@ def _targets(res):
                         f"{r['ratio']:.2f} ({r['time']:.2f} s{spread})", "≤ 1.25",
                         r["ratio"] <= 1.25))
     etas = [r.get("eta", math.nan) for r in res["rows"]
-            if r["section"] in ("dense", "structured", "partial") and r["method"].startswith(("mbseig", "partial"))]
+            if r["section"] in ("dense", "structured", "partial")
+            and r["method"].startswith(("mbseig", "partial"))]
     etas = [e for e in etas if isinstance(e, float) and math.isfinite(e)]
     if etas:
-        out.append(("largest backward error, mbseig paths on chain families", f"{max(etas):.1e}", "≤ 1e-12",
-                    max(etas) <= 1e-12))
+        out.append(("largest backward error, mbseig paths on chain families", f"{max(etas):.1e}",
+                    "≤ 1e-12", max(etas) <= 1e-12))
     return out
 
 
@@ -187,7 +195,8 @@ def write_report(res, out_dir):
     L = ["# mbseig benchmarks: speed against accuracy", ""]
     L.append(f"Generated by `mbseig bench{' --quick' if cfg['quick'] else ''}` "
              f"(median of {cfg['repeats']} interleaved runs per point unless stated; BLAS threads: "
-             f"{cfg['threads'] or 'library default'}; total {res.get('elapsed', 0):.0f} s). Machine: "
+             f"{cfg['threads'] or 'library default'}; total {res.get('elapsed', 0):.0f} s). "
+             "Machine: "
              f"{res['machine']['cpus']} CPUs, Python {res['machine']['python']}, numpy "
              f"{res['machine']['numpy']}, scipy {res['machine']['scipy']}.{_load_words(res)} The "
              f"machine is shared and noisy: compare ratios measured in the same run, not absolute "
@@ -200,7 +209,8 @@ def write_report(res, out_dir):
     dense = _rows(res, "dense")
     if dense:
         L += ["", "## Dense eigensolvers (chain_damped, closed-form eigenvalues)", "",
-              "Error: max over eigenvalues of |s − s_exact| / |s_exact|. η: largest backward error.",
+              "Error: max over eigenvalues of |s − s_exact| / |s_exact|. η: largest backward "
+              "error.",
               "`mbseig companion` is the dense general path (forced); `mbseig default` takes the "
               "structured proportional path on this family.", ""]
         methods = list(dict.fromkeys(r["method"] for r in dense))
@@ -210,22 +220,26 @@ def write_report(res, out_dir):
             for m in methods:
                 r = _get(dense, m, n)
                 cells.append("–" if r is None else f"{_f(r['time'])} s / {_f(r['error'], '.0e')}"
-                             + ("" if not math.isfinite(r.get("eta", math.nan)) else f" / η {r['eta']:.0e}"))
+                             + ("" if not math.isfinite(r.get("eta", math.nan))
+                                else f" / η {r['eta']:.0e}"))
             L.append(f"| {n} | " + " | ".join(cells) + " |")
         L.append("")
-        L.append("Cells: median time / eigenvalue error / backward error. Sizes above 1000 ran once.")
+        L.append("Cells: median time / eigenvalue error / backward error. Sizes above 1000 ran "
+                 "once.")
         lv = res.get("left_vectors")
         if lv:
             L += ["", f"Left eigenvectors on the companion path (n = {lv['n']}): right only "
                   f"{lv['right only']:.3g} s, left and right {lv['left and right']:.3g} s "
-                  f"(+{100 * (lv['left and right'] / lv['right only'] - 1):.0f} %). mbseig computes them "
-                  "only when M, P or Q is not symmetric (`left=\"auto\"`): for symmetric matrices the left "
-                  "vector is the conjugate of the right one, exactly, so κ costs nothing there."]
+                  f"(+{100 * (lv['left and right'] / lv['right only'] - 1):.0f} %). mbseig "
+                  "computes them only when M, P or Q is not symmetric (`left=\"auto\"`): for "
+                  "symmetric matrices the left vector is the conjugate of the right one, exactly, "
+                  "so κ costs nothing there."]
     st = _rows(res, "structured")
     if st:
         _table(L, "Structured fast paths against eigh(Q, M) and the dense general path",
                "Floor: `scipy.linalg.eigh(Q, M)` with vectors on the same matrices, interleaved.",
-               "| path | n | time | eigh(Q, M) floor | / floor | general path | speed-up | error | η |",
+               "| path | n | time | eigh(Q, M) floor | / floor | general path | speed-up | error "
+               "| η |",
                st, lambda r: f"| {r['method']} | {r['n']} | {_f(r['time'])} s | "
                f"{_f(r.get('floor_time'))} s | "
                f"{_f(r.get('floor_ratio', r.get('pipeline_ratio')), '.2f')} | "
@@ -237,7 +251,8 @@ def write_report(res, out_dir):
                "Each run in a fresh process (peak resident memory of that process). `general`: one "
                "extra dashpot makes the damping non-proportional (shift-invert Arnoldi on the "
                "companion pencil); its error column is empty (no closed form), η verifies it.",
-               "| path | n | load | equilibrium | linearize | modes | total | peak RSS | error | η | runs |",
+               "| path | n | load | equilibrium | linearize | modes | total | peak RSS | error | η "
+               "| runs |",
                part, lambda r: f"| {r['solver']} | {r['n']:.0e} | {r['load']:.2f} | "
                f"{r['equilibrium']:.2f} | {r['linearize']:.2f} | {r['modes']:.2f} | "
                f"{r['total']:.2f} s | {r['rss_mb']:.0f} MB | {_f(r['error'], '.0e')} | "
@@ -246,15 +261,18 @@ def write_report(res, out_dir):
     if large:
         L += ["", "## Large constrained model, general damping (lowest 20 modes)", "",
               "1-D chain of n masses m_i = 1 + 0.5 sin i, every 10th spring a rigid link (n/10 "
-              "constraint rows in the bordered pencil), grounded dashpots on every 7th mass plus βK: "
-              "non-proportional. Eigen stage only (the matrices are built directly), each solve in a "
-              "fresh process, interleaved with the floor: `eigsh` shift-invert at 0 on the undamped "
+              "constraint rows in the bordered pencil), grounded dashpots on every 7th mass plus "
+              "βK: non-proportional. Eigen stage only (the matrices are built directly), each "
+              "solve in a fresh process, interleaved with the floor: `eigsh` shift-invert at 0 on "
+              "the undamped "
               "bordered pencil (one `splu`). The optional SLEPc backend `partial-slepc` is "
               "measured against SLEPc itself in its own section below.", "",
-              "| path | n | constraints | time | / floor | peak RSS | η | coverage verified | runs |",
+              "| path | n | constraints | time | / floor | peak RSS | η | coverage verified "
+              "| runs |",
               "|---|---|---|---|---|---|---|---|---|"]
-        L.extend(f"| {r['method']} | {r['n']:.0e} | {r['m']} | {r['time']:.2f} s | {r['ratio']:.2f}× | "
-                 f"{r['rss_mb']:.0f} MB | {_f(r['eta'], '.0e')} | {_f(r.get('verified'), '')} | "
+        L.extend(f"| {r['method']} | {r['n']:.0e} | {r['m']} | {r['time']:.2f} s | "
+                 f"{r['ratio']:.2f}× | {r['rss_mb']:.0f} MB | {_f(r['eta'], '.0e')} | "
+                 f"{_f(r.get('verified'), '')} | "
                  f"{r['repeats']} |" for r in large)
     L += startup_lines(_rows(res, "startup"))
     sw = _rows(res, "sweeps")
@@ -296,15 +314,16 @@ def write_report(res, out_dir):
     jac = _rows(res, "jacobians")
     if jac:
         _table(L, "Jacobians of a 2-D spring network",
-               "Error: max |K − K_ref| / max |K_ref| with K_ref the complex-step Jacobian (exact to "
-               "rounding); for the complex step itself, its difference from the analytic K.",
+               "Error: max |K − K_ref| / max |K_ref| with K_ref the complex-step Jacobian (exact "
+               "to rounding); for the complex step itself, its difference from the analytic K.",
                "| method | coordinates | time | error |", jac,
                lambda r: f"| {r['method']} | {r['n']} | {r['time']:.2e} s | {r['error']:.1e} |")
     rotor = _rows(res, "rotor")
     if rotor:
-        _table(L, "Rotor: Campbell diagram of the overhung rotor (Friswell 5.9.x), mbseig and ROSS",
-               "Time of the whole Campbell diagram (whirl, log decrements, critical speeds) and per "
-               "speed, median of the stated runs; the agreement rows are the largest relative "
+        _table(L, "Rotor: Campbell diagram of the overhung rotor (Friswell 5.9.x), mbseig and "
+               "ROSS",
+               "Time of the whole Campbell diagram (whirl, log decrements, critical speeds) and "
+               "per speed, median of the stated runs; the agreement rows are the largest relative "
                "difference of the eigenvalues from ROSS at the same mesh (benchmarks/"
                "ross_friswell.py).",
                "| method | speeds | time | per speed | error | note |", rotor,
@@ -355,20 +374,26 @@ def write_report(res, out_dir):
     cs = _rows(res, "constraint")
     if cs:
         L += ["", "## Linearization with and without the constraint-force stiffness", "",
-              "| case and linearization | ω₁ [rad/s] | relative error | time | reference |", "|---|---|---|---|---|"]
+              "| case and linearization | ω₁ [rad/s] | relative error | time | reference |",
+              "|---|---|---|---|---|"]
         for r in cs:
-            L.append(f"| {r['method']} | {r['omega']:.6g} | {r['error']:.1e} | {r['time']:.2e} s | {r['reference']} |")
+            L.append(f"| {r['method']} | {r['omega']:.6g} | {r['error']:.1e} | {r['time']:.2e} s | "
+                     f"{r['reference']} |")
     td = _rows(res, "timedomain")
-    L += ["", "## Time-domain check: integrator settings (Ziegler pendulum past the flutter load)", ""]
+    L += ["", "## Time-domain check: integrator settings (Ziegler pendulum past the flutter load)",
+          ""]
     if td:
-        L += ["| integrator | mode | δ predicted | δ measured | rel. error | check | time |", "|---|---|---|---|---|---|---|"]
+        L += ["| integrator | mode | δ predicted | δ measured | rel. error | check | time |",
+              "|---|---|---|---|---|---|---|"]
         for r in td:
-            L.append(f"| {r['method']} | {r['n']} | {r['predicted_delta']:+.5g} | {r['measured_delta']:+.5g} | "
-                     f"{r['error']:.1e} | {'pass' if r['passed'] else 'FAIL'} | {r['time']:.2f} s |")
+            L.append(f"| {r['method']} | {r['n']} | {r['predicted_delta']:+.5g} | "
+                     f"{r['measured_delta']:+.5g} | {r['error']:.1e} | "
+                     f"{'pass' if r['passed'] else 'FAIL'} | {r['time']:.2f} s |")
         L.append("")
-        L.append("The default (DOP853 at rtol 1e-10) adds no measurable damping. Implicit methods at a loose "
-                 "tolerance damp the response numerically: the measured δ moves towards the stable side, which "
-                 "on a marginal mode can turn growth into apparent decay; the check's 1 % tolerance catches it.")
+        L.append("The default (DOP853 at rtol 1e-10) adds no measurable damping. Implicit methods "
+                 "at a loose tolerance damp the response numerically: the measured δ moves towards "
+                 "the stable side, which on a marginal mode can turn growth into apparent decay; "
+                 "the check's 1 % tolerance catches it.")
     else:
         L.append(res.get("timedomain_note") or "not run")
     L.extend(_nlevp_lines(_rows(res, "nlevp")))
@@ -377,9 +402,10 @@ def write_report(res, out_dir):
         _table(L, "Stability where methods fail",
                "Each row: the naive method, its answer, mbseig's answer, and the reference that "
                "decides (asserted in tests/test_failures.py).",
-               "| case | naive method | naive answer | mbseig | reference | naive wrong | mbseig right |",
-               fails, lambda c: f"| {c['name']} | {c['naive_method']} | {c['naive']} | {c['mbseig']} | "
-               f"{c['reference']} | {'yes' if c['naive_wrong'] else 'no'} | "
+               "| case | naive method | naive answer | mbseig | reference | naive wrong "
+               "| mbseig right |",
+               fails, lambda c: f"| {c['name']} | {c['naive_method']} | {c['naive']} | "
+               f"{c['mbseig']} | {c['reference']} | {'yes' if c['naive_wrong'] else 'no'} | "
                f"{'yes' if c['mbseig_right'] else '**no**'} |")
     (out_dir / "benchmarks.md").write_text("\n".join(L) + "\n")
     plots.save(plots.speed_accuracy(res), out_dir / "speed_accuracy.png", dpi=120)

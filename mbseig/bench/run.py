@@ -109,7 +109,8 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
                                        cfg["general_max"], log)
             res["left_vectors"] = bench_left_vectors(cfg["left_n"], repeats, log)
         if "structured" in sections:
-            res["rows"] += bench_structured(cfg["structured_sizes"], repeats, cfg["general_max"], log)
+            res["rows"] += bench_structured(cfg["structured_sizes"], repeats, cfg["general_max"],
+                                            log)
             res["rows"] += bench_pipeline(cfg["pipeline_sizes"], repeats, log)
         if "peer" in sections:
             rows, note = bench_peer(cfg["peer_sizes"], repeats, log)
@@ -142,11 +143,13 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
 
             res["rows"] += bench_spatial(log, n=500 if quick else 10_000, repeats=repeats)
         if "failures" in sections:
-            res["failures"] = [{k: getattr(c, k) for k in ("name", "naive_method", "naive", "mbseig",
-                                                           "reference", "naive_wrong", "mbseig_right")}
+            res["failures"] = [{k: getattr(c, k)
+                                for k in ("name", "naive_method", "naive", "mbseig", "reference",
+                                          "naive_wrong", "mbseig_right")}
                                for c in run_all()]
     if "partial" in sections:  # fresh processes: BLAS threads set through the environment
-        res["rows"] += bench_partial(cfg["partial_sizes"], repeats, cfg["partial_general_max"], threads, log)
+        res["rows"] += bench_partial(cfg["partial_sizes"], repeats, cfg["partial_general_max"],
+                                     threads, log)
     if "large" in sections:  # SLEPc has its own section, against SLEPc itself
         res["rows"] += bench_large(cfg["large_sizes"], 1 if quick else repeats, threads, log,
                                    slepc=False)
@@ -176,5 +179,5 @@ def _load():
 def _machine():
     import scipy
 
-    return {"python": platform.python_version(), "numpy": np.__version__, "scipy": scipy.__version__,
-            "cpus": os.cpu_count(), "platform": platform.platform()}
+    return {"python": platform.python_version(), "numpy": np.__version__,
+            "scipy": scipy.__version__, "cpus": os.cpu_count(), "platform": platform.platform()}

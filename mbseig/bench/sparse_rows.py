@@ -45,11 +45,12 @@ def partial_worker(kind, n, n_modes):
         warnings.simplefilter("ignore", RuntimeWarning)
         md = modes(lin.M, P, lin.Q, N=lin.N, coordinate_names=lin.coordinate_names, n_modes=n_modes)
     t4 = time.perf_counter()
-    err = rel_error(md.eigenvalues, chain_exact(n)[: n_modes + 5]) if kind == "proportional" else math.nan
+    err = (rel_error(md.eigenvalues, chain_exact(n)[: n_modes + 5]) if kind == "proportional"
+           else math.nan)
     rss = peak_rss_mb()
-    print(json.dumps({"kind": kind, "n": n, "load": t1 - t0, "equilibrium": t2 - t1, "linearize": t3 - t2,
-                      "modes": t4 - t3, "total": t4 - t0, "rss_mb": rss, "error": err,
-                      "eta": float(md.backward_error.max()), "solver": md.solver,
+    print(json.dumps({"kind": kind, "n": n, "load": t1 - t0, "equilibrium": t2 - t1,
+                      "linearize": t3 - t2, "modes": t4 - t3, "total": t4 - t0, "rss_mb": rss,
+                      "error": err, "eta": float(md.backward_error.max()), "solver": md.solver,
                       "n_listed": len(md), "verdict": md.verdict}))
 
 
@@ -70,15 +71,18 @@ def bench_partial(sizes, repeats, general_max, threads, log, n_modes=20):
     rows = []
     env = dict(os.environ)
     if threads:
-        env.update({k: str(threads) for k in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")})
+        env.update({k: str(threads)
+                    for k in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")})
     for kind in ("proportional", "general"):
         for n in sizes:
             if kind == "general" and n > general_max:
                 continue
             runs = []
             for _ in range(repeats):  # medians at every size, 10⁶ included (≈20 s a run)
-                code = f"from mbseig.bench.sparse_rows import partial_worker; partial_worker({kind!r}, {n}, {n_modes})"
-                p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+                code = ("from mbseig.bench.sparse_rows import partial_worker; "
+                        f"partial_worker({kind!r}, {n}, {n_modes})")
+                p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                                   env=env)
                 if p.returncode != 0:
                     log(f"partial {kind} n={n} failed: {p.stderr.strip().splitlines()[-1:]}")
                     break
@@ -91,7 +95,8 @@ def bench_partial(sizes, repeats, general_max, threads, log, n_modes=20):
                    "repeats": len(runs), **med, "error": runs[-1]["error"], "eta": runs[-1]["eta"],
                    "solver": runs[-1]["solver"], "n_listed": runs[-1]["n_listed"]}
             rows.append(row)
-            log(f"partial {kind:12s} n={n:8d} total {med['total']:.2f} s (modes {med['modes']:.2f}) "
+            log(f"partial {kind:12s} n={n:8d} total {med['total']:.2f} s "
+                f"(modes {med['modes']:.2f}) "
                 f"rss {med['rss_mb']:.0f} MB err {row['error']:.1e} η {row['eta']:.1e}")
     return rows
 
@@ -105,7 +110,8 @@ def large_chain(n, every=10, k=1000.0, c_ground=1e-5, beta=2e-4):
     import scipy.sparse as sp
 
     i = np.arange(n)
-    K = sp.diags([2 * k * np.ones(n), -k * np.ones(n - 1), -k * np.ones(n - 1)], [0, 1, -1], format="csr")
+    K = sp.diags([2 * k * np.ones(n), -k * np.ones(n - 1), -k * np.ones(n - 1)], [0, 1, -1],
+                 format="csr")
     cd = np.zeros(n)
     cd[::7] = c_ground
     C = (sp.diags(cd) + beta * K).tocsr()
@@ -160,16 +166,20 @@ def bench_large(sizes, repeats, threads, log, n_modes=20, slepc=True):
              + (["partial-slepc"] if slepc and slepc_available() else []))
     env = dict(os.environ)
     if threads:
-        env.update({k: str(threads) for k in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")})
+        env.update({k: str(threads)
+                    for k in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")})
     rows = []
     for n in sizes:
         runs = {k: [] for k in kinds}
         for rep in range(repeats):
             for kind in kinds:
                 if n >= 1_000_000 and rep and kind in ("partial-companion", "partial-slepc"):
-                    continue  # 10⁶: the slow paths once (minutes a run), floor and projected medians
-                code = f"from mbseig.bench.sparse_rows import large_worker; large_worker({kind!r}, {n}, {n_modes})"
-                p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+                    # 10⁶: the slow paths once (minutes a run), floor and projected medians
+                    continue
+                code = ("from mbseig.bench.sparse_rows import large_worker; "
+                        f"large_worker({kind!r}, {n}, {n_modes})")
+                p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                                   env=env)
                 if p.returncode != 0:
                     log(f"large {kind} n={n} failed: {p.stderr.strip().splitlines()[-1:]}")
                     continue
@@ -187,6 +197,7 @@ def bench_large(sizes, repeats, threads, log, n_modes=20, slepc=True):
                    "verified": rr[-1].get("verified"), "solver": rr[-1].get("solver"),
                    "projected": rr[-1].get("projected")}
             rows.append(row)
-            log(f"large {kind:18s} n={n:8d} {t:8.2f} s  ({row['ratio']:.2f}x floor) rss {row['rss_mb']:.0f} MB "
+            log(f"large {kind:18s} n={n:8d} {t:8.2f} s  ({row['ratio']:.2f}x floor) "
+                f"rss {row['rss_mb']:.0f} MB "
                 f"η {row['eta']:.1e}" + ("" if kind == "floor" else f" verified {row['verified']}"))
     return rows

@@ -256,7 +256,8 @@ def _parameters(table, configurations, config, overrides):
             if key == "description":
                 continue
             if key not in raw:
-                raise CaseError(f"sets unknown parameter {key!r}", element=f"configurations.{config}")
+                raise CaseError(f"sets unknown parameter {key!r}",
+                                element=f"configurations.{config}")
             raw[key] = value
     for key, value in overrides.items():
         if key not in raw:

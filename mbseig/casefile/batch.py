@@ -2,8 +2,9 @@
 
 Repeated points, point masses and spring/damper elements are expanded for all values of the
 index at once: each expression is parsed once and evaluated on a numpy array of index values
-(the whitelist of :mod:`mbseig.casefile.expr`, walked by the same code with numpy functions), each name template is formatted
-once per member, and springs become one :class:`~mbseig.model.batched.SpringDamperSet`.
+(the whitelist of :mod:`mbseig.casefile.expr`, walked by the same code with numpy functions), each
+name template is formatted once per member, and springs become one
+:class:`~mbseig.model.batched.SpringDamperSet`.
 
 Anything unusual (an unknown field, a value outside the number rule, a name that clashes, a point
 that is a body marker, an ``enabled`` or ``name`` field, ...) makes the batch decline, and the
@@ -87,14 +88,15 @@ def vector_template(text, names, var, ivals):
         pre, suf = parts[0], parts[2]
         return [pre + s + suf for s in cols[1]]
     cols = [c for c in cols if c is not None]
-    return ["".join(t) for t in zip(*cols)] if len(cols) > 1 else cols[0]
+    return ["".join(t) for t in zip(*cols, strict=True)] if len(cols) > 1 else cols[0]
 
 
 def repeated_fields(item, kinds, var, ivals, params, optional=()):
     """The fields of a repeated element for every index value at once, or None (the element is
     then read member by member, which reports any problem).  ``kinds`` maps each allowed key to
     ``"name"`` (a name template), ``"names"`` (a list of templates), 0 (a number), a size
-    (a list of that many numbers) or None (left to the caller); keys in ``optional`` may be absent, any other key declines."""
+    (a list of that many numbers) or None (left to the caller); keys in ``optional`` may be absent,
+    any other key declines."""
     if "enabled" in item or set(item) - {*kinds, "repeat"} or ivals.size == 0:
         return None
     out = {}
@@ -150,8 +152,8 @@ class LazyPoints(Mapping):
 
 
 class Batcher:
-    """Callbacks for :func:`mbseig.casefile.fields.expand`: ``batch(section, item, label, var, ivals,
-    params) -> bool`` (True when the whole repeated element was added)."""
+    """Callbacks for :func:`mbseig.casefile.fields.expand`: ``batch(section, item, label, var,
+    ivals, params) -> bool`` (True when the whole repeated element was added)."""
 
     def __init__(self, builder):
         self.b = builder
@@ -167,8 +169,10 @@ class Batcher:
         self.g_const, self.forces, self.gravity = g_const, forces, gravity
 
     def __call__(self, section, item, label, var, ivals, params):
-        handler = {"points": self._points, "masses": self._masses, "forces": self._forces}.get(section)
-        if handler is None or ivals.size == 0 or "enabled" in item or "name" in item and section != "points":
+        handler = {"points": self._points, "masses": self._masses,
+                   "forces": self._forces}.get(section)
+        if (handler is None or ivals.size == 0 or "enabled" in item
+                or "name" in item and section != "points"):
             return False
         try:
             handler(item, label, var, ivals, params)
@@ -201,13 +205,13 @@ class Batcher:
             axes = "xyz"[:dim]
             idx = b.assembly.coordinates([f"{nm}.{ax}" for nm in names for ax in axes],
                                          pos.ravel().tolist(), "length").reshape(nb, dim)
-        b.point_index.update(zip(names, idx))
-        b.point_pos.update(zip(names, pos))
+        b.point_index.update(zip(names, idx, strict=True))
+        b.point_pos.update(zip(names, pos, strict=True))
         self._register(names, idx, pos)
 
     def _register(self, names, idx, pos):
         start = self._n_rows
-        self._rows.update(zip(names, range(start, start + len(names))))
+        self._rows.update(zip(names, range(start, start + len(names)), strict=True))
         self._idx_chunks.append(np.asarray(idx, np.intp).reshape(len(names), -1))
         self._pos_chunks.append(np.asarray(pos, float).reshape(len(names), -1))
         self._n_rows += len(names)

@@ -120,7 +120,8 @@ class Builder(ElementReaders):
         else:
             self.beam_specs, self.fe_specs = [], []
         if not self.q_init:
-            raise CaseError("the model has no free coordinates (every point is fixed)", element="points")
+            raise CaseError("the model has no free coordinates (every point is fixed)",
+                            element="points")
         self.n = len(self.q_init)
         q0 = np.array(self.q_init)
         self.q0 = q0
@@ -159,7 +160,8 @@ class Builder(ElementReaders):
             if bname in self.bodies or bname in self.point_index or "." in bname:
                 raise f.error(f"body name {bname!r} is used already or contains '.'")
             pts = f.raw("points")
-            if not isinstance(pts, list) or len(pts) != 2 or not all(isinstance(p, str) for p in pts):
+            if (not isinstance(pts, list) or len(pts) != 2
+                    or not all(isinstance(p, str) for p in pts)):
                 raise f.error("points must be a list of two basic point names")
             pi, pj = (self.basic_point(f, template(p, names, f)) for p in pts)
             if pi == pj:
@@ -178,7 +180,8 @@ class Builder(ElementReaders):
             ri, rj = self.affine_of(pi), self.affine_of(pj)
             qb = combine([(1.0, ri), (1.0, rj)], stack=True)
             Mb = f.formed("the body's mass matrix",
-                          lambda: body_mass_matrix(m, inertia, tuple(com), L))
+                          lambda m=m, inertia=inertia, com=com, L=L:
+                              body_mass_matrix(m, inertia, tuple(com), L))
             mass_blocks.append(self._embed(qb, Mb))
             self.mass_parts.append((bname, *mass_blocks[-1]))
             if gravity is not None:
@@ -194,7 +197,8 @@ class Builder(ElementReaders):
         mass_elements = []  # configuration-dependent masses (co-rotational beams)
         flexible_record = {} if not flex else _flexible().assemble(
             self, forces, constraints, mass_blocks, mass_elements, g_const, gravity)
-        self.gravity_force = g_const.copy() if gravity is not None else None  # masses, bodies, beams
+        # masses, bodies, beams
+        self.gravity_force = g_const.copy() if gravity is not None else None
 
         for item, label, names in expand("joints", self.data.get("joints", []), self.params):
             before = len(constraints)
@@ -266,7 +270,8 @@ class Builder(ElementReaders):
         """The point's map (one object per point and build: elements share it read-only)."""
         aff = self._affine.get(pname)
         if aff is None:
-            aff = self._affine[pname] = Affine.select(self.point_index[pname], self.point_pos[pname])
+            aff = self._affine[pname] = Affine.select(self.point_index[pname],
+                                                      self.point_pos[pname])
         return aff
 
     def point_ref(self, f, key):

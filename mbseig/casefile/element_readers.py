@@ -136,7 +136,8 @@ class ElementReaders:
         sense_txt = f.text("sense", "ccw")
         if sense_txt not in ("ccw", "cw"):
             raise f.error("sense must be 'ccw' or 'cw'")
-        return combine([(1.0, dirs[0]), (1.0, dirs[1])], stack=True), (1.0 if sense_txt == "ccw" else -1.0)
+        return (combine([(1.0, dirs[0]), (1.0, dirs[1])], stack=True),
+                (1.0 if sense_txt == "ccw" else -1.0))
 
     # -- forces --------------------------------------------------------------------------
     def _force(self, f, forces, g_const):
@@ -195,7 +196,8 @@ class ElementReaders:
             forces.append(FollowerForce(f.label, combine([(1.0, p), (1.0, u)], stack=True), mag))
         else:
             raise f.error(
-                f"unknown force type {kind!r} (spring, damper, spring_damper, torsional, force, follower)"
+                f"unknown force type {kind!r} (spring, damper, spring_damper, torsional, force, "
+                "follower)"
             )
 
 

@@ -45,17 +45,20 @@ def fe_spec(b, f, new_coord):
     ndof = int(ndof)
     rots = f.raw("rotations", ["free"] * len(iface)) if ndof == 3 else []
     if ndof == 3 and (not isinstance(rots, list) or len(rots) != len(iface)):
-        raise f.error("rotations must list one of \"free\", \"clamped\" or a body per interface point")
+        raise f.error("rotations must list one of \"free\", \"clamped\" or a body per interface "
+                      "point")
     f.done()
     n_if = ndof * len(iface)
     if M.shape[0] < n_if:
-        raise f.error(f"matrices are {M.shape[0]}×{M.shape[0]}, fewer than the {n_if} interface dofs")
+        raise f.error(f"matrices are {M.shape[0]}×{M.shape[0]}, fewer than the {n_if} interface "
+                      "dofs")
     for key, A in (("mass", M), ("stiffness", K)):
         if not np.allclose(A, A.T, rtol=1e-9, atol=1e-12 * np.abs(A).max()):
             raise f.error(f"{key} matrix is not symmetric")
     theta_idx = []
-    for p, rot in zip(iface, rots):
-        theta_idx.append(-1 if rot == "clamped" else new_coord(b, f"{name}.{p}.theta", 0.0, "angle"))
+    for p, rot in zip(iface, rots, strict=False):  # rots is [] (no θ rows) when ndof == 2
+        theta_idx.append(-1 if rot == "clamped"
+                         else new_coord(b, f"{name}.{p}.theta", 0.0, "angle"))
     eta_idx = [new_coord(b, f"{name}.eta{k + 1}", 0.0, "modal") for k in range(M.shape[0] - n_if)]
     return {"name": name, "label": f.label, "M": M, "K": K, "interface": iface, "ndof": ndof,
             "rotations": list(rots), "theta_idx": theta_idx, "eta_idx": eta_idx}
@@ -68,7 +71,8 @@ def _spec3d(b, f, name, M, K, iface, new_coord):
     rots = f.raw("rotations", ["free"] * len(iface))
     if (not isinstance(rots, list) or len(rots) != len(iface)
             or not all(isinstance(r, str) for r in rots)):
-        raise f.error("rotations must list one of \"free\", \"clamped\" or a body per interface point")
+        raise f.error("rotations must list one of \"free\", \"clamped\" or a body per interface "
+                      "point")
     rots = [template(r, f.names, f) for r in rots]
     for r in rots:
         if r not in ("free", "clamped") and r not in b.bodies:
@@ -76,12 +80,13 @@ def _spec3d(b, f, name, M, K, iface, new_coord):
     f.done()
     n_if = 6 * len(iface)
     if M.shape[0] < n_if:
-        raise f.error(f"matrices are {M.shape[0]}×{M.shape[0]}, fewer than the {n_if} interface dofs")
+        raise f.error(f"matrices are {M.shape[0]}×{M.shape[0]}, fewer than the {n_if} interface "
+                      "dofs")
     for key, A in (("mass", M), ("stiffness", K)):
         if not np.allclose(A, A.T, rtol=1e-9, atol=1e-12 * np.abs(A).max()):
             raise f.error(f"{key} matrix is not symmetric")
     theta_idx = [[new_coord(b, f"{name}.{p}.theta_{a}", 0.0, "angle") for a in "xyz"]
-                 if r == "free" else r for p, r in zip(iface, rots)]
+                 if r == "free" else r for p, r in zip(iface, rots, strict=True)]
     eta_idx = [new_coord(b, f"{name}.eta{k + 1}", 0.0, "modal") for k in range(M.shape[0] - n_if)]
     return {"name": name, "label": f.label, "M": M, "K": K, "interface": iface, "ndof": 6,
             "rotations": list(rots), "theta_idx": theta_idx, "eta_idx": eta_idx}
@@ -104,13 +109,15 @@ def assemble_fe(b, spec, constraints, forces, mass_blocks, lock, error_only):
     if spec["ndof"] == 6:
         return _assemble3d(b, spec, forces, mass_blocks)
     terms = []
-    for p, t in zip(spec["interface"], spec["theta_idx"] or [None] * len(spec["interface"])):
+    for p, t in zip(spec["interface"], spec["theta_idx"] or [None] * len(spec["interface"]),
+                    strict=True):
         pos0 = b.point_pos[p]
         terms.append((1.0, b.affine_of(p) - Affine.constant(pos0)))
         if spec["ndof"] == 3:
             terms.append((1.0, Affine.select([t], [0.0])))
     _attach(spec, terms, forces, mass_blocks)
-    for p, rot, t in zip(spec["interface"], spec["rotations"], spec["theta_idx"]):
+    # rotations and theta_idx are [] when ndof == 2: nothing to lock then
+    for _p, rot, t in zip(spec["interface"], spec["rotations"], spec["theta_idx"], strict=False):
         if rot in ("free", "clamped"):
             continue
         theta = Affine.select([t], [0.0])
@@ -136,7 +143,7 @@ def _attach(spec, terms, forces, mass_blocks):
 def _assemble3d(b, spec, forces, mass_blocks):
     b.bind()  # the bodies' frames (idempotent; a weld reads them)
     terms = []
-    for p, t in zip(spec["interface"], spec["theta_idx"]):
+    for p, t in zip(spec["interface"], spec["theta_idx"], strict=True):
         terms.append((1.0, b.affine_of(p) - Affine.constant(b.point_pos[p])))
         terms.append((1.0, _rotation3d(b, t)))
     _attach(spec, terms, forces, mass_blocks)

@@ -1,7 +1,7 @@
 """Flexible bodies in case files: ``[[beams]]`` and ``[[fe_bodies]]``.
 
-Called by the case builder (:mod:`mbseig.casefile.builder`) in two steps: :func:`allocate` adds the extra
-coordinates right after the points (interior beam nodes ``beam.n3.x``/``.y``, node angles
+Called by the case builder (:mod:`mbseig.casefile.builder`) in two steps: :func:`allocate` adds the
+extra coordinates right after the points (interior beam nodes ``beam.n3.x``/``.y``, node angles
 ``beam.n3.theta``, FE interface angles ``body.A.theta`` and modal coordinates ``body.eta1``), and
 :func:`assemble` adds elements, masses and constraints once bodies exist (a beam end may be
 clamped to a rigid body).
@@ -125,15 +125,17 @@ def _beam_spec(b, f, mesh_override):
         sf.done()
         props = sf.formed("the section's area and second moment",
                           lambda: section_properties(shape=shape, dims=dims))
-        A, I, depth, kappa_default = props["A"], props["I"], props["depth"], props["kappa"]
-        if not (A >= MIN_NORMAL and I >= MIN_NORMAL):
-            raise sf.error(f"the section's area {A:g} or second moment {I:g} vanishes below "
+        A, I_area, depth, kappa_default = (props["A"], props["I"], props["depth"],
+                                           props["kappa"])
+        if not (A >= MIN_NORMAL and I_area >= MIN_NORMAL):
+            raise sf.error(f"the section's area {A:g} or second moment {I_area:g} vanishes below "
                            f"the double-precision range: the section is too small")
         f.raw("depth", None)
     else:
         A = f.num("A", positive=True)
-        I = f.num("I", positive=True)
-        depth = f.num("depth", f.formed("the depth sqrt(12 I/A)", lambda: math.sqrt(12.0 * I / A)),
+        I_area = f.num("I", positive=True)
+        depth = f.num("depth", f.formed("the depth sqrt(12 I/A)",
+                                        lambda: math.sqrt(12.0 * I_area / A)),
                       positive=True)
     kappa = f.num("shear_coefficient", kappa_default, positive=True)
     G = f.num("G", None)
@@ -153,7 +155,7 @@ def _beam_spec(b, f, mesh_override):
     n, auto = element_count(f, AUTO_START_ELEMENTS, MAX_ELEMENTS, mesh_override)
     ends = _parse_ends(f)
     f.done()
-    section = BeamSection(E=E, G=G, A=A, I=I, rho=rho, kappa=kappa, theory=theory)
+    section = BeamSection(E=E, G=G, A=A, I=I_area, rho=rho, kappa=kappa, theory=theory)
     spec = _BeamSpec(name=name, label=f.label, points=(pa, pb), length=length, section=section,
                      depth=depth, n_elements=n, auto=auto, ends=ends)
     spec.warnings.extend(slenderness_warnings(theory, length / depth, EB_SLENDERNESS,
@@ -193,14 +195,16 @@ def allocate(b, mesh=None):
                 spec.pos_idx.append(b.point_index[p])
             else:
                 r = xa + chord * (i / n)
-                idx = [_new_coord(b, f"{spec.name}.n{i}.{ax}", r[a], "length") for a, ax in enumerate("xy")]
+                idx = [_new_coord(b, f"{spec.name}.n{i}.{ax}", r[a], "length")
+                       for a, ax in enumerate("xy")]
                 spec.node_pos.append(r)
                 spec.pos_idx.append(np.array(idx, dtype=np.intp))
             end = 0 if i == 0 else 1 if i == n else None
             if end is not None and spec.ends[end] == "clamped":
                 spec.theta_idx.append(-1)
             else:
-                spec.theta_idx.append(_new_coord(b, f"{spec.name}.n{i}.theta", spec.theta0, "angle"))
+                spec.theta_idx.append(_new_coord(b, f"{spec.name}.n{i}.theta", spec.theta0,
+                                                 "angle"))
         for msg in spec.warnings:
             warnings.warn(f"{label}: {msg}", BeamTheoryWarning, stacklevel=4)
         b.beam_specs.append(spec)
@@ -227,7 +231,8 @@ def assemble(b, forces, constraints, mass_blocks, mass_elements, g_const, gravit
         record[spec.name] = _assemble_beam(b, spec, q_init, forces, constraints, mass_blocks,
                                            mass_elements, g_const, gravity)
     for spec in b.fe_specs:
-        record[spec["name"]] = assemble_fe(b, spec, constraints, forces, mass_blocks, _lock, _ErrorOnly)
+        record[spec["name"]] = assemble_fe(b, spec, constraints, forces, mass_blocks, _lock,
+                                           _ErrorOnly)
     if not record:
         return {}
     out = {"bodies": record, "refinement": refinement}
@@ -283,10 +288,11 @@ def _assemble_beam(b, spec, q_init, forces, constraints, mass_blocks, mass_eleme
         w = combine([(1.0, r1), (1.0, t1), (1.0, r2), (1.0, t2)], stack=True)
         f = _ErrorOnly(spec.label)
         el = f.formed("the beam element's stiffness and mass",
-                      lambda: BeamElement(f"{spec.label} element {k + 1}", w, spec.section, l0))
+                      lambda k=k, w=w: BeamElement(f"{spec.label} element {k + 1}", w,
+                                                   spec.section, l0))
         if el.idx.size == 0:
             continue
-        M_ref = f.formed("the beam element's mass matrix", lambda: el.mass(q_init))
+        M_ref = f.formed("the beam element's mass matrix", lambda el=el: el.mass(q_init))
         forces.append(el)
         mass_elements.append((el, M_ref))
         mass_blocks.append((el.idx, el.idx, M_ref))

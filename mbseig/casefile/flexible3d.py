@@ -209,7 +209,7 @@ def _mesh(spec):
     spans = np.diff(merged)
     counts = span_elements(spans, spec.n_elements)
     arcs = [0.0]
-    for a, n in zip(merged[:-1], counts):
+    for a, n in zip(merged[:-1], counts, strict=True):
         h = (merged[merged.index(a) + 1] - a) / n
         arcs += [a + h * (j + 1) for j in range(n)]
     arcs[-1] = L

@@ -156,9 +156,10 @@ def _checked(A, name, label):
     if A.dtype.kind == "c":
         if np.any(A.imag):
             i, j = np.argwhere(A.imag != 0)[0]
-            raise CaseError(f"{name}: complex entry ({i}, {j}) = {complex(A[i, j])!r}: linear cases "
-                            f"take real M, P, Q (a complex stiffness has no time-domain model); "
-                            f"mbseig.modes() solves complex matrices", element=label)
+            raise CaseError(f"{name}: complex entry ({i}, {j}) = {complex(A[i, j])!r}: "
+                            f"linear cases take real M, P, Q (a complex stiffness has no "
+                            f"time-domain model); mbseig.modes() solves complex matrices",
+                            element=label)
         A = A.real
     if A.dtype.kind in "iu":
         if np.any(np.abs(A.astype(float)) > _EXACT_INT):
@@ -168,5 +169,6 @@ def _checked(A, name, label):
     A = np.asarray(A, dtype=float)
     if not np.all(np.isfinite(A)):
         i, j = np.argwhere(~np.isfinite(A))[0]
-        raise CaseError(f"{name}: entry ({i}, {j}) = {float(A[i, j])!r} is not finite", element=label)
+        raise CaseError(f"{name}: entry ({i}, {j}) = {float(A[i, j])!r} is not finite",
+                        element=label)
     return A

@@ -31,7 +31,8 @@ def parse_report(table, builder) -> dict:
     act = table.get("actuator", [])
     act = [act] if isinstance(act, str) else act
     if not isinstance(act, list) or not all(isinstance(a, str) for a in act):
-        raise CaseError("actuator must be an element name or a list of names", element="report.actuator")
+        raise CaseError("actuator must be an element name or a list of names",
+                        element="report.actuator")
     declared = builder.declared_names()
     for a in act:
         if a in builder.named:

@@ -175,7 +175,8 @@ def _outputs(builder, forces, constraints, inputs):
                 quantity = _quantity(f, "constraint")
                 d = _unit(f, "direction", builder.dim) if f.has("direction") else None
                 f.done()
-                yield Output(name, "constraint", label, quantity=quantity, element=el.name, direction=d)
+                yield Output(name, "constraint", label, quantity=quantity, element=el.name,
+                             direction=d)
                 continue
             if kind == "force" and isinstance(el, SpringDamper):
                 okind = "spring"

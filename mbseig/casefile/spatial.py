@@ -376,7 +376,8 @@ class SpatialBuilder(SpatialElementReaders, Builder):
         value = f.raw(key, default)
         if value is None:
             return np.zeros((size, size))
-        if isinstance(value, list) and len(value) == size and all(isinstance(r, list) for r in value):
+        if (isinstance(value, list) and len(value) == size
+                and all(isinstance(r, list) for r in value)):
             rows = [Fields({"row": r}, f"{f.label}.{key}[{i}]", f.names).vec("row", size)
                     for i, r in enumerate(value)]
             return np.array(rows)

@@ -34,7 +34,8 @@ from .batch import repeated_fields
 from .fields import REQUIRED, Fields
 
 UNIT_TOL = 1e-9  # |‖axis‖ − 1| allowed, and the tolerance of perpendicular / coincident axes
-FORCE_TYPES = ("spring", "damper", "spring_damper", "force", "torque", "torsional", "bushing", "rotor")
+FORCE_TYPES = ("spring", "damper", "spring_damper", "force", "torque", "torsional", "bushing",
+               "rotor")
 JOINT_TYPES = (*JOINT_ROWS, "distance", "fixed", "slider", "angle_driver", "rolling", "contact",
                "mimic")
 AXIS_KEY = {"revolute": "axis", "cylindrical": "axis", "prismatic": "axis",
@@ -94,7 +95,7 @@ class SpatialElementReaders:
         on = (FRAME_SIZE, locals_[1], b2) if b2 != "ground" else (0, locals_[0], b1)
         self._coincident_axes(f, kind, b1, b2, at, axes)
         self.add_constraint(constraints, QuadraticConstraint(f.label, rows, 1.0, on), f)
-        for b, fr, loc in zip((b1, b2), frames, locals_):
+        for b, fr, loc in zip((b1, b2), frames, locals_, strict=True):
             self._station(b, f.label, frame_point(fr, loc))
         if name is not None:
             self.spatial_joints[name] = (kind, b1, b2, at, axes[0] if axes else None, f.label)
@@ -197,7 +198,7 @@ class SpatialElementReaders:
     def _add_bushing(self, label, frames, bodies, at, K, D, forces):
         locals_ = (self.local(bodies[0], at), self.local(bodies[1], at))
         ends = []
-        for b, fr, loc in zip(bodies, frames, locals_):
+        for b, fr, loc in zip(bodies, frames, locals_, strict=True):
             ends.append((b, frame_point(fr, loc), b in self.station_origin and not np.any(loc)))
             self._station(b, label, ends[-1][1])
         forces.append(QuadraticSpringDamper(label, bushing_rows(frames, locals_), K, D))
@@ -213,15 +214,17 @@ class SpatialElementReaders:
         if got is None or len(got["bodies"]) != 2:
             return False
         self.bind()
-        pairs, known = list(zip(*got["bodies"])), {*self.frames, "ground"}
+        pairs, known = list(zip(*got["bodies"], strict=True)), {*self.frames, "ground"}
         if any(a == b or a not in known or b not in known for a, b in pairs):
             return False  # an unknown body, the same twice: the member reader names it
         at, K, D = got["at"], got["stiffness"], got.get("damping")
-        loc = [np.array([self.local(b, x) for b, x in zip(col, at)]) for col in got["bodies"]]
+        loc = [np.array([self.local(b, x) for b, x in zip(col, at, strict=True)])
+               for col in got["bodies"]]
         frames = [[GROUND if b == "ground" else self.frames[b] for b in col]
                   for col in got["bodies"]]
         P = [point_matrices(x) for x in loc]
-        stacks = [combine([(1.0, f0), (1.0, f1)], stack=True) for f0, f1 in zip(*frames)]
+        stacks = [combine([(1.0, f0), (1.0, f1)], stack=True)
+                  for f0, f1 in zip(*frames, strict=True)]
         maps = bushing_maps(stacks, loc[0], loc[1])
         for k, (b1, b2) in enumerate(pairs):
             label_k, ends = f"{label} ({var}={int(ivals[k])})", []

@@ -95,7 +95,8 @@ def _joint_positions(robot, positions, where):
             raise CaseError(f"joint {name!r} is {robot.joints[name].type}: it has no position "
                             f"(a revolute, continuous or prismatic joint has)", file=where[0],
                             element=where[1])
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        if (isinstance(value, bool) or not isinstance(value, (int, float))
+                or not math.isfinite(value)):
             raise CaseError(f"{name} must be a finite number (rad or m), got {value!r}",
                             file=where[0], element=where[1])
         q[name] = float(value)
@@ -341,7 +342,8 @@ def expand_urdf(case: dict, case_path) -> dict:
 
 
 def import_urdf(urdf_path, out_toml=None, *, positions=None, stiffness=None, damping=None,
-                floating: bool = False, gravity=(0.0, 0.0, -9.81), title: str | None = None) -> dict:
+                floating: bool = False, gravity=(0.0, 0.0, -9.81),
+                title: str | None = None) -> dict:
     """The plain 3-D case equivalent to a URDF (``mbseig import-urdf ROBOT.urdf --out CASE.toml``).
 
     Parameters

@@ -115,25 +115,25 @@ def groups(robot: UrdfRobot, root, order, children, frames) -> dict:
             links = tuple(_members(children, top))
             massive = [n for n in links if robot.links[n].mass > 0]
             m = float(sum(robot.links[n].mass for n in massive))
-            com, I, scale = np.zeros(3), np.zeros((3, 3)), 0.0
+            com, inertia, scale = np.zeros(3), np.zeros((3, 3)), 0.0
             parts = []
             for n in massive:
                 link, (R, p) = robot.links[n], frames[n]
                 Ri = R @ rpy_matrix(link.rpy)
                 parts.append((link.mass, p + R @ link.xyz, Ri @ link.inertia @ Ri.T))
             if len(parts) == 1:  # one link: its own centre and inertia, exactly
-                _, com, I = parts[0]
-                scale = float(np.max(np.abs(I)))
+                _, com, inertia = parts[0]
+                scale = float(np.max(np.abs(inertia)))
             elif parts:
                 com = sum(mi * ci for mi, ci, _ in parts) / m
                 for mi, ci, Ii in parts:
                     d = ci - com
-                    I = I + Ii + mi * (float(d @ d) * np.eye(3) - np.outer(d, d))
+                    inertia = inertia + Ii + mi * (float(d @ d) * np.eye(3) - np.outer(d, d))
                     r = float(np.linalg.norm(d))  # d carries the rounding of ci and com
                     scale += float(np.max(np.abs(Ii))) + 2.0 * mi * r * (
                         r + float(np.linalg.norm(ci)) + float(np.linalg.norm(com)))
-            I = 0.5 * (I + I.T)
-            out[top] = Group(top, links, massive[0] if massive else None, m, com, I, scale)
+            inertia = 0.5 * (inertia + inertia.T)
+            out[top] = Group(top, links, massive[0] if massive else None, m, com, inertia, scale)
     return out
 
 

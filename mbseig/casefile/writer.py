@@ -1,6 +1,6 @@
-"""Cases in Python (``mbseig.CaseBuilder``, ``mbseig.to_toml``): :class:`CaseBuilder` assembles the plain dict of a case file (the structure
-of the TOML formats of the design notes, 2-D and 3-D), and :func:`to_toml` writes any case dict
-back to TOML.
+"""Cases in Python (``mbseig.CaseBuilder``, ``mbseig.to_toml``): :class:`CaseBuilder` assembles the
+plain dict of a case file (the structure of the TOML formats of the design notes, 2-D and 3-D), and
+:func:`to_toml` writes any case dict back to TOML.
 
 The dict is exactly what ``tomllib`` returns for the equivalent file, so a built case and a
 written one are interchangeable: ``tomllib.loads(to_toml(case)) == case`` for every case dict
