@@ -76,7 +76,8 @@ class LinearModel:
                        └ −M⁻¹Q   −M⁻¹P  ┘
     """
 
-    #: the reference motion this belongs to (mbseig.studies.reference): quadratic M, P, Q with its basis N
+    #: the reference motion this belongs to (mbseig.studies.reference): quadratic M, P, Q with its
+    #: basis N
     kind = "rest"
 
     M: np.ndarray
@@ -201,8 +202,9 @@ def _linearize(model, eq, rank_tol, constraint_stiffness, sparse, reference=None
     if rank_tol is None:
         rank_tol = float(eq.tolerances.get("rank_tol", 1e-10))
     if isinstance(model, LinearCase):
-        return LinearModel(M=model.M, P=model.P, Q=model.Q, N=np.eye(model.n), q0=np.zeros(model.n),
-                           lam0=np.zeros(0), coordinate_names=model.coordinate_names, name=model.name,
+        return LinearModel(M=model.M, P=model.P, Q=model.Q, N=np.eye(model.n),
+                           q0=np.zeros(model.n), lam0=np.zeros(0),
+                           coordinate_names=model.coordinate_names, name=model.name,
                            parameters=model.parameters, tolerances={"rank_tol": rank_tol},
                            B=np.zeros((model.n, 0)), C=np.zeros((0, 2 * model.n)),
                            D=np.zeros((0, 0)), independent=tuple(model.coordinate_names))
@@ -222,8 +224,8 @@ def _linearize(model, eq, rank_tol, constraint_stiffness, sparse, reference=None
             tolerances={"rank_tol": rank_tol, "sparse": True}, constraint_jacobian=G,
             display=Displayed(model, q0))
     G = model.phi_q(q0, dense=True)
-    N, rank, independent, sigma = (continuous_null_basis(G, model.n, rank_tol, model.coordinate_names,
-                                                         reference)
+    N, rank, independent, sigma = (continuous_null_basis(G, model.n, rank_tol,
+                                                         model.coordinate_names, reference)
                                    if basis is None or reference is not None else basis)
     Md, Cd, Kd = model.mass_matrix(q0).toarray(), C, K
     if model.n_constraints == 0:

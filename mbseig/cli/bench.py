@@ -6,8 +6,10 @@ from __future__ import annotations
 def register(sub):
     p = sub.add_parser("bench", help="measure speed against accuracy; write reports/benchmarks.md")
     p.add_argument("--quick", action="store_true", help="small sizes only (about a minute)")
-    p.add_argument("--out", default=None, metavar="DIR", help="output directory (default: reports/)")
-    p.add_argument("--repeats", type=int, default=None, help="runs per point (median); default 3, quick 1")
+    p.add_argument("--out", default=None, metavar="DIR",
+                   help="output directory (default: reports/)")
+    p.add_argument("--repeats", type=int, default=None,
+                   help="runs per point (median); default 3, quick 1")
     p.add_argument("--threads", type=int, default=1,
                    help="BLAS threads during the measurements (0: library default)")
     p.add_argument("--sections", nargs="+", default=None,

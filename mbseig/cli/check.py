@@ -230,7 +230,8 @@ def run_periodic(args, spec) -> int:
           f"{res.multiplier.imag:+.8g}j, |mu| = {res.modulus:.10g}")
     print(f"nonlinear simulation along its Floquet vector (amplitude {res.amplitude:.3g}, "
           f"{res.periods} periods): growth per period {res.growth:.10g}, relative error "
-          f"{res.relative_error:.2e} (tolerance {res.rtol:g}); off the subspace {res.off_subspace:.1e}")
+          f"{res.relative_error:.2e} (tolerance {res.rtol:g}); off the subspace "
+          f"{res.off_subspace:.1e}")
     print("check: passed" if res.passed else "check: FAILED")
     return 0 if res.passed else 1
 

@@ -195,7 +195,8 @@ def print_reactions(rows):
     their coordinates) are summarized, not listed."""
     if not rows:
         return
-    fmt = lambda v: "(" + ", ".join(f"{x:.6g}" for x in v) + ")"
+    def fmt(v):
+        return "(" + ", ".join(f"{x:.6g}" for x in v) + ")"
 
     def _carried_text(r):  # what the multipliers carry as the element states it, its bound
         c, err = r["reaction"], r["reaction_error"]

@@ -100,4 +100,5 @@ def rest_note(path, *, gravity=True) -> str:
     elif verdict == "neutral":
         found += (": a direction of zero stiffness remains (a joint that gravity does not "
                   "load, such as one about the vertical), so no rest position is strictly stable")
-    return f"{head}, so gravity alone sets the rest position; the equilibrium found is {found}; {HOLD}"
+    return (f"{head}, so gravity alone sets the rest position; the equilibrium found is "
+            f"{found}; {HOLD}")

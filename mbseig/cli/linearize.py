@@ -144,9 +144,11 @@ def write_arrays(path, arrays, meta):
             scipy.io.savemat(str(path), {**arrays, "coordinate_names": meta["coordinate_names"],
                                          **names})
         else:
-            path.write_text(json.dumps(jsonable({**meta, **{k: json_value(v) for k, v in arrays.items()}})))
+            path.write_text(json.dumps(jsonable({**meta, **{k: json_value(v)
+                                                            for k, v in arrays.items()}})))
     except OSError as exc:
-        raise CaseError(f"cannot write: {exc.strerror or exc}", file=str(path), element="--out") from None
+        raise CaseError(f"cannot write: {exc.strerror or exc}", file=str(path),
+                        element="--out") from None
 
 
 # ---- steady motion (steady reference: [motion] with speed)
@@ -154,7 +156,7 @@ def write_arrays(path, arrays, meta):
 # E Ẋ = A X about the motion, X = [x; z] (d positions on the holonomic manifold, k independent
 # velocities; :func:`mbseig.studies.steady.linearize_steady`), with the maps back to the full
 # coordinates, q = q₀(t) + N x and [q̇ − q̇₀; Ω − Ω₀] = [N 0; 0 I](T z − S x).
-# 
+#
 # The pencil is also written in mbseig's quadratic convention, (M s² + P s + Q) X = 0 with M = 0,
 # P = E, Q = −A (``dof`` = d + k, the size of X), and E is invertible, so ``A_state`` = E⁻¹A is the
 # state matrix.  ``--out FILE`` writes .npz, .mat or .json.
@@ -197,7 +199,8 @@ def run_steady(args, spec) -> int:
 
             savemat(p, arrays)
         else:
-            p.write_text(json.dumps(jsonable({**info, **{k: v.tolist() for k, v in arrays.items()}}),
+            p.write_text(json.dumps(jsonable({**info,
+                                              **{k: v.tolist() for k, v in arrays.items()}}),
                                     allow_nan=False))
     if args.json:
         print_json({**info, **{k: v.tolist() for k, v in arrays.items()}})
@@ -213,9 +216,9 @@ def run_steady(args, spec) -> int:
 # ---- periodic motion (periodic reference: [motion] with period)
 # ``mbseig linearize CASE`` on a periodic case: the linearization along the periodic
 # reference motion, projected on the constraints.
-# 
+#
 #     x = (y, p),   δq = N(t) y,   p = Nᵀ M δq̇,   ẋ = A(t) x,   A(t + T) = A(t)
-# 
+#
 # ``A`` holds A(t_k) at the ``times`` t_k = kT/S of one period (S × 2r × 2r; the first-order
 # periodic system whose monodromy gives the Floquet multipliers, mbseig.studies.floquet_paths),
 # and ``M``, ``P``, ``Q`` are the reduced matrices NᵀMN, NᵀCN, NᵀKN at t = 0 (frozen at that

@@ -31,7 +31,8 @@ def register(sub):
     p.add_argument("--solver", default="auto", choices=["auto", *SOLVERS],
                    help="eigensolver path (default: chosen by structure)")
     p.add_argument("--n-modes", type=int, default=None, metavar="K",
-                   help="only the K modes nearest the target (sparse shift-invert path, large models)")
+                   help="only the K modes nearest the target (sparse shift-invert path, "
+                        "large models)")
     p.add_argument("--target-hz", type=float, default=None, metavar="F",
                    help="with --n-modes: the modes whose natural frequency omega_n/2pi = "
                         "|s|/2pi is nearest F Hz (default 0: the lowest)")
@@ -163,7 +164,7 @@ def run_rest(args, spec) -> int:
         if sens and sens[0]:  # the zero rule on each ∂s/∂p with its propagated bound
             print(f"mode {k + 1} ds/dp: " + "; ".join(
                 f"{p} {fmt_complex(v[k], b[k], b[k], '.4g')}"
-                for (p, v), b in zip(sens[0].items(), sens[1].values())))
+                for (p, v), b in zip(sens[0].items(), sens[1].values(), strict=True)))
         if energy is not None:
             for kind in ("kinetic", "potential"):
                 parts = energy[k][kind]
@@ -249,7 +250,7 @@ def motion_direction(d) -> str:
 # ``mbseig modes CASE`` on a periodic case (DESIGN §8, "Periodic motions"): the reference
 # motion, the Floquet multipliers with their error bounds and the verdict; the frozen-time
 # eigenvalues are listed beside them as what a frozen-time analysis would (wrongly) conclude.
-# 
+#
 # ``--n-modes K``: the K multipliers of largest modulus by the partial method (Arnoldi on the
 # monodromy operator, :mod:`mbseig.studies.periodic_partial`), without forming the monodromy
 # matrix; the frozen-time summary is left out (it needs every eigenvalue at 64 instants).
@@ -278,7 +279,8 @@ def _run_partial(args, spec) -> int:
 def _table(fl):
     print(f"{'k':>3} {'multiplier':>30} {'|mu|':>12} {'bound':>9} {'exponent':>28}")
     T = float(fl["period"])
-    for k, (mu, ex, b) in enumerate(zip(fl["multipliers"], fl["exponents"], fl["error_bounds"])):
+    for k, (mu, ex, b) in enumerate(zip(fl["multipliers"], fl["exponents"], fl["error_bounds"],
+                                        strict=True)):
         m = abs(complex(*mu))
         be = b / (m * T) if m else b  # the exponent's bound, to first order
         # the zero rule (mbseig.display): a part within its bound of 0 reads 0

@@ -18,7 +18,8 @@ def register(sub):
     grp.add_argument("--all-configs", action="store_true",
                      help="every configuration of the case, with the comparison table and the "
                           "studies of its [report] table")
-    p.add_argument("--out", default=None, metavar="DIR", help="output directory (default reports/CASE)")
+    p.add_argument("--out", default=None, metavar="DIR",
+                   help="output directory (default reports/CASE)")
     p.add_argument("--no-check", action="store_true", help="skip the time-domain check")
     p.add_argument("--no-studies", action="store_true", help="skip the [[report.studies]] sweeps")
     p.add_argument("--no-sensitivities", action="store_true",

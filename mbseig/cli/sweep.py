@@ -37,7 +37,8 @@ def register(sub):
                    help="output directory (default: sweep-CASE[-CONFIG])")
     add_study_options(p)
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="run the points on a Dask distributed scheduler (pip install 'mbseig[dask]')")
+                   help="run the points on a Dask distributed scheduler "
+                        "(pip install 'mbseig[dask]')")
     p.add_argument("--xtol-rel", type=float, default=1e-10, metavar="X",
                    help="boundary tolerance relative to the first axis' span (default 1e-10)")
     p.add_argument("--no-continuation", dest="continuation", action="store_false",
@@ -232,7 +233,7 @@ def _write(args, spec, res, name, values, folder) -> int:
 # ``mbseig sweep CASE --param NAME=START:STOP:COUNT`` on a periodic case: the Floquet verdict
 # at every point and the ``boundaries`` where it changes (flip / fold / secondary, loss /
 # recovery), located to 1e-8 relative; ``--out DIR`` also gets ``sweep.json``.
-# 
+#
 # With two ranges (``--param A=...:...:n --param B=...:...:m``) it writes the stability chart over
 # the grid (the Ince–Strutt chart of a Mathieu-type system): ``chart.png`` and ``chart.json`` (the
 # verdict, max|μ| and the deciding bound at every point, and where the verdict changes along
@@ -299,7 +300,8 @@ def _periodic_sweep(args, spec, ranges, fixed, study) -> int:
         print(f"  {name} = {pt['value']:<14.8g} {pt['verdict']:<9} max|mu| = "
               f"{pt['spectral_radius']:.10g} ± {pt['error_bound']:.1e}")
     for b in out["boundaries"]:
-        print(f"boundary: {name} = {b['value']:.12g} ({b['kind']}, {b['stability']}; {b['method']})")
+        print(f"boundary: {name} = {b['value']:.12g} ({b['kind']}, {b['stability']}; "
+              f"{b['method']})")
     if not out["boundaries"]:
         print("no verdict change on this grid")
     return 0

@@ -1,6 +1,7 @@
 """Dense paths for the quadratic eigenvalue problem (M s² + P s + Q) x = 0 (docs/design.md).
 
-Registered in :data:`mbseig.eigen.contract.SOLVERS` (the kernels: :mod:`~mbseig.eigen.dense_paths`); ``auto`` picks by structure and conditioning
+Registered in :data:`mbseig.eigen.contract.SOLVERS` (the kernels:
+:mod:`~mbseig.eigen.dense_paths`); ``auto`` picks by structure and conditioning
 (:func:`choose_solver`) and the result says which path ran and why:
 
 ``eigh``          P = 0, M and Q symmetric, M positive definite: ``eigh(Q, M)``, s = ±√(−ω²).
@@ -303,7 +304,8 @@ def solve_qep(M, P, Q, *, solver: str = "auto", sym_tol: float = 1e-13,
     M, P, Q = _dense(M, "M"), _dense(P, "P"), _dense(Q, "Q")
     n = M.shape[0]
     if not (M.ndim == P.ndim == Q.ndim == 2 and M.shape == P.shape == Q.shape == (n, n)):
-        raise SolverError(f"M, P, Q must be square and of one size, got {M.shape}, {P.shape}, {Q.shape}")
+        raise SolverError(f"M, P, Q must be square and of one size, got {M.shape}, {P.shape}, "
+                          f"{Q.shape}")
     if not all(np.all(np.isfinite(A)) for A in (M, P, Q)):
         raise SolverError("M, P and Q must be finite")
     complex_problem = any(np.iscomplexobj(A) for A in (M, P, Q))
@@ -319,7 +321,7 @@ def solve_qep(M, P, Q, *, solver: str = "auto", sym_tol: float = 1e-13,
     if scaled:  # factors in logarithms: γ²δ, γδ, δ may each be out of range, the products not
         M, P, Q = _scaled(M, 2 * lg + ld), _scaled(P, lg + ld), _scaled(Q, ld)
     norms = (fro(M), fro(P), fro(Q)) if scaled else norms0
-    memo = {"fro": dict(zip("MPQ", norms))}
+    memo = {"fro": dict(zip("MPQ", norms, strict=True))}
     name, reason, extras = choose_solver(M, P, Q, sym_tol=sym_tol, rayleigh_tol=rayleigh_tol,
                                          memo=memo, companion_cond=companion_cond)
     if scaled and SOLVERS[name].divides_by_mass:  # no mass normalization of a problem scaled
@@ -369,9 +371,12 @@ def solve_qep(M, P, Q, *, solver: str = "auto", sym_tol: float = 1e-13,
     keep = np.isfinite(s)  # |s| beyond the double range: an infinite eigenvalue to precision
     if not np.all(keep):
         details["beyond_range"] = int(np.sum(~keep))
-        pick = lambda a: a[..., keep] if a is not None else None
+        def pick(a):
+            return a[..., keep] if a is not None else None
+
         sol = replace(sol, vectors=sol.vectors[:, keep], backward_error=sol.backward_error[keep],
-                      left_vectors=pick(sol.left_vectors), n_infinite=sol.n_infinite + int(np.sum(~keep)))
+                      left_vectors=pick(sol.left_vectors),
+                      n_infinite=sol.n_infinite + int(np.sum(~keep)))
         s, condition, real_error = s[keep], condition[keep], pick(real_error)
     return replace(sol, eigenvalues=s, condition=condition,
                    real_error=real_error, norms=norms0, details=details, n_dof=n,

@@ -39,8 +39,8 @@ def read(listing, k):
 
 def mode_table(listing):
     """("table", head, rows) of the listing: eigenvalue parts, both frequencies, ζ, δ, the
-    margin δ − tol (δ as read; "–" for a mode not counted), stability, kind and the coordinates that move most (the
-    declared direction of a rigid-body mode by construction)."""
+    margin δ − tol (δ as read; "–" for a mode not counted), stability, kind and the coordinates
+    that move most (the declared direction of a rigid-body mode by construction)."""
     rows = []
     for k in range(len(listing)):
         s = complex(listing.eigenvalues[k])
@@ -106,8 +106,9 @@ def mode_label(k, listing):
 
 def check_table(res, listing):
     """("table", head, rows) of a time-domain check (:class:`mbseig.check.ModeCheck` per
-    mode): predicted values with their bounds (the check's own, else the listing's), measured values with what the run
-    resolves of them (``resolution_delta`` / ``resolution_omega``, when the check gives it)."""
+    mode): predicted values with their bounds (the check's own, else the listing's), measured
+    values with what the run resolves of them (``resolution_delta`` / ``resolution_omega``, when
+    the check gives it)."""
     rows = []
     for m in res.modes:
         k = m.index - 1

@@ -47,7 +47,7 @@ def multiplier_figure(rep):
     th = np.linspace(0, 2 * math.pi, 361)
     ax.plot(np.cos(th), np.sin(th), color="0.4", lw=1)
     colors = {"stable": "#2b8cbe", "critical": "#6a51a3", "unstable": "#de2d26"}
-    for m, b in zip(mu, fl["error_bounds"]):
+    for m, b in zip(mu, fl["error_bounds"], strict=True):
         st = "unstable" if abs(m) - b > 1 else "stable" if abs(m) + b < 1 else "critical"
         m = shown(m, b)
         ax.plot(m.real, m.imag, "o", color=colors[st], ms=7, mfc="none", mew=1.6)
@@ -106,7 +106,8 @@ def _multiplier_rows(fl, condition, ebounds):
     """One row a multiplier: μ (each part within its bound b of 0 reads 0), |μ|, b, κ, the
     exponent ln(μ)/T (parts within the propagated bound read 0), the stability."""
     rows = []
-    for k, (m, ex, b) in enumerate(zip(fl["multipliers"], fl["exponents"], fl["error_bounds"])):
+    for k, (m, ex, b) in enumerate(zip(fl["multipliers"], fl["exponents"], fl["error_bounds"],
+                                       strict=True)):
         mod = abs(complex(*m))
         st = "unstable" if mod - b > 1 else "stable" if mod + b < 1 else "critical"
         eb = ebounds[k] if k < len(ebounds) else None
@@ -171,7 +172,8 @@ def periodic_blocks(rep, case, out_dir):
                   "largest of the difference between two monodromy estimates (rtol "
                   f"{fl['tolerances'][0]:g} and {fl['tolerances'][1]:g}, the second on a shifted "
                   "sampling), the condition number times their difference, |μ| times the "
-                  f"mismatch of Liouville's identity ({fl['det_check']:.1e}) and a rounding floor.")]
+                  f"mismatch of Liouville's identity ({fl['det_check']:.1e}) and a rounding "
+                  "floor.")]
     body += scope_sentences([(tag, verdict)])
     body += [("p", f"Frozen-time eigenvalues ({rep.frozen['instants']} instants): max Re s = "
                    f"{fmt(rep.frozen['max_real_part'], rep.frozen_bound, '.4g')}, which would say "

@@ -1,9 +1,10 @@
 """Rendering of report blocks: Markdown (figures linked) and self-contained HTML (figures as
 PNG data URIs).  Blocks: ("h1"|"h2"|"h3"|"p"|"pre", text) | ("table", header, rows) |
-("img", path, caption) | ("gallery", [(path, caption), ...]) | ("toc", [(level, heading text), ...]) (a table of contents linking
-the headings; both renderers give every h2/h3 the same GitHub-style anchor).  The HTML has
-print styles (@media print): full width, no page break inside a figure or a table, each
-configuration on a new page, link targets spelled out in the contents."""
+("img", path, caption) | ("gallery", [(path, caption), ...]) |
+("toc", [(level, heading text), ...]) (a table of contents linking the headings; both
+renderers give every h2/h3 the same GitHub-style anchor).  The HTML has print styles
+(@media print): full width, no page break inside a figure or a table, each configuration on a
+new page, link targets spelled out in the contents."""
 
 from __future__ import annotations
 
@@ -75,8 +76,11 @@ def render_markdown(blocks, out_dir) -> str:
     return "\n".join(lines).rstrip() + "\n"
 
 
-_CSS = """body{font-family:sans-serif;max-width:1200px;margin:2em auto;padding:0 1em;color:#222;line-height:1.4}
-table{border-collapse:collapse;margin:0.6em 0;font-size:0.85em;display:block;overflow-x:auto;max-width:100%}
+_CSS = """\
+body{font-family:sans-serif;max-width:1200px;margin:2em auto;padding:0 1em;color:#222;\
+line-height:1.4}
+table{border-collapse:collapse;margin:0.6em 0;font-size:0.85em;display:block;overflow-x:auto;\
+max-width:100%}
 td,th{border:1px solid #bbb;padding:2px 6px;vertical-align:top}
 th{background:#eee}img{max-width:100%;height:auto;border:1px solid #ddd}figure{margin:1em 0}
 figcaption{font-size:0.85em;color:#555}code{background:#f4f4f4}

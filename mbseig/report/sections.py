@@ -37,7 +37,8 @@ def configuration_blocks(case, study, out_dir, *, run_check, stem, units, animat
     blocks.append(("table", ["quantity", "value"], [
         ["coordinates", str(model.n)],
         ["constraints", str(model.n_constraints)],
-        ["redundant constraints", f"{eq.n_redundant}" + (f" ({'; '.join(eq.redundant)})" if eq.redundant else "")],
+        ["redundant constraints",
+         f"{eq.n_redundant}" + (f" ({'; '.join(eq.redundant)})" if eq.redundant else "")],
         ["degrees of freedom", str(lin.dof)],
         ["equilibrium residual", f"{eq.residual:.1e} ({eq.iterations} Newton iterations)"],
         ["eigensolver", f"{md.solver} ({md.solver_reason})"],
@@ -48,9 +49,11 @@ def configuration_blocks(case, study, out_dir, *, run_check, stem, units, animat
         blocks.append(("h3", "Equilibrium"))
         blocks.append(("p", statics_text(eq)))
     if rep["posture"]:
-        blocks.append(("table", ["joint", "flexion [deg]", "range [deg]", "margin [deg]", "in range"],
+        blocks.append(("table",
+                       ["joint", "flexion [deg]", "range [deg]", "margin [deg]", "in range"],
                        [[p["name"], fmt(p["angle_deg"], 6),
-                         "–" if p["range_deg"] is None else f"{p['range_deg'][0]:g} … {p['range_deg'][1]:g}",
+                         "–" if p["range_deg"] is None
+                         else f"{p['range_deg'][0]:g} … {p['range_deg'][1]:g}",
                          fmt(p["margin_deg"], 4), "yes" if p["in_range"] else "**NO**"]
                         for p in rep["posture"]]))
         flags = rep["out_of_range"]
@@ -60,7 +63,8 @@ def configuration_blocks(case, study, out_dir, *, run_check, stem, units, animat
         sets = "; ".join(
             f"{s['element']}: " + (f"free length {s['free_length'] * 1e3:.6g} mm, length "
                                    f"{s['length'] * 1e3:.6g} mm, tension {s['tension']:.6g} N"
-                                   if "free_length" in s else f"locked at {s['length'] * 1e3:.6g} mm")
+                                   if "free_length" in s
+                                   else f"locked at {s['length'] * 1e3:.6g} mm")
             for s in d["sets"])
         unloaded = d.get("unloaded") or []
         held = (f" The command is set on the device without {', '.join(unloaded)} and held as "
@@ -77,7 +81,8 @@ def configuration_blocks(case, study, out_dir, *, run_check, stem, units, animat
     def rfmt(x, digits):  # a reaction within its error bound is rounding residue: 0
         return fmt(x, digits, bound=zero)
     if rep["pins"]:
-        blocks.append(("table", ["pin (force on the outboard bodies)", "point", "Fx [N]", "Fy [N]", "|F| [N]"],
+        blocks.append(("table", ["pin (force on the outboard bodies)", "point", "Fx [N]", "Fy [N]",
+                                 "|F| [N]"],
                        [[p["name"], p["point"], rfmt(p["force"][0], 5), rfmt(p["force"][1], 5),
                          rfmt(p["magnitude"], 5)] for p in rep["pins"]]))
     rows, wrenches, internal = [], [], []
@@ -214,7 +219,8 @@ def statics_text(eq):
     st = eq.static or {}
     verdict = st.get("verdict")
     stab = {"stable": "statically stable (the reduced tangent stiffness is positive definite)",
-            "unstable": f"statically UNSTABLE ({st.get('index')} direction(s) of negative stiffness)",
+            "unstable": f"statically UNSTABLE ({st.get('index')} direction(s) of negative "
+                        "stiffness)",
             "neutral": "statically neutral (a zero stiffness)",
             "undetermined": (("statics cannot decide (an eigenvalue of the reduced stiffness "
                               "within its tolerance of zero, so the sign of its determinant is "
@@ -244,13 +250,15 @@ def check_blocks(res, run_check, listing):
     blocks.append(("p", f"Each mode is excited alone in the nonlinear model ({res.integrator}, "
                         f"rtol {tol['ode_rtol']:g}) and its modal coordinate fitted; tolerances: δ "
                         f"{tol['delta_rtol']:g} relative, ω {tol['omega_rtol']:g} relative. "
-                        f"Result: {'all passed' if res.passed else 'FAILED for ' + str(res.failed)}."))
+                        "Result: "
+                        f"{'all passed' if res.passed else 'FAILED for ' + str(res.failed)}."))
     blocks.append(check_table(res, listing))
     return blocks
 
 
 def _wrench_row(c, rfmt):
-    """A joint's row of the report's wrench table (:func:`mbseig.statics.reactions.reaction_forces`)."""
+    """A joint's row of the report's wrench table
+    (:func:`mbseig.statics.reactions.reaction_forces`)."""
     def vec(v):
         return "(" + ", ".join(rfmt(x, 5) for x in v) + ")"
     err = c.get("error") or {}

@@ -106,7 +106,8 @@ def _shape_blocks(rep, out_dir, tag):
     note = (f"The {rigid} rigid-body mode{'s' if rigid > 1 else ''} by construction (named in "
             f"the table) {'are' if rigid > 1 else 'is'} not drawn. " if rigid else "")
     if len(drawn) < len(listing) - rigid:
-        note += f"The figure draws the lowest {len(drawn)} of the {len(listing) - rigid} counted modes."
+        note += (f"The figure draws the lowest {len(drawn)} of the {len(listing) - rigid} counted "
+                 "modes.")
     labels = [mode_label(k, listing) for k in drawn]
     fig = spatial_modes(a.model, a.state.q, rep.shapes[:, :len(drawn)], labels,
                         title=f"{tag}: steady motion (black) and mode shapes (±, red/blue)",

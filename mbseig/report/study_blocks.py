@@ -39,12 +39,14 @@ def study_section(data, units):
     rows = []
     for c in sw.critical:
         first, rom, line = c["first"], c["rom"], c["line"]
-        label = ", ".join(f"{k} = " + with_unit(f"{v:g}", units.get(k)) for k, v in line.items()) or "–"
+        label = ", ".join(f"{k} = " + with_unit(f"{v:g}", units.get(k))
+                          for k, v in line.items()) or "–"
         freq = "–" if first is None else f"{abs(first['eigenvalue'][1]) / (2 * math.pi):.5g}"
         band = ("–" if first is None or first["band"][0] == first["band"][1] else
                 f"{first['band'][0]:.10g} … {first['band'][1]:.10g}")
         rows.append([label,
-                     "stable over the range" if first is None else with_unit(f"{first['value']:.10g}", unit),
+                     "stable over the range" if first is None
+                     else with_unit(f"{first['value']:.10g}", unit),
                      "–" if first is None else first["kind"] + (
                          "" if first.get("event") == "crossing" else f" ({first['event']})"),
                      freq, band,
@@ -63,8 +65,8 @@ def study_section(data, units):
                         f"found); modes tracked by MAC; each boundary located where Re s = 0 of "
                         f"the crossing mode (or where the two eigenvalues of an undamped pair "
                         f"collide) by Brent's method to xtol = {xtol:.3g}, with the band where "
-                        f"the mode is critical within its tolerance beside it; range-of-motion exit "
-                        f"by Brent's method on the smallest joint margin to the same xtol."))
+                        f"the mode is critical within its tolerance beside it; range-of-motion "
+                        f"exit by Brent's method on the smallest joint margin to the same xtol."))
     u = f" [{unit}]" if unit and unit != "1" else ""
     blocks.append(("table", ["line", f"critical {name}", "instability",
                              "ω_d/2π at onset [Hz]", f"critical band{u}",
@@ -77,9 +79,11 @@ def study_section(data, units):
                             f"from the secant prediction of the last two; "
                             f"{len(pts)} of {len(c['points'])} points found):"))
         ua = units.get(c["along"])
-        blocks.append(("table", [c["along"] + (f" [{ua}]" if ua and ua != "1" else " [–]" if ua else ""),
+        blocks.append(("table", [c["along"] + (f" [{ua}]" if ua and ua != "1"
+                                               else " [–]" if ua else ""),
                                  f"critical {name}{u}", "test function"],
-                       [[f"{p['p2']:.6g}", f"{p['value']:.10g}", p.get("test") or "–"] for p in pts]))
+                       [[f"{p['p2']:.6g}", f"{p['value']:.10g}", p.get("test") or "–"]
+                        for p in pts]))
     captions = {"root_locus": "root locus (one colour a mode, numbered as the mode tables at the "
                               "first value; one line style a line)",
                 "modes_vs_parameter": "damped frequency ω_d/2π and damping δ of each mode",
@@ -99,13 +103,14 @@ def compare_blocks(cmp):
     pairs = cmp.pairs
     bounds = cmp.bounds or [((None, None), (None, None))] * len(pairs)
     rows = []
-    for k, ((a, b), (ba, bb)) in enumerate(zip(pairs, bounds)):
+    for k, ((a, b), (ba, bb)) in enumerate(zip(pairs, bounds, strict=True)):
         rel = abs(a - b) / abs(a) if a is not None and b is not None and abs(a) > 0 else None
         rows.append([str(k + 1), "–" if a is None else fmt_complex(a, *ba),
                      "–" if b is None else fmt_complex(b, *bb),
                      "–" if rel is None else f"{rel:.3g}"])
-    return [("p", f"Eigenvalues of {cmp.config} with the constraint-force stiffness Σ λ ∇²Φ (correct) "
-                  f"and without it (the common omission); largest multiplier |λ| = {cmp.lam_max:.4g}. "
+    return [("p", f"Eigenvalues of {cmp.config} with the constraint-force stiffness Σ λ ∇²Φ "
+                  f"(correct) and without it (the common omission); largest multiplier |λ| = "
+                  f"{cmp.lam_max:.4g}. "
                   f"Verdict with: {cmp.verdict_with}; without: {cmp.verdict_without}."),
             ("table", ["#", "s with Σλ∇²Φ", "s without", "|Δs|/|s|"], rows)]
 
@@ -166,7 +171,7 @@ def _unbalance_blocks(rs, out_dir, title, unit, critical):
                     f"x₁ (x₁(t) = |X₁| cos(Ωt + phase)) at every rotor station and output; the "
                     f"whole table (every speed) is in `{out_dir.name}/{csv.name}`.")]
     rows = []
-    for v, om, st, a, b, big, u in ub.peaks():
+    for v, om, st, a, _b, big, u in ub.peaks():
         rows.append([st, with_unit(fmt(v, 6), unit), fmt(om, 6), f"{big:.4e} {u or ''}".strip(),
                      "–" if a == 0 else f"{np.degrees(np.angle(a)):.1f}"])
     hits = ub.resonance_values()

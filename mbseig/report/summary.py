@@ -55,13 +55,15 @@ def summary_blocks(summaries, study_sums, units, sensitivities=None, *, out_dir=
                 where = ", ".join(f"{k} = " + with_unit(f"{v:g}", units.get(k))
                                   for k, v in c["line"].items())
                 if c["critical"] is None:
-                    margins.append(f"{name}: no boundary in the swept range" + (f" ({where})" if where else ""))
+                    margins.append(f"{name}: no boundary in the swept range"
+                                   + (f" ({where})" if where else ""))
                 elif current is not None and isinstance(current, (int, float)):
                     margins.append(margin_text(name, float(current), c["critical"], unit, c["kind"],
                                                verdict=s["verdict"])
                                    + (f" at {where}" if where and len(own) > 1 else ""))
                 else:
-                    margins.append(f"{name}* = {with_unit(fmt(c['critical'], 6), unit)} ({c['kind']})")
+                    margins.append(f"{name}* = {with_unit(fmt(c['critical'], 6), unit)} "
+                                   f"({c['kind']})")
                 if c.get("rom"):
                     margins.append(f"{c['rom']['joint']} leaves its range of motion at {name} = "
                                    + with_unit(fmt(c["rom"]["value"], 6), unit))
@@ -270,7 +272,8 @@ def findings(study_sums, units):
                 small = small + [{"critical": f_min, "line": {"damping_scale": s_min}}]
         if zero is not None:
             msg += f"The undamped flutter load (damping scale 0) is {val(zero['critical'])}. "
-            lim = min(small, key=lambda c: c["line"]["damping_scale"])["critical"] if small else None
+            lim = (min(small, key=lambda c: c["line"]["damping_scale"])["critical"] if small
+                   else None)
             if lim is not None and lim < zero["critical"] * (1 - 1e-6):
                 msg += (f"As the damping tends to zero the critical load tends to about "
                         f"{with_unit(f'{lim:.5g}', u)}, "

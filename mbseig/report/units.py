@@ -54,8 +54,9 @@ def _is_unit_token(tok: str) -> bool:
     if not tok:
         return False
     parts = re.split(r"[/·*]", tok)
-    return all(p in _UNIT_WORDS or (_UNIT_TOKEN.match(p) and re.sub(r"(\^-?\d+|\*\*-?\d+|[²³])$", "", p)
-                                    in _UNIT_WORDS) for p in parts if p)
+    return all(p in _UNIT_WORDS
+               or (_UNIT_TOKEN.match(p) and re.sub(r"(\^-?\d+|\*\*-?\d+|[²³])$", "", p)
+                   in _UNIT_WORDS) for p in parts if p)
 
 
 def _comment_units(text: str) -> dict:

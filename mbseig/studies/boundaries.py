@@ -110,7 +110,7 @@ class Evaluator:
         a = self.anchors
         if len(a) == 1:
             return a[0][1]
-        for (p0, q0), (p1, q1) in zip(a, a[1:]):
+        for (p0, q0), (p1, q1) in zip(a, a[1:], strict=False):
             if p0 <= p <= p1:
                 w = (p - p0) / (p1 - p0) if p1 != p0 else 0.0
                 return (1 - w) * q0 + w * q1

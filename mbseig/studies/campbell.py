@@ -149,7 +149,8 @@ class CampbellResult:
                 "track": j,
                 "frequency": [None if np.isnan(v) else float(abs(v.imag)) for v in col],
                 "delta": [None if np.isnan(v) else float(-v.real) for v in col],
-                "log_decrement": [None if np.isnan(x) else float(x) for x in self.log_decrement[:, j]],
+                "log_decrement": [None if np.isnan(x) else float(x)
+                                  for x in self.log_decrement[:, j]],
                 "log_decrement_bound": [None if np.isnan(x) else float(x) for x in bound[:, j]],
                 "whirl": [self.whirl[k][j] for k in range(len(self.values))],
                 "kind": [self.kind[k][j] for k in range(len(self.values))],
@@ -169,7 +170,8 @@ def campbell(case, parameter, values, *, config=None, fixed=None, harmonic=1.0, 
     spec = as_spec(case)
     values = np.asarray(values, float)
     if values.size < 2:
-        raise CaseError("a Campbell diagram needs at least two parameter values", element="campbell")
+        raise CaseError("a Campbell diagram needs at least two parameter values",
+                        element="campbell")
     fixed = dict(fixed or {})
     calls = [((spec, config, {**fixed, parameter: float(v)}), {}) for v in values]
     xtol = xtol_rel * abs(float(values[-1] - values[0]))
@@ -211,7 +213,7 @@ def campbell(case, parameter, values, *, config=None, fixed=None, harmonic=1.0, 
                 meta.append(j)
         found = runner.map(_crossing, searches, "critical speeds")
     critical = []
-    for c in sorted(({**res, "mode": j} for j, res in zip(meta, found)),
+    for c in sorted(({**res, "mode": j} for j, res in zip(meta, found, strict=True)),
                     key=lambda c: c["value"]):
         # two tracks that followed one mode to the same crossing give it once
         if not any(abs(c["value"] - d["value"]) <= 10 * xtol and c["whirl"] == d["whirl"]

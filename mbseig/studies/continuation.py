@@ -260,7 +260,7 @@ def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rto
              f"{state['held']}" if state["held"] else "resolved at every value")
     if shared is None and key is not None and len(grid) == len(values) and all(
             how == "continuation" and eq.static.get("verdict") != "unstable"
-            and pt.get("error") is None for (eq, how, _, _), pt in zip(grid, points)):
+            and pt.get("error") is None for (eq, how, _, _), pt in zip(grid, points, strict=True)):
         for old in list(_SHARED)[:-1]:  # (the lines of one sweep follow each other)
             _SHARED.pop(old, None)
         _SHARED[key] = {"case": case, "params": dict(params), "fam": fam, "branch": branch,
@@ -317,7 +317,8 @@ def _shared_statics(key, case, config, params, axis, values, state):
         model0 = state["build"](values[0])
         for name in names:
             su = ScalarUpdate(case.data, config, {**params, axis: float(values[0])}, name, model0)
-            if su.reason is not None or any(f != "damping" for *_, keys in su.updates for f in keys):
+            if su.reason is not None or any(f != "damping"
+                                            for *_, keys in su.updates for f in keys):
                 return None
     except (MbseigError, KeyError, TypeError, ValueError):
         return None
@@ -359,7 +360,8 @@ def _diagram(fam, branch, points, model_at, point_params, opts, postures):
     # a grid point's static verdict was judged by examine() on the same equilibrium; with
     # every constraint row followed, its multipliers are the same (unique), so it is reused
     grid_static = ({id(bp): points[k].get("static") for k, bp in enumerate(branch.grid)
-                    if bp is not None and points[k].get("static") in ("stable", "unstable", "neutral")}
+                    if bp is not None
+                    and points[k].get("static") in ("stable", "unstable", "neutral")}
                    if fam.rows.size == fam.m else {})
     for bp in branch.points:
         model = model_at(bp.p)

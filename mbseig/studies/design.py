@@ -147,9 +147,9 @@ def eigen_sensitivities(case_spec, *, config=None, params=None, analysis=None,
         h = REL_STEP * abs(value) if value != 0 else ABS_STEP
         plus = _reduced(spec, config, {**params, name: value + h}, ref)
         minus = _reduced(spec, config, {**params, name: value - h}, ref)
-        dM, dP, dQ = ((p_ - m_) / (2 * h) for p_, m_ in zip(plus, minus))
+        dM, dP, dQ = ((p_ - m_) / (2 * h) for p_, m_ in zip(plus, minus, strict=True))
         scale = max(np.abs(M).max(), np.abs(P).max(), np.abs(Q).max(), 1e-300)
-        if max(np.abs(p_ - m_).max() for p_, m_ in zip(plus, minus)) <= 1e-14 * scale:
+        if max(np.abs(p_ - m_).max() for p_, m_ in zip(plus, minus, strict=True)) <= 1e-14 * scale:
             continue  # does not enter the model
         ds = np.empty(s.size, complex)
         for k in range(s.size):

@@ -21,8 +21,9 @@ converges slowly for the kinks of a piecewise coefficient (a contact, a Procrust
 direct integration works for any callable A(t) and gives the error estimates used below.
 Cost: the state holds n² numbers and a dense A(t) X costs n³ per right-hand side, so one
 period costs O(steps · n³) beside the evaluations of A (a periodic case integrates Chebyshev
-interpolants of A, :mod:`mbseig.studies.floquet_chebyshev`, so those are few); :func:`floquet_partial` (Arnoldi on the monodromy operator, one
-integration of n numbers per product) costs O(steps · n²) per product and needs p ≥ 2k + 1
+interpolants of A, :mod:`mbseig.studies.floquet_chebyshev`, so those are few);
+:func:`floquet_partial` (Arnoldi on the monodromy operator, one integration of n numbers per
+product) costs O(steps · n²) per product and needs p ≥ 2k + 1
 products for the k largest |μ|, each of which evaluates A(t) again at every stage: it is faster
 only where evaluating A(t) is cheap beside n³ (measured for the projected systems of periodic
 cases in benchmarks/periodic_scaling.py and docs/periodic.md).

@@ -115,7 +115,7 @@ def chebyshev_system(system: LinearPeriodicSystem, *, rtol=INTERPOLATION_RTOL):
     trace = system.trace
     if trace is None:  # the exact trace of the original segments, not of the interpolants
         def trace(t, _segs=system.segments):
-            for a, b, A in _segs:
+            for _a, b, A in _segs:
                 if t <= b:
                     return float(np.trace(A(t)))
             return float(np.trace(_segs[-1][2](t)))

@@ -14,7 +14,7 @@ from .floquet import DEFAULT_RTOLS, floquet, monodromy
 __all__ = ["Boundary", "verdict_changes", "StabilityChart", "stability_chart"]
 
 
-# ---- verdict changes along a parameter ------------------------------------------------------------
+# ---- verdict changes along a parameter ------------------------------------------------------
 @dataclass(frozen=True)
 class Boundary:
     """Where the verdict changes: ``value`` of the parameter, ``kind`` flip (μ → −1), fold
@@ -42,11 +42,11 @@ def _char_function(kind, build, *, method, rtol):
     def g(p):
         A, T = build(p)
         Phi = monodromy(A, T, method=method, rtol=rtol)
-        I = np.eye(Phi.shape[0])
+        Id = np.eye(Phi.shape[0])
         if kind == "flip":
-            return float(np.linalg.det(I + Phi))
+            return float(np.linalg.det(Id + Phi))
         if kind == "fold":
-            return float(np.linalg.det(Phi - I))
+            return float(np.linalg.det(Phi - Id))
         return float(np.max(np.abs(la.eigvals(Phi))) - 1.0)
     return g
 
@@ -98,7 +98,7 @@ def verdict_changes(build, values, *, rel_tol=1e-8, method="DOP853", rtols=DEFAU
     return tuple(out)
 
 
-# ---- stability chart ----------------------------------------------------------------------------------
+# ---- stability chart ------------------------------------------------------------------------
 @dataclass(frozen=True)
 class StabilityChart:
     """Verdicts on a grid of two parameters (Ince–Strutt chart of a Mathieu-type system):

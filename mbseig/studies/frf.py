@@ -305,7 +305,7 @@ def write_frf(r: FRF, out_dir):
         lines = ["freq_hz,re,im,magnitude,phase_deg,resonance"]
         lines += [f"{f:.12g},{z.real:.12g},{z.imag:.12g},{abs(z):.12g},{ph:.12g},false"
                   if np.isfinite(z) else f"{f:.12g},,,,,true"
-                  for f, z, ph in zip(r.freq_hz, r.response, phase)]
+                  for f, z, ph in zip(r.freq_hz, r.response, phase, strict=True)]
         (out / "frf.csv").write_text("\n".join(lines) + "\n")
         bode_figure(r).savefig(out / "bode.png", dpi=100, metadata={"Software": None})
     except OSError as exc:

@@ -35,8 +35,8 @@ from .floquet_sparse import as_operator
 from .periodic_motion import reference_motion, sample_linearization
 
 __all__ = ["PeriodicAnalysis", "periodic_analysis", "PeriodicLinearization",
-           "periodic_linearization", "linearize_periodic", "timed_model", "period_of", "check_time_fields",
-           "forget_kept", "TIMED_SECTIONS"]
+           "periodic_linearization", "linearize_periodic", "timed_model", "period_of",
+           "check_time_fields", "forget_kept", "TIMED_SECTIONS"]
 
 TIMED_SECTIONS = ("points", "joints", "forces")  # where a numeric field may use t
 _UNTIMED_KEYS = {"name", "type", "repeat", "enabled", "fixed", "points", "bodies", "point",
@@ -59,7 +59,8 @@ def check_time_fields(data):
                     if bad and uses_time(fval):
                         raise CaseError(f"{fname} uses t, but it cannot depend on time",
                                         element=_label(key, k, item))
-        elif key not in ("motion", "expected", "source", "description", "title") and uses_time(value):
+        elif (key not in ("motion", "expected", "source", "description", "title")
+              and uses_time(value)):
             if isinstance(value, list):
                 for k, item in enumerate(value):
                     if uses_time(item):
@@ -186,7 +187,8 @@ class PeriodicLinearization:
     """The linearization along the reference motion, sampled twice (on N instants and on
     the grid shifted by half a step) as trigonometric series, and its projected systems."""
 
-    #: the reference motion this belongs to (mbseig.studies.reference): sampled A(t), the monodromy map
+    #: the reference motion this belongs to (mbseig.studies.reference): sampled A(t), the
+    #: monodromy map
     kind = "periodic"
 
     timed: object
@@ -252,7 +254,7 @@ def linearize_periodic(timed, ref, *, samples=SAMPLES, max_samples=1024, paramet
             fit = sample_linearization(ref, N, 0.0, sparse=True)
             fit2 = sample_linearization(ref, N, 0.5 * T / N, sparse=True)
             probe = np.linspace(0.0, T, 7)[1:-1] + 0.01 * T
-            diff = max(_relative_difference(a(t), b(t)) for a, b in zip(fit, fit2)
+            diff = max(_relative_difference(a(t), b(t)) for a, b in zip(fit, fit2, strict=True)
                        for t in probe)
             if diff <= 1e-10 or 2 * N > max_samples:
                 break

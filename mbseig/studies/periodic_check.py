@@ -64,7 +64,8 @@ def check_floquet(analysis, *, index=0, amplitude=1e-4, periods=8, rtol=1e-3,
     d = xs - ref.x0[None, :]
     c, *_ = np.linalg.lstsq(V, d.T, rcond=None)
     norms = np.linalg.norm(c, axis=0)
-    off = float(np.max(np.linalg.norm(d.T - V @ c, axis=0) / np.maximum(np.linalg.norm(d, axis=1), 1e-300)))
+    off = float(np.max(np.linalg.norm(d.T - V @ c, axis=0)
+                       / np.maximum(np.linalg.norm(d, axis=1), 1e-300)))
     K = periods
     while K > 1 and norms[K] > 100 * norms[0]:
         K -= 1

@@ -31,7 +31,8 @@ def exponent_modes(fl, condition=None) -> list:
     rows = []
     T = float(fl["period"])
     kappa = [None] * len(fl["multipliers"]) if condition is None else list(condition)
-    for mu, ex, b, kap in zip(fl["multipliers"], fl["exponents"], fl["error_bounds"], kappa):
+    for mu, ex, b, kap in zip(fl["multipliers"], fl["exponents"], fl["error_bounds"], kappa,
+                              strict=True):
         re, im = ex
         if im < 0 or (im == 0 and mu[1] < 0):
             continue  # the conjugate of a listed pair
@@ -75,7 +76,8 @@ def periodic_json(a) -> dict:
 
 
 def partial_json(p) -> dict:
-    """The modes JSON of ``--n-modes K`` (:func:`mbseig.studies.periodic_partial.periodic_partial`)."""
+    """The modes JSON of ``--n-modes K``
+    (:func:`mbseig.studies.periodic_partial.periodic_partial`)."""
     lin = p.linearization
     model, ref = lin.timed.base, lin.reference
     fl = p.to_dict()

@@ -91,7 +91,7 @@ def _with_pairs(result, k):
     """The first ``k`` multipliers of ``result``, plus the conjugate of a complex one whose
     partner ARPACK left out (a pair is reported whole)."""
     mu, res = list(result.multipliers[:k]), list(result.residuals[:k])
-    for m, r in zip(list(mu), list(res)):
+    for m, r in zip(list(mu), list(res), strict=True):
         if abs(m.imag) > 1e-12 * abs(m) and not any(abs(x - m.conjugate()) <= 1e-9 * abs(m)
                                                      for x in mu):
             mu.append(m.conjugate())

@@ -112,7 +112,7 @@ def periodic_report_data(spec, *, config=None, run_check=True, studies=True) -> 
     fl = floquet_json(a)
     T = float(fl["period"])
     ebounds = tuple(float(b) / (abs(complex(*m)) * T) if abs(complex(*m)) > 0 else math.inf
-                    for m, b in zip(fl["multipliers"], fl["error_bounds"]))
+                    for m, b in zip(fl["multipliers"], fl["error_bounds"], strict=True))
     fbound = 1e-9 * max(1.0, float(np.abs(lam).max()) if lam.size else 1.0)
     return PeriodicReport(spec.name, str(spec.data.get("title", "")),
                           getattr(model, "description", "") or "", config, a, fl,

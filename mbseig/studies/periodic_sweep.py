@@ -42,7 +42,7 @@ class PeriodicSweep:
             "points": [{"value": float(v), "verdict": r.verdict,
                         "spectral_radius": r.spectral_radius, "error_bound": r.error_bound,
                         "multipliers": [[float(m.real), float(m.imag)] for m in r.multipliers]}
-                       for v, r in zip(self.values, self.results)],
+                       for v, r in zip(self.values, self.results, strict=True)],
             "boundaries": [{"value": b.value, "kind": b.kind, "stability": b.stability,
                             "bracket": list(b.bracket), "method": b.method, "xtol": b.xtol,
                             "verdicts": list(b.verdicts)} for b in self.boundaries],

@@ -1,4 +1,5 @@
-"""The whole pipeline on one case and parameter point, and its JSON form (the fixed `mbseig modes --json` interface).
+"""The whole pipeline on one case and parameter point, and its JSON form (the fixed
+`mbseig modes --json` interface).
 
 Each mode of the JSON has ``freq_hz`` = ω_d/2π (damped, as fixed in DESIGN §8) and
 ``freq_n_hz`` = ω_n/2π = |s|/2π (natural), and, when the case names angles (report angles,

@@ -26,8 +26,8 @@ from ..model import Model
 from ..numerics import DOUBLE_RANGE, jsonable, require_finite, watched
 from ..statics import Equilibrium, equilibrium
 
-__all__ = ["Analysis", "analyze_model", "as_spec", "modes_json", "equilibrium_stage", "linear_stage",
-           "eigen_stage", "MODEL_CAUSE", "EIGEN_CAUSE"]
+__all__ = ["Analysis", "analyze_model", "as_spec", "modes_json", "equilibrium_stage",
+           "linear_stage", "eigen_stage", "MODEL_CAUSE", "EIGEN_CAUSE"]
 
 MODEL_CAUSE = (f"the case's values are too large or too small together (forces, stiffnesses, "
                f"masses and lengths multiply beyond {DOUBLE_RANGE})")
@@ -100,8 +100,8 @@ def eigen_stage(lin: LinearModel, *, solver="auto", modes_options=None) -> Modes
     # arithmetic exceptions become the one-line error here
     with watched("eigen", EIGEN_CAUSE, float_warnings=False):
         md = modes(lin.M, lin.P, lin.Q, solver=solver, N=lin.N,
-                   coordinate_names=lin.coordinate_names, rigid=lin.rigid, display=lin.display, **extra,
-                   **(modes_options or {}))
+                   coordinate_names=lin.coordinate_names, rigid=lin.rigid, display=lin.display,
+                   **extra, **(modes_options or {}))
     bad = ~(np.isfinite(md.eigenvalues) & ~np.isnan(md.backward_error))
     if np.any(bad):
         k = int(np.argmax(bad))
@@ -151,7 +151,8 @@ def modes_json(a: Analysis) -> dict:
         "solver_reason": md.solver_reason,
         "n_infinite": int(md.n_infinite),
         "redundant_constraints": list(eq.redundant),
-        "tolerances": {k: float(v) for k, v in md.tolerances.items() if isinstance(v, (int, float))},
+        "tolerances": {k: float(v) for k, v in md.tolerances.items()
+                       if isinstance(v, (int, float))},
     }
     if eq.contacts:  # DESIGN §8: each single-sided contact's force and state
         out["contacts"] = [dict(c) for c in eq.contacts]

@@ -53,7 +53,7 @@ class SweepPoint(PointRecord):
     corrector_iterations: int | None = optional()
 
     @classmethod
-    def failed(cls, params, error: str) -> "SweepPoint":
+    def failed(cls, params, error: str) -> SweepPoint:
         return cls(params=dict(params), error=error)
 
 
@@ -110,7 +110,7 @@ class Boundary(StudyRecord):
                    tolerance=found["tolerance"], shape=found["shape"], q=found["q"])
 
     @classmethod
-    def at_event(cls, fold: "Fold", *, stability, xtol):
+    def at_event(cls, fold: Fold, *, stability, xtol):
         """A fold or branch point of the branch that changes its stability (a divergence)."""
         method = ("fold of the branch: dp/ds = 0 by Brent's method on the arclength"
                   if fold.type == "fold" else

@@ -2,8 +2,8 @@
 
 The request names the modes (the lowest ``modes`` listed modes and/or those below ``f_max`` Hz)
 and a relative ``accuracy``.  Every beam with ``elements = "auto"`` starts at
-:data:`mbseig.casefile.flexible.AUTO_START_ELEMENTS` elements; one beam at a time is doubled while the
-others are held, and the change Δ of the requested frequencies,
+:data:`mbseig.casefile.flexible.AUTO_START_ELEMENTS` elements; one beam at a time is doubled
+while the others are held, and the change Δ of the requested frequencies,
 
     Δ = max_k |ω_k(2n) − ω_k(n)| / ω_k(2n)       (sorted ω_n; rigid-body modes compared absolutely)
 

@@ -194,7 +194,8 @@ def report_data(case, *, configs=None, out_dir, run_check=True, jobs=None, studi
     base = case.build(configs[0])
     chosen = []
     if studies:  # the studies that will run, their own unbalance checked before any work
-        for k, st in enumerate(getattr(base, "report", {}).get("studies", [])):  # a linear case has no [report]
+        # (a linear case has no [report])
+        for k, st in enumerate(getattr(base, "report", {}).get("studies", [])):
             if st.get("config") in configs or len(configs) > 1:
                 check_study_unbalance(case, st, f"report.studies[{k}]")
                 chosen.append((k, st))

@@ -203,7 +203,7 @@ def curve_values(line_values):
     to 0 through 1/10 and 1/100 of the smallest positive one), from the first line outwards."""
     vals = [float(v) for v in line_values]
     out = [vals[0]]
-    for a, b in zip(vals, vals[1:]):
+    for a, b in zip(vals, vals[1:], strict=False):
         if a > 0 and b > 0 and max(a, b) / min(a, b) >= 10:
             mids = list(np.geomspace(a, b, 4)[1:-1])
         elif b == 0 and a > 0:
@@ -233,14 +233,14 @@ def sweep_study(case, study, *, jobs=None) -> SweepStudy:
     xtol = res.tolerances["xtol"]
     direction = 1.0 if values[-1] >= values[0] else -1.0
     crit = []
-    for l, line in enumerate(res.lines):
-        bs = sorted((b for b in res.boundaries if b["line"] == l and b["stability"] == "loss"),
+    for li, line in enumerate(res.lines):
+        bs = sorted((b for b in res.boundaries if b["line"] == li and b["stability"] == "loss"),
                     key=lambda b: (b["value"] - values[0]) * direction)
         first = bs[0] if bs else None
         crit.append({"line": line, "critical": None if first is None else first["value"],
                      "kind": None if first is None else first["kind"],
-                     "rom": rom_exit(case, config, line, name, values, res.points[l], xtol),
-                     "failed": sum(1 for pt in res.points[l] if pt.get("error")),
+                     "rom": rom_exit(case, config, line, name, values, res.points[li], xtol),
+                     "failed": sum(1 for pt in res.points[li] if pt.get("error")),
                      "first": first})
     curves = [{"along": c["along"],
                "points": [(p["p2"], p["value"]) for p in c["points"] if p["value"] is not None]}
@@ -263,7 +263,7 @@ def rom_exit(case, config, line, name, values, points, xtol):
         if not a["out_of_range"] and b["out_of_range"]:
             ev = Evaluator(case, config, line, name, [(values[k], a["q"]), (values[k + 1], b["q"])])
 
-            def margin(p):
+            def margin(p, ev=ev):
                 pt = ev(p)
                 model = ev.make(p)
                 rows = [r for r in posture(model, pt["q"]) if r["margin_deg"] is not None]
@@ -300,7 +300,8 @@ def compare_study(case, config) -> CompareStudy:
     sa, sb = with_h.all_eigenvalues, without.all_eigenvalues
     ia, ib = linear_sum_assignment(np.abs(sa[:, None] - sb[None, :]))
     ba, bb = _listed_bounds(with_h, sa), _listed_bounds(without, sb)
-    rows = sorted(((sa[i], sb[j], ba[i], bb[j]) for i, j in zip(ia, ib) if sa[i].imag >= 0),
+    rows = sorted(((sa[i], sb[j], ba[i], bb[j]) for i, j in zip(ia, ib, strict=True)
+                   if sa[i].imag >= 0),
                   key=lambda p: (abs(p[0]), p[0].imag))
     lam_max = float(np.max(np.abs(eq.lam))) if eq.lam.size else 0.0
     return CompareStudy(config=config, pairs=[(a, b) for a, b, _, _ in rows], lam_max=lam_max,

@@ -120,7 +120,8 @@ class Runner:
             try:
                 from distributed import Client
             except ImportError:
-                raise MbseigError("--scheduler needs the optional extra: pip install 'mbseig[dask]'",
+                raise MbseigError("--scheduler needs the optional extra: "
+                                  "pip install 'mbseig[dask]'",
                                   element="--scheduler") from None
             self._client = (self.scheduler if not isinstance(self.scheduler, str)
                             else _connect(Client, self.scheduler, self.connect_timeout))
@@ -280,7 +281,7 @@ class Runner:
         # a worker lost while it runs a task: the scheduler runs the task again on another
         # worker, and its future completes once (tests/test_resume.py kills one)
         futs = [self._client.submit(capped, fn, self.blas, *calls[i], pure=False) for i in todo]
-        index = {f.key: i for f, i in zip(futs, todo)}
+        index = {f.key: i for f, i in zip(futs, todo, strict=True)}
         try:
             for fut in das_completed(futs):
                 arrived(index[fut.key], fut.result())
@@ -309,7 +310,8 @@ def progress_bar(stream=None):
                 bar.close()
             bar = bars[label] = tqdm(total=total, desc=f"{label:<10}", file=stream,
                                      unit="task", dynamic_ncols=True, leave=True,
-                                     bar_format="{desc} {percentage:3.0f}%|{bar}| {n_fmt}/{total_fmt} "
+                                     bar_format="{desc} {percentage:3.0f}%|{bar}| "
+                                                "{n_fmt}/{total_fmt} "
                                                 "[{elapsed}<{remaining}, {rate_fmt}]")
         bar.update(done - bar.n)
         if done >= total:

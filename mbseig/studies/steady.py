@@ -253,9 +253,9 @@ def steady_state(model, motion: Motion, *, wheels=None, q0=None, tol=1e-12, max_
     reach ``tol`` or the constraints do not allow the motion."""
     asm = SteadyAssembly(model, wheels)
     q = np.array(model.q_init if q0 is None else q0, float)
-    L, l = generator(model, motion)
+    L, ell = generator(model, motion)
     nw, n, mh = len(asm.wheels), asm.n, asm.m_h
-    qd = L @ q + l
+    qd = L @ q + ell
     if np.linalg.norm(asm.phi_q(q) @ qd) > 1e-9 * max(1.0, np.abs(qd).max(initial=0.0)):
         raise SteadyMotionError("the constraints do not let the system move this way (a "
                          "ground joint, or a ground plane that does not contain the motion)")
@@ -270,7 +270,7 @@ def steady_state(model, motion: Motion, *, wheels=None, q0=None, tol=1e-12, max_
     sizes = np.cumsum([0, n, nw, mh, 2 * nw])
     fscale = max(1.0, float(np.abs(model.g_const).max(initial=0.0)))
     for it in range(max_iter + 1):
-        qd = L @ q + l
+        qd = L @ q + ell
         Pq = asm.phi_q(q)
         A, At = asm.velocity(q, qd)
         f, Fq, Fp, FO, Hmu = asm.forces(q, qd, spin, mu)
@@ -295,8 +295,9 @@ def steady_state(model, motion: Motion, *, wheels=None, q0=None, tol=1e-12, max_
         q, spin = q + step[:n], spin + step[n:n + nw]
         lam, mu = lam + step[sizes[2]:sizes[3]], mu + step[sizes[3]:]
     contacts = tuple({"name": w.name, "force": float(-lam[r] / w.length),
-                      "active": bool(-lam[r] >= 0)} for w, r in zip(asm.wheels, asm.contact_row))
-    return SteadyState(q, L @ q + l, spin, lam, mu, res, it, contacts, motion)
+                      "active": bool(-lam[r] >= 0)}
+                     for w, r in zip(asm.wheels, asm.contact_row, strict=True))
+    return SteadyState(q, L @ q + ell, spin, lam, mu, res, it, contacts, motion)
 
 
 def _moving_frame_terms(model, asm, state, naive):
@@ -352,7 +353,9 @@ def full_descriptor(model, state: SteadyState, *, wheels=None, naive=False):
     Pq = asm.phi_q(q)
     Fq, Fp, FO, A, At = _moving_frame_terms(model, asm, state, naive)
     mv = 2 * nw
-    Z = lambda r, c: np.zeros((r, c))
+    def Z(r, c):
+        return np.zeros((r, c))
+
     E = sla.block_diag(np.eye(n), asm.M, asm.J, Z(mh, mh), Z(mv, mv))
     Am = np.block([
         [Z(n, n), np.eye(n), Z(n, nw), Z(n, mh), Z(n, mv)],

@@ -120,13 +120,13 @@ class _Dynamics:
                 float(np.max(np.abs(A @ qd + self.asm.B @ spin), initial=0.0)))
 
 
-def _frame(L, l, t):
+def _frame(L, ell, t):
     """(𝓡 = e^{Lt}, b(t) = ∫₀ᵗ e^{Lτ} l dτ) of the reference motion."""
     n = L.shape[0]
     if not np.any(L):
-        return np.eye(n), l * t
+        return np.eye(n), ell * t
     G = np.zeros((n + 1, n + 1))
-    G[:n, :n], G[:n, n] = L, l
+    G[:n, :n], G[:n, n] = L, ell
     E = sla.expm(G * t)
     return E[:n, :n], E[:n, n]
 
@@ -162,7 +162,7 @@ def check_steady(spec, *, config=None, params=None, indices=None, naive=False, a
     model, st, lin = a.model, a.state, a.linear
     # vectors in the coordinates X = [x; z] (no deflation)
     full = solve(descriptor_problem(lin.E, lin.A), Request(solver="descriptor-qz"))
-    L, l = generator(model, a.motion)
+    L, ell = generator(model, a.motion)
     dyn = _Dynamics(model)
     length = model.length_scale
     d = lin.dof
@@ -200,7 +200,7 @@ def check_steady(spec, *, config=None, params=None, indices=None, naive=False, a
         w0 = lin.T @ z0 - lin.S @ x0
         qbar = st.q + lin.N @ x0
         p = lin.N @ w0[:d]
-        q, qd, spin = _project(dyn, qbar, p + L @ qbar + l, st.spin + w0[d:])
+        q, qd, spin = _project(dyn, qbar, p + L @ qbar + ell, st.spin + w0[d:])
         t_eval = np.linspace(0.0, T, n_samples + 1)
         dyn.nfev = 0
         sol = solve_ivp(dyn.rhs, (0.0, T), np.concatenate([q, qd, spin]), method="DOP853",
@@ -214,9 +214,9 @@ def check_steady(spec, *, config=None, params=None, indices=None, naive=False, a
         drift_c = drift_v = 0.0
         for i, t in enumerate(sol.t):
             q, qd, spin = dyn.split(sol.y[:, i])
-            R, b = _frame(L, l, t)
+            R, b = _frame(L, ell, t)
             qb = R.T @ (q - b)
-            pb = R.T @ qd - (L @ qb + l)
+            pb = R.T @ qd - (L @ qb + ell)
             x = lin.N.T @ (qb - st.q)
             z = lin.T.T @ (np.concatenate([lin.N.T @ pb, spin - st.spin]) + lin.S @ x)
             eta[i] = yc @ (lin.E @ np.concatenate([x, z])) / den

@@ -92,7 +92,7 @@ def mode_rows(sol, *, safety=SAFETY, declared=None, formed_in=1) -> list:
     (:class:`Cyclic`), each named in ``rigid_body``."""
     rows = [] if declared is None else declared.rows()
     floor = max(int(formed_in), 1) * np.finfo(float).eps
-    for s, eta, kap in zip(sol.eigenvalues, sol.backward_error, sol.condition):
+    for s, eta, kap in zip(sol.eigenvalues, sol.backward_error, sol.condition, strict=True):
         tol = safety * kap * max(eta, floor) * max(abs(s), 1.0)
         if s.imag < -tol:
             continue  # the conjugate of a listed pair
@@ -190,7 +190,7 @@ def cyclic_directions(model, state, lin) -> Cyclic:
     up = up / np.linalg.norm(up)
     d = np.asarray(motion.direction, float)
     d = d / np.linalg.norm(d)
-    L, l = generator(model, motion)
+    L, ell = generator(model, motion)
     unit = generator(model, dataclasses.replace(motion, yaw_rate=1.0, speed=0.0))[0]
     q0, xi, spin = state.q, state.qd, np.asarray(state.spin, float)
     nw = spin.size
@@ -207,7 +207,7 @@ def cyclic_directions(model, state, lin) -> Cyclic:
     cands.append(("heading" if not turning else "heading (phase along the turn)",
                   h, unit @ xi - L @ h, zero_w))
     if not turning and motion.speed != 0:
-        cands.append(("speed along the motion", np.zeros(model.n), l / motion.speed,
+        cands.append(("speed along the motion", np.zeros(model.n), ell / motion.speed,
                       spin / motion.speed))
     N, T, S = lin.N, lin.T, lin.S
     scale = max(float(np.linalg.norm(lin.A)), 1e-300)
@@ -252,8 +252,8 @@ def cyclic_directions(model, state, lin) -> Cyclic:
     # the declared eigenvalues (0; ±i r for a turn's plane pair) are those of J: J is
     # nilpotent (straight running) or J (J² + r² I) = 0 (a turn), to the rounding of J
     r = float(motion.yaw_rate)
-    I = np.eye(J.shape[0])
-    poly = np.linalg.matrix_power(J, J.shape[0]) if not turning else J @ (J @ J + r * r * I)
+    Id = np.eye(J.shape[0])
+    poly = np.linalg.matrix_power(J, J.shape[0]) if not turning else J @ (J @ J + r * r * Id)
     jn = max(float(np.linalg.norm(J)), abs(r))
     pn = float(np.linalg.norm(poly))
     res = max(res, pn / jn ** (J.shape[0] if not turning else 3) if pn else 0.0)

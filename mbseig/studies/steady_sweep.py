@@ -137,7 +137,7 @@ def steady_sweep(spec, name, values, *, config=None, fixed=None, xtol=1e-11, job
         runs = runner.map(_steady_point, [((spec, config, params(v)), {}) for v in values],
                           "points", points=1)
     points = []
-    for v, a in zip(values, runs):
+    for v, a in zip(values, runs, strict=True):
         points.append({"value": float(v), "verdict": a.verdict,
                        "eigenvalues": [[float(s.real), float(s.imag)]
                                        for s in a.eigenvalues],
@@ -186,7 +186,9 @@ def _stability_crossing(at, lo, hi, a0, a1, name, xtol):
     f0, f1 = growth_rates(a0, base)[kind], growth_rates(a1, base)[kind]
     root = None
     if f0 is not None and f1 is not None and (f0 < 0) != (f1 < 0):
-        fun = lambda p: _value(growth_rates(at(p), base)[kind], f0)
+        def fun(p):
+            return _value(growth_rates(at(p), base)[kind], f0)
+
         root = float(brentq(fun, lo, hi, xtol=xtol, rtol=4 * np.finfo(float).eps))
         g = growth_rates(at(root), base)[kind]
         scale = max(1.0, max(abs(s) for s in at(root).eigenvalues))

@@ -83,7 +83,7 @@ def _lines(axes, fixed):
         if n in fixed:
             raise CaseError(f"parameter {n!r} is both swept and fixed", element="--param")
     others = axes[1:]
-    return [dict(zip([n for n, _ in others], combo))
+    return [dict(zip([n for n, _ in others], combo, strict=True))
             for combo in itertools.product(*[v for _, v in others])] or [{}]
 
 
@@ -190,15 +190,16 @@ def run_sweep(case, axes, *, config=None, fixed=None, jobs=None, scheduler=None,
             calls = [((case, config, {**fixed, **line, axis0: float(v)}), opts)
                      for line in lines for v in values0]
             flat = runner.map(evaluate_point, calls, "points", points=1)
-            points = [flat[l * n0:(l + 1) * n0] for l in range(len(lines))]
-            branches, events, records = [[] for _ in lines], [[] for _ in lines], [{} for _ in lines]
+            points = [flat[li * n0:(li + 1) * n0] for li in range(len(lines))]
+            branches, events, records = ([[] for _ in lines], [[] for _ in lines],
+                                         [{} for _ in lines])
         tracks, tols, searches = [], [], []
-        for l, line in enumerate(lines):
-            S, T, _ = track_line(points[l])
+        for li, line in enumerate(lines):
+            S, T, _ = track_line(points[li])
             tracks.append(S)
             tols.append(T)
             searches += _crossing_searches(case, config, {**fixed, **line}, axis0, values0,
-                                           points[l], S, T, events[l], l, xtol, opts)
+                                           points[li], S, T, events[li], li, xtol, opts)
         found = runner.map(locate_task, [(a, kw) for _, a, kw in searches], "boundaries")
         boundaries = _merge_conjugates(
             _crossings(searches, found, tracks, tols, lines, axis0, values0, xtol), xtol)
@@ -229,7 +230,7 @@ def _followed_lines(runner, case, config, fixed, lines, axis0, values0, opts):
                                       for line in lines], "lines", points=len(values0))
     opts = {k: v for k, v in opts.items() if k not in ("lean", "share")}
     points, branches, events, records = [], [], [], []
-    for line, r in zip(lines, results):
+    for line, r in zip(lines, results, strict=True):
         if r.get("points") is None:  # the first point failed: every point on its own
             r = {"points": [evaluate_point(case, config, {**fixed, **line, axis0: float(v)},
                                            **opts) for v in values0],
@@ -241,9 +242,9 @@ def _followed_lines(runner, case, config, fixed, lines, axis0, values0, opts):
     return points, branches, events, records
 
 
-def _crossing_searches(case, config, params, axis0, values0, points, S, T, events, l, xtol,
+def _crossing_searches(case, config, params, axis0, values0, points, S, T, events, li, xtol,
                        opts):
-    """The boundary searches of line ``l``: every bracket where a tracked eigenvalue's
+    """The boundary searches of line ``li``: every bracket where a tracked eigenvalue's
     δ + tol changes sign on one branch segment, away from folds, branch points and jumps."""
     shapes = track_shapes(points, S)
     H = -S.real + T
@@ -263,7 +264,7 @@ def _crossing_searches(case, config, params, axis0, values0, points, S, T, event
             anchors = [(lo, pa["q"]), (hi, pb["q"])]
             refs = [(complex(S[k, j]), shapes[(k, j)]), (complex(S[k + 1, j]), shapes[(k + 1, j)])]
             stable_end = "lo" if a >= 0 else "hi"
-            searches.append(((l, j, k), (case, config, params, axis0, lo, hi,
+            searches.append(((li, j, k), (case, config, params, axis0, lo, hi,
                                          anchors, refs[0], refs[1], xtol, stable_end), opts))
     return searches
 
@@ -272,15 +273,15 @@ def _crossings(searches, found, tracks, tols, lines, axis0, values0, xtol):
     """The located crossings as :class:`Boundary` records (loss or recovery, flutter or
     divergence by the crossing eigenvalue)."""
     boundaries = []
-    for ((l, j, k), _, _), res in zip(searches, found):
+    for ((li, j, k), _, _), res in zip(searches, found, strict=True):
         if res is None or "error" in res:
             continue
-        S = tracks[l]
-        onset = "loss" if -S[k, j].real + tols[l][k, j] >= 0 else "recovery"
+        S = tracks[li]
+        onset = "loss" if -S[k, j].real + tols[li][k, j] >= 0 else "recovery"
         un = S[k + 1, j] if onset == "loss" else S[k, j]
-        real = abs(un.imag) <= max(tols[l][k + 1 if onset == "loss" else k, j], 1e-12 * abs(un))
+        real = abs(un.imag) <= max(tols[li][k + 1 if onset == "loss" else k, j], 1e-12 * abs(un))
         boundaries.append(Boundary.crossing(
-            line=l, fixed={n: float(v) for n, v in lines[l].items()}, parameter=axis0,
+            line=li, fixed={n: float(v) for n, v in lines[li].items()}, parameter=axis0,
             track=int(j), bracket=[float(values0[k]), float(values0[k + 1])],
             kind="divergence" if real else "flutter", stability=onset, xtol=xtol,
             found=res))
@@ -291,11 +292,11 @@ def _event_records(events, lines, axis0, xtol):
     """(folds, boundaries): every located fold and branch point of the followed branches, and
     a divergence boundary where one changes the stability."""
     folds, boundaries = [], []
-    for l, evs in enumerate(events):
+    for li, evs in enumerate(events):
         for e in evs:
             if e.get("type") not in ("fold", "branch point") or e.get("located") is False:
                 continue
-            rec = Fold(line=l, fixed={n: float(v) for n, v in lines[l].items()},
+            rec = Fold(line=li, fixed={n: float(v) for n, v in lines[li].items()},
                        parameter=axis0, value=float(e["p"]), type=e["type"],
                        branch=("turns " + e["turns"]) if e.get("turns") else
                               ("switched to the stable branch" if e.get("switched") else
@@ -328,7 +329,7 @@ def _curves(runner, case, config, fixed, axes, lines, boundaries, span, xtol, op
                axis0, axis2, values2, b, span, xtol), opts) for b in starts]
     found = runner.map(curve_task, calls, "curves")
     out = []
-    for b, pts in zip(starts, found):
+    for b, pts in zip(starts, found, strict=True):
         out.append(BoundaryCurve(parameter=axis0, along=axis2, stability=b["stability"],
                                  kind=b["kind"], start=b["value"], points=pts, bend=BEND,
                                  max_insert=MAX_INSERT, xtol=xtol))
@@ -338,10 +339,13 @@ def _curves(runner, case, config, fixed, axes, lines, boundaries, span, xtol, op
 def _merge_conjugates(boundaries, xtol):
     """One boundary per event: a complex pair crosses with both of its tracks."""
     out = []
-    for b in sorted(boundaries, key=lambda b: (b["line"], b["value"], -b["eigenvalue"][1], b["track"])):
+    for b in sorted(boundaries,
+                    key=lambda b: (b["line"], b["value"], -b["eigenvalue"][1], b["track"])):
         dup = any(o["line"] == b["line"] and abs(o["value"] - b["value"]) <= 10 * xtol
-                  and abs(o["eigenvalue"][0] - b["eigenvalue"][0]) <= 1e-6 * (1 + abs(o["eigenvalue"][0]))
-                  and abs(o["eigenvalue"][1] + b["eigenvalue"][1]) <= 1e-6 * (1 + abs(o["eigenvalue"][1]))
+                  and abs(o["eigenvalue"][0] - b["eigenvalue"][0])
+                  <= 1e-6 * (1 + abs(o["eigenvalue"][0]))
+                  and abs(o["eigenvalue"][1] + b["eigenvalue"][1])
+                  <= 1e-6 * (1 + abs(o["eigenvalue"][1]))
                   and b["eigenvalue"][1] != 0 for o in out)
         if not dup:
             out.append(b)
@@ -378,9 +382,11 @@ def _diagram(model, branches, name):
     elif name in names:
         i = names.index(name)
         unit = UNITS[model.coordinate_kinds[i]]
-        get = (lambda b: None if b.get("q") is None else b["q"][i])
+        def get(b):
+            return None if b.get("q") is None else b["q"][i]
     else:
-        raise CaseError(f"--diagram {name!r} is neither a named angle ({', '.join(angles) or 'none'}) "
+        raise CaseError(f"--diagram {name!r} is neither a named angle "
+                        f"({', '.join(angles) or 'none'}) "
                         f"nor a coordinate of the model", element="--diagram")
     for br in branches:
         for b in br:

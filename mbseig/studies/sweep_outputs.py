@@ -38,9 +38,9 @@ def write_outputs(res: SweepResult, out_dir, *, units=None) -> list[Path]:
         w = csv.writer(fh, lineterminator="\n")
         w.writerow(others + [res.axis, "track", "re", "im", "delta", "omega_n", "freq_hz", "zeta",
                              "mode"])
-        for l, line in enumerate(res.lines):
-            S = res.tracks[l]
-            numbers = res.mode_numbers(l)
+        for li, line in enumerate(res.lines):
+            S = res.tracks[li]
+            numbers = res.mode_numbers(li)
             for j in res.listed_tracks(S):
                 for k, v in enumerate(res.values):
                     s = S[k, j]
@@ -49,7 +49,8 @@ def write_outputs(res: SweepResult, out_dir, *, units=None) -> list[Path]:
                     wn = abs(s)
                     w.writerow([repr(float(line[n])) for n in others] + [
                         repr(float(v)), j, repr(float(s.real)), repr(float(s.imag)),
-                        repr(float(-s.real)), repr(float(wn)), repr(float(abs(s.imag) / (2 * math.pi))),
+                        repr(float(-s.real)), repr(float(wn)),
+                        repr(float(abs(s.imag) / (2 * math.pi))),
                         repr(float(-s.real / wn)) if wn > 0 else "0.0", numbers.get(j, "")])
     paths.append(p)
     p = out / "boundaries.csv"
@@ -72,10 +73,11 @@ def write_outputs(res: SweepResult, out_dir, *, units=None) -> list[Path]:
             w = csv.writer(fh, lineterminator="\n")
             w.writerow(others + [res.axis, res.diagram["variable"], "kind", "segment", "static",
                                  "verdict"])
-            for l, line in enumerate(res.lines):
-                for b in res.branches[l]:
+            for li, line in enumerate(res.lines):
+                for b in res.branches[li]:
                     w.writerow([repr(float(line[n])) for n in others] + [
-                        repr(float(b["p"])), "" if b.get("value") is None else repr(float(b["value"])),
+                        repr(float(b["p"])),
+                        "" if b.get("value") is None else repr(float(b["value"])),
                         b["kind"], b["segment"], b.get("static") or "", b.get("verdict") or ""])
         paths.append(p)
         paths.append(plots.save(plots.bifurcation_diagram(res), out / "bifurcation.png"))
@@ -90,7 +92,8 @@ def write_outputs(res: SweepResult, out_dir, *, units=None) -> list[Path]:
                 for i, c in enumerate(res.curves):
                     for pt in c["points"]:
                         band = pt.get("band") or [None, None]
-                        w.writerow([i, repr(pt["p2"]), "" if pt["value"] is None else repr(pt["value"]),
+                        w.writerow([i, repr(pt["p2"]),
+                                    "" if pt["value"] is None else repr(pt["value"]),
                                     c["stability"], pt.get("test") or "",
                                     "" if band[0] is None else repr(band[0]),
                                     "" if band[1] is None else repr(band[1])])

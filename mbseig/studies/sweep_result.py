@@ -56,10 +56,10 @@ class SweepResult:
     def abscissa_grid(self):
         """Spectral abscissa max Re s on the grid, shape (len(axis 0), len(lines))."""
         out = np.full((len(self.values), len(self.lines)), np.nan)
-        for l, line in enumerate(self.points):
+        for li, line in enumerate(self.points):
             for k, pt in enumerate(line):
                 if not pt.get("error") and pt["eigenvalues"].size:
-                    out[k, l] = float(np.max(pt["eigenvalues"].real))
+                    out[k, li] = float(np.max(pt["eigenvalues"].real))
         return out
 
     @staticmethod
@@ -89,7 +89,8 @@ class SweepResult:
         k0 = min(first.values(), default=0)
         at_start = sorted((j for j in first if first[j] == k0),
                           key=lambda j: (abs(S[k0, j]), -S[k0, j].real, j))
-        later = sorted((j for j in first if first[j] != k0), key=lambda j: (first[j], abs(S[first[j], j]), j))
+        later = sorted((j for j in first if first[j] != k0),
+                       key=lambda j: (first[j], abs(S[first[j], j]), j))
         return {j: i + 1 for i, j in enumerate(at_start + later)}
 
     def to_dataframe(self):
@@ -105,11 +106,11 @@ class SweepResult:
                               element="to_dataframe") from None
         others = [n for n, _ in self.axes[1:]]
         rows = []
-        for l, line in enumerate(self.lines):
-            S, T = self.tracks[l], self.tolerances_track[l]
-            numbers = self.mode_numbers(l)
+        for li, line in enumerate(self.lines):
+            S, T = self.tracks[li], self.tolerances_track[li]
+            numbers = self.mode_numbers(li)
             for k, v in enumerate(self.values):
-                pt = self.points[l][k]
+                pt = self.points[li][k]
                 for j in self.listed_tracks(S):
                     s = S[k, j]
                     if np.isnan(s):
@@ -151,10 +152,11 @@ class SweepResult:
 
     def to_json(self) -> dict:
         lines = []
-        for l, fixed in enumerate(self.lines):
-            S = self.tracks[l]
+        for li, fixed in enumerate(self.lines):
+            S = self.tracks[li]
             tracks = [{"track": int(j),
-                       "eigenvalue": [[None, None] if np.isnan(v) else [float(v.real), float(v.imag)]
+                       "eigenvalue": [[None, None] if np.isnan(v)
+                                      else [float(v.real), float(v.imag)]
                                       for v in S[:, j]]}
                       for j in self.listed_tracks(S)]
             pts = [{"params": {k: float(v) for k, v in pt["params"].items()},
@@ -162,12 +164,13 @@ class SweepResult:
                     "out_of_range": pt.get("out_of_range", []),
                     "statics": pt.get("statics"), "static": pt.get("static"),
                     "iterations": pt.get("iterations"), "segment": pt.get("segment")}
-                   for pt in self.points[l]]
+                   for pt in self.points[li]]
             branch = [{k: b[k] for k in ("p", "kind", "segment", "static", "verdict", "angles")}
-                      | {"value": b.get("value")} for b in (self.branches[l] if self.branches else [])]
+                      | {"value": b.get("value")}
+                      for b in (self.branches[li] if self.branches else [])]
             lines.append({"fixed": {k: float(v) for k, v in fixed.items()}, "points": pts,
                           "tracks": tracks, "branch": branch,
-                          "continuation": self.records[l] if self.records else None})
+                          "continuation": self.records[li] if self.records else None})
         bounds = [b.to_json() for b in self.boundaries]
         return jsonable({
             "case": self.case, "config": self.config,

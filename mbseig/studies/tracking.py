@@ -88,7 +88,7 @@ def track_line(points):
                     float(np.max(np.abs(s), initial=0.0)), 1e-300)
         rows, cols = linear_sum_assignment(_match_cost(ref_s, ref_X, s, X, scale))
         matched = set()
-        for r, c in zip(rows, cols):
+        for r, c in zip(rows, cols, strict=True):
             tracks_s[r][k] = s[c]
             tracks_t[r][k] = tol[c]
             ref[r] = (s[c], X[:, c])
@@ -100,7 +100,7 @@ def track_line(points):
                 ref.append((s[c], X[:, c]))
     S = np.full((n_pts, len(tracks_s)), np.nan + 1j * np.nan)
     T = np.full((n_pts, len(tracks_s)), np.nan)
-    for j, (ts, tt) in enumerate(zip(tracks_s, tracks_t)):
+    for j, (ts, tt) in enumerate(zip(tracks_s, tracks_t, strict=True)):
         for k, v in ts.items():
             S[k, j] = v
             T[k, j] = tt[k]

@@ -87,7 +87,7 @@ class UnbalanceResponse:
 
     def resonance_values(self) -> list:
         """The swept values where the response is a resonance."""
-        return [float(v) for v, r in zip(self.values, self.resonance) if r]
+        return [float(v) for v, r in zip(self.values, self.resonance, strict=True) if r]
 
     @property
     def major(self) -> np.ndarray:
@@ -109,7 +109,7 @@ class UnbalanceResponse:
         outs = [{"output": name, "unit": unit,
                  "amplitude": [float(x) for x in np.abs(self.Y[:, j])],
                  "phase": deg(self.Y[:, j])}
-                for j, (name, unit) in enumerate(zip(self.outputs, self.output_units))]
+                for j, (name, unit) in enumerate(zip(self.outputs, self.output_units, strict=True))]
         return jsonable({"case": self.case, "parameter": self.parameter,
                          "values": [float(v) for v in self.values],
                          "speed": [float(v) for v in self.speeds],
@@ -128,7 +128,7 @@ class UnbalanceResponse:
             for k in range(len(self.speeds)):
                 yield (self.values[k], self.speeds[k], st, self.X1[k, j], self.X2[k, j],
                        major[k, j], "m")
-        for j, (name, unit) in enumerate(zip(self.outputs, self.output_units)):
+        for j, (name, unit) in enumerate(zip(self.outputs, self.output_units, strict=True)):
             for k in range(len(self.speeds)):
                 yield (self.values[k], self.speeds[k], name, self.Y[k, j], None,
                        abs(self.Y[k, j]), unit)
@@ -334,9 +334,9 @@ def unbalance_response(case, parameter, values, *, at, unbalance, phase=0.0, con
     # response is 0 at Ω = 0 (no unbalance force), else not known (NaN)
     names = tuple(dict.fromkeys(n for d in per_speed for n in d))
     X1 = np.array([[d[n][0] if n in d else (0.0 if w == 0 else np.nan) for n in names]
-                   for d, w in zip(per_speed, speeds)], complex)
+                   for d, w in zip(per_speed, speeds, strict=True)], complex)
     X2 = np.array([[d[n][1] if n in d else (0.0 if w == 0 else np.nan) for n in names]
-                   for d, w in zip(per_speed, speeds)], complex)
+                   for d, w in zip(per_speed, speeds, strict=True)], complex)
     if lin is None:
         raise CaseError(f"no speed of the sweep spins the rotor ({parameter} = "
                         f"{values[0]:g} … {values[-1]:g})", element="unbalance",
@@ -345,7 +345,8 @@ def unbalance_response(case, parameter, values, *, at, unbalance, phase=0.0, con
     units = tuple(lin.output_units) if outputs and lin.output_units else ("",) * len(outputs)
     Ys = [np.zeros(len(outputs), complex) if y is None else y for y in Ys]
     return UnbalanceResponse(case=spec.name, parameter=parameter, values=values,
-                             speeds=np.array(speeds), stations=names, X1=X1, X2=X2, unbalance=float(unbalance), at=at,
+                             speeds=np.array(speeds), stations=names, X1=X1, X2=X2,
+                             unbalance=float(unbalance), at=at,
                              angle=float(phase), outputs=outputs, output_units=units,
                              Y=np.array(Ys).reshape(len(values), len(outputs)),
                              directions=directions, source=str(spec.source),

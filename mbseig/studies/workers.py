@@ -11,9 +11,9 @@ left go to a pool of W = min(free CPUs, R) processes only when it is predicted f
 with ``start`` the pool's measured start-up (:data:`POOL_START`, per start method) and x the
 measured transfer of one task (pickling its arguments and its result both ways).  The free
 CPUs are those the 1-minute load average leaves beside this study's own processes
-(:func:`free_cpus`): on a machine busy with other work a second process gets no second CPU.  Otherwise the
-whole stage runs in-process (:func:`pool_pays`, the rule; tests/test_interrupt.py).  A pool
-forked after the first tasks inherits what they left in memory, as the later tasks of an
+(:func:`free_cpus`): on a machine busy with other work a second process gets no second CPU.
+Otherwise the whole stage runs in-process (:func:`pool_pays`, the rule; tests/test_interrupt.py).
+A pool forked after the first tasks inherits what they left in memory, as the later tasks of an
 in-process run do (the statics of a line shared by the lines that differ only in damping).
 ``jobs=1`` runs in-process, ``jobs=N`` on N processes from the first task.
 
@@ -34,8 +34,8 @@ import time
 from ..eigen.dense import blas_held
 from ..statics.linalg import blas_threads
 
-__all__ = ["PROBE", "POOL_START", "MARGIN", "usable_cpus", "free_cpus", "pool_pays", "capped", "timed",
-           "worker_init", "sigmask", "interned", "release", "start_method"]
+__all__ = ["PROBE", "POOL_START", "MARGIN", "usable_cpus", "free_cpus", "pool_pays", "capped",
+           "timed", "worker_init", "sigmask", "interned", "release", "start_method"]
 
 #: tasks a stage runs in-process and times before it decides on a pool (jobs=None)
 PROBE = 2
