@@ -80,15 +80,16 @@ def four_bar_constraint_stiffness():
         data={"omega_naive": float(ww), "omega_mbseig": float(wr), "shift": float(shift)})
 
 
-def ziegler_matrices(load, c=1.0, l=1.0, m=1.0):  # noqa: E741 - public keyword (length)
-    """Ziegler's double pendulum (masses 2m, m; springs c; follower force at the tip):
+def ziegler_matrices(load, c=1.0, length=1.0, m=1.0):
+    """Ziegler's double pendulum (masses 2m, m; links of length l; springs c; follower force at
+    the tip):
 
         M = m l² [[3, 1], [1, 1]],   Q = [[2c − F l, F l − c], [−c, c]]   (non-symmetric)
 
     Flutter for F > F_cr = (7/2 − √2) c/l (Ziegler 1952; Bolotin 1963, Nonconservative Problems).
     """
-    M = m * l**2 * np.array([[3.0, 1.0], [1.0, 1.0]])
-    Q = np.array([[2 * c - load * l, load * l - c], [-c, c]])
+    M = m * length**2 * np.array([[3.0, 1.0], [1.0, 1.0]])
+    Q = np.array([[2 * c - load * length, load * length - c], [-c, c]])
     return M, np.zeros((2, 2)), Q
 
 
