@@ -22,8 +22,12 @@ class AugmentedPattern:
     def __init__(self, Mf, Js):
         self.keys = [(x.indptr.copy(), x.indices.copy()) for x in (Mf, Js)]
         nm, nj = Mf.nnz, Js.nnz
-        ids = lambda x, start: sp.csr_matrix(
-            (np.arange(start, start + x.nnz, dtype=float), x.indices, x.indptr), shape=x.shape)
+
+        def ids(x, start):
+            return sp.csr_matrix(
+                (np.arange(start, start + x.nnz, dtype=float), x.indices, x.indptr),
+                shape=x.shape)
+
         A = sp.bmat([[ids(Mf, 1), ids(Js, nm + 1).T], [ids(Js, nm + nj + 1), None]], format="csc")
         self.src = A.data.astype(np.intp) - 1  # into [M.data, Φ_q.data, Φ_q.data]
         self.in_m = self.src < nm
@@ -32,7 +36,7 @@ class AugmentedPattern:
 
     def matches(self, Mf, Js):
         return all(np.array_equal(p, x.indptr) and np.array_equal(i, x.indices)
-                   for (p, i), x in zip(self.keys, (Mf, Js)))
+                   for (p, i), x in zip(self.keys, (Mf, Js), strict=True))
 
     def fill(self, Mf, Js):
         data = np.concatenate([Mf.data, Js.data, Js.data])[self.src]

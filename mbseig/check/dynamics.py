@@ -104,7 +104,7 @@ class ForwardDynamics:
 
     def phi_q(self, q):
         J = np.zeros((self.m, self.n))
-        for r, c in zip(self.rows, self.constraints):
+        for r, c in zip(self.rows, self.constraints, strict=True):
             J[np.ix_(r, c.idx)] = c.jac(q)
         return J
 
@@ -115,7 +115,8 @@ class ForwardDynamics:
 
     def _check_mass(self):
         """The reduced mass Nᵀ M N must be positive definite (no massless free motion)."""
-        N = null_space_basis(self.phi_q(self.q0), self.n, self.rank_tol)[0] if self.m else np.eye(self.n)
+        N = (null_space_basis(self.phi_q(self.q0), self.n, self.rank_tol)[0] if self.m
+             else np.eye(self.n))
         if N.shape[1] == 0:
             return
         Mr = N.T @ self.M @ N

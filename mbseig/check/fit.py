@@ -105,7 +105,8 @@ def probe_rigid(dyn, Mr, N, x, a, modes, eq, length, names):
     w_eff = math.sqrt(abs(k_eff))
     w_ref = mode_scale(dyn, N @ x, eq, length, names)
     if w_ref == 0.0:  # nothing acts on these points: the model's other modes give the scale
-        others = [abs(s) for s, kd in zip(modes.eigenvalues, modes.kind) if kd != "rigid-body"]
+        others = [abs(s) for s, kd in zip(modes.eigenvalues, modes.kind, strict=True)
+                  if kd != "rigid-body"]
         w_ref = max(others, default=0.0)
     return w_eff, w_ref
 

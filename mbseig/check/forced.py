@@ -23,7 +23,8 @@ class ForcedDynamics(ForwardDynamics):
         known = {i.name for i in (getattr(model, "inputs", ()) or ())}
         unknown = sorted(set(inputs) - known)
         if unknown:
-            raise CaseError(f"unknown input {unknown[0]!r} (known: {', '.join(sorted(known)) or 'none'})",
+            raise CaseError(f"unknown input {unknown[0]!r} "
+                            f"(known: {', '.join(sorted(known)) or 'none'})",
                             element="time-domain check")
         self.inputs = dict(inputs)
         self.t = 0.0

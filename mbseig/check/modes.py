@@ -36,7 +36,8 @@ the undamped pendulum shows an apparent δ/ω = 3.0e-12 whether the run lasts 20
 tests/test_timedomain.py).  Implicit L-stable methods (Radau, BDF) damp under-resolved motion;
 Radau is offered (``method=``) for stiff models, where it damps only the unresolved fast modes
 that the modal projection discards; BDF (variable order 1–5) is offered to measure what a
-low-order implicit method does to the measured δ (``mbseig bench``).  A symplectic scheme (RATTLE) would be energy-neutral but is
+low-order implicit method does to the measured δ (``mbseig bench``).
+A symplectic scheme (RATTLE) would be energy-neutral but is
 second order and does not help with the damped and non-conservative forces the check must also
 handle.
 

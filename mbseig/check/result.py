@@ -109,7 +109,8 @@ class ModeCheck:
             "probe": None if math.isnan(self.probe_omega) else {
                 "omega_eff": float(self.probe_omega), "omega_ref": float(self.probe_reference),
                 "ratio": probe_ratio(self), "checked": probe_text(self)},
-            "resolution": {"delta": num(self.resolution_delta), "omega": num(self.resolution_omega)},
+            "resolution": {"delta": num(self.resolution_delta),
+                           "omega": num(self.resolution_omega)},
             "tolerance": {"delta": num(self.tolerance_delta), "omega": num(self.tolerance_omega)},
             "capped": bool(self.capped),
             "unresolved": self.unresolved or None,
