@@ -144,7 +144,7 @@ def mode_figure(model, q0, qs, *, title=""):
         def draw(q):  # the frame axes show a spin about a body's own line
             draw_spatial(ax3, model, layout, q, lambda P: (P[:, 0], P[:, 1], P[:, 2]),
                          colour="tab:red", lw=2.0, triads=0.12 * L)
-            for ax, proj in zip(axes[1:], planes):
+            for ax, proj in zip(axes[1:], planes, strict=True):
                 draw_spatial(ax, model, layout, q, proj, colour="tab:red", lw=2.0,
                              triads=0.12 * L)
     else:
@@ -201,7 +201,7 @@ def write_mode_gif(model, q0, shape, path, *, label="", oscillatory=True, frames
                     canvas.restore_region(background)
                     draw(q)
                     moving = [(ax, [a for a in ax.get_children() if a not in keep])
-                              for ax, keep in zip(axes, base)]
+                              for ax, keep in zip(axes, base, strict=True)]
                     for ax, artists in moving:
                         for artist in artists:
                             ax.draw_artist(artist)

@@ -35,7 +35,7 @@ def chart_figure(chart, *, ax=None):
     ax.set_xlabel(chart.names[0])
     ax.set_ylabel(chart.names[1])
     ax.legend(handles=[Patch(facecolor=c, edgecolor="#888888", label=v)
-                       for c, v in zip(colors, ("stable", "critical", "unstable"))],
+                       for c, v in zip(colors, ("stable", "critical", "unstable"), strict=True)],
               loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7)
     ax.set_title("Floquet stability chart (numbers: max|μ| where unstable)")
     return fig

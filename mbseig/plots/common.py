@@ -113,7 +113,7 @@ def decade_scale(ax, which, values):
     return "symlog"
 
 
-def mode_numbers(res, l):
+def mode_numbers(res, l):  # noqa: E741 -- public parameter name, kept
     """Track → mode number of the sweep's line l (numbered as the mode tables at the line's
     first point: sorted by ω_n, then δ); plain track indices when the result has none."""
     fn = getattr(res, "mode_numbers", None)
@@ -129,7 +129,7 @@ def axis_label(res, name, prefix=""):
     return f"{prefix}{name}{tail}"
 
 
-def line_label(res, l):
+def line_label(res, l):  # noqa: E741 -- public parameter name, kept
     line = res.lines[l] if getattr(res, "lines", None) else {}
     units = getattr(res, "units", None) or {}
     return ", ".join(f"{k} = {v:g}" + (f" {units[k]}" if units.get(k) not in (None, "1") else "")

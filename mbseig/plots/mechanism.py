@@ -176,8 +176,8 @@ def draw_mechanism(ax, model, layout, q, *, colour, lw, alpha=1.0, labels=False,
             if a.idx.size and "." not in n:
                 r = pt(n)
                 extra = f" ({tors[n]} spring)" if n in tors else ""
-                ax.annotate(n + extra, r, textcoords="offset points", xytext=(4, -9), fontsize=small,
-                            color="0.25")
+                ax.annotate(n + extra, r, textcoords="offset points", xytext=(4, -9),
+                            fontsize=small, color="0.25")
         for n in layout["fixed"]:
             if n in tors:
                 ax.annotate(f"{tors[n]} spring", pt(n), textcoords="offset points",

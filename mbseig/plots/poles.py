@@ -156,7 +156,8 @@ def speed_accuracy(res):
     fig = figure(layout="constrained", figsize=(9, 6))
     ax = fig.subplots()
     markers = "os^vD<>pPX*h"
-    rows = [r for r in res["rows"] if r["section"] in ("dense", "structured", "partial", "jacobians")
+    rows = [r for r in res["rows"]
+            if r["section"] in ("dense", "structured", "partial", "jacobians")
             and isinstance(r.get("error"), float) and math.isfinite(r["error"])]
     methods = list(dict.fromkeys(f"{r['section']}: {r['method']}" for r in rows))
     colors = colormap("tab20").colors  # one colour per method (tab10 repeats after ten)
@@ -165,7 +166,8 @@ def speed_accuracy(res):
         x = [r["time"] for r in pts]
         y = [max(r["error"], 1e-17) for r in pts]
         sizes = [r["n"] for r in pts]
-        label = f"{m} (n = {min(sizes):g}…{max(sizes):g})" if len(pts) > 1 else f"{m} (n = {sizes[0]:g})"
+        label = (f"{m} (n = {min(sizes):g}…{max(sizes):g})" if len(pts) > 1
+                 else f"{m} (n = {sizes[0]:g})")
         colour = colors[(2 * k) % 20 if k < 10 else (2 * k + 1) % 20]
         ax.plot(x, y, linestyle="-", label=label, alpha=0.85, color=colour, lw=1.2,
                 marker=markers[k % len(markers)], ms=3)

@@ -41,7 +41,8 @@ def default_stations(res, stations=None):
     ``MAX_CURVES``."""
     items = [(s, res.X1[:, j], res.major[:, j]) for j, s in enumerate(res.stations)]
     items += [(n, res.Y[:, j], np.abs(res.Y[:, j]))
-              for j, (n, u) in enumerate(zip(res.outputs, res.output_units)) if u == "m"]
+              for j, (n, u) in enumerate(zip(res.outputs, res.output_units, strict=True))
+              if u == "m"]
     if stations:
         return [it for it in items if it[0] in set(stations)][:MAX_CURVES]
     moving = [it for it in items if np.nanmax(np.abs(it[2]), initial=0.0) > 0]
@@ -122,7 +123,7 @@ def unbalance_polar(res, *, unit=None, stations=None):
     cmap = colormap("tab10")
     x = np.asarray(res.values, float)
     u = f" {unit}" if unit and unit != "1" else ""
-    for i, (name, z, amp) in enumerate(default_stations(res, stations)):
+    for i, (name, z, _amp) in enumerate(default_stations(res, stations)):
         z = np.asarray(z)
         c = cmap(i % 10)
         ax.plot(z.real, z.imag, "-", color=c, lw=1.2, label=name)
@@ -134,8 +135,9 @@ def unbalance_polar(res, *, unit=None, stations=None):
         ax.annotate(f"{res.parameter} = {x[k]:.4g}{u}", (z.real[k], z.imag[k]), fontsize=6,
                     xytext=(4, 4), textcoords="offset points", color=c)
     for v in _resonances(res):  # the curve is broken there: say where and why
-        ax.plot([], [], color="tab:red", ls="--", lw=1.0, label=f"{res.parameter} = {v:.4g}{u}: {RESONANCE_LABEL} "
-                                         f"(curve broken)")
+        ax.plot([], [], color="tab:red", ls="--", lw=1.0,
+                label=f"{res.parameter} = {v:.4g}{u}: {RESONANCE_LABEL} "
+                      f"(curve broken)")
     ax.axhline(0.0, color="0.5", lw=0.6)
     ax.axvline(0.0, color="0.5", lw=0.6)
     ax.set_aspect("equal", adjustable="datalim")

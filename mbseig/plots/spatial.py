@@ -21,7 +21,8 @@ read by their attributes (duck typing):
 A beam is drawn as a curve: between its nodes the cubic Hermite interpolation of the nodes'
 displaced positions and tangents (each node's triad turning the reference axis; a clamped end
 keeps it; where a node has no triad of its own, the chord), the deformed shape of the element's
-own bending interpolation.  A body is drawn rigid: the displaced configuration q₀ ± a·L·Re(e^{−iφ} x) is projected back
+own bending interpolation.  A body is drawn rigid: the displaced configuration
+q₀ ± a·L·Re(e^{−iφ} x) is projected back
 onto the constraints Φ(q) = 0 (:func:`mbseig.plots.project_constraints`), and its points are
 affine maps of the body's frame, so they move together.  Each body is drawn as the segments
 from its centre of mass to every point it carries and every joint or spring station on it (a
@@ -75,7 +76,7 @@ def spatial_layout(model):
             carried_by.setdefault(p, []).append(name)
     fixed = [n for n, a in model.points.items() if a.idx.size == 0 and "." not in n]
     joints = [p for p, bs in carried_by.items() if len(bs) > 1 or p in fixed]
-    for name, b in model.bodies.items():
+    for _name, b in model.bodies.items():
         joints += list(b.get("markers") or ())[1:]
     for e in model.forces:
         if e.glyph != "rotor":

@@ -67,7 +67,7 @@ def tornado(panels, *, change_pct=10.0):
     axes = list(np.ravel(fig.subplots(grid_rows, cols, squeeze=False)))
     for ax in axes[len(panels):]:
         ax.axis("off")
-    for ax, p in zip(axes, panels):
+    for ax, p in zip(axes, panels, strict=False):  # the grid's spare axes are switched off
         labels = [r[0] for r in p["rows"]][::-1]
         up = np.array([r[1] * change_pct for r in p["rows"]][::-1], float)
         y = np.arange(len(labels))

@@ -27,10 +27,10 @@ def _tracks(res):
     carries none)."""
     cmap = colormap("tab10")
     tols = getattr(res, "tolerances_track", None)
-    for l, S in enumerate(res.tracks):
-        numbers = mode_numbers(res, l)
-        ls = LINESTYLES[l % len(LINESTYLES)]
-        T = None if tols is None or l >= len(tols) else np.asarray(tols[l], float)
+    for li, S in enumerate(res.tracks):
+        numbers = mode_numbers(res, li)
+        ls = LINESTYLES[li % len(LINESTYLES)]
+        T = None if tols is None or li >= len(tols) else np.asarray(tols[li], float)
         for j in res.listed_tracks(S):
             m = numbers.get(j, j + 1)
             yield ls, S[:, j], m, cmap((m - 1) % 10), None if T is None else T[:, j]
@@ -61,10 +61,11 @@ def _mode_legend(ax, res, modes_seen, extra):
     style per line of the other axes, then ``extra`` handles."""
     from matplotlib.lines import Line2D
 
-    handles = [Line2D([], [], color=c, lw=1.5, label=f"mode {m}") for m, c in sorted(modes_seen.items())]
+    handles = [Line2D([], [], color=c, lw=1.5, label=f"mode {m}")
+               for m, c in sorted(modes_seen.items())]
     if len(res.tracks) > 1:
-        handles += [Line2D([], [], color="0.3", linestyle=LINESTYLES[l % len(LINESTYLES)],
-                           label=line_label(res, l)) for l in range(len(res.tracks))]
+        handles += [Line2D([], [], color="0.3", linestyle=LINESTYLES[li % len(LINESTYLES)],
+                           label=line_label(res, li)) for li in range(len(res.tracks))]
     ax.legend(handles=handles + extra, fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0),
               borderaxespad=0.0, title=f"modes numbered at {res.axis} = {res.values[0]:g}",
               title_fontsize=7)
@@ -213,12 +214,12 @@ def bifurcation_diagram(res):
     var = res.diagram.get("variable", "")
     seen = set()
     n_lines = len(res.branches)
-    for l, branch in enumerate(res.branches):
+    for li, branch in enumerate(res.branches):
         # lines that share a branch (parameters that do not enter the statics) would hide each
         # other: the first line is drawn widest, each next one narrower on top of it
-        lw = 1.4 + 1.6 * (n_lines - 1 - l)
+        lw = 1.4 + 1.6 * (n_lines - 1 - li)
         pts = [b for b in branch if b.get("value") is not None]
-        for a, b in zip(pts, pts[1:]):
+        for a, b in zip(pts, pts[1:], strict=False):  # consecutive pairs: one fewer
             if a["segment"] != b["segment"]:
                 ax.plot([a["p"], b["p"]], [a["value"], b["value"]], ":", color="0.6", lw=0.8)
                 continue
@@ -251,13 +252,14 @@ def bifurcation_diagram(res):
         seen.add("boundary")
     ax.set_xlabel(axis_label(res, res.axis))
     ax.set_ylabel(f"{var} [{res.diagram.get('unit', '')}]")
-    title = f"bifurcation diagram of {Path(res.case).stem}" + (f" ({res.config})" if res.config else "")
+    title = (f"bifurcation diagram of {Path(res.case).stem}"
+             + (f" ({res.config})" if res.config else ""))
     ax.set_title(title + ": dashed = unstable, dotted = jump")
     ax.grid(True, lw=0.3)
     if n_lines > 1:
-        for l in range(n_lines):
-            ax.plot([], [], "-", color="0.6", lw=1.4 + 1.6 * (n_lines - 1 - l),
-                    label=line_label(res, l) or f"line {l + 1}")
+        for li in range(n_lines):
+            ax.plot([], [], "-", color="0.6", lw=1.4 + 1.6 * (n_lines - 1 - li),
+                    label=line_label(res, li) or f"line {li + 1}")
         seen.add("lines")
     if seen:
         ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
