@@ -41,16 +41,16 @@ class Affine:
         """Time derivative ṙ = C q̇[idx]."""
         return self.C @ qd[self.idx]
 
-    def __sub__(self, other: "Affine") -> "Affine":
+    def __sub__(self, other: Affine) -> Affine:
         return combine([(1.0, self), (-1.0, other)])
 
     @staticmethod
-    def constant(value) -> "Affine":
+    def constant(value) -> Affine:
         value = np.asarray(value, dtype=float)
         return Affine(np.zeros(0, dtype=np.intp), np.zeros((value.size, 0)), value.copy())
 
     @staticmethod
-    def select(indices, fixed_values=None) -> "Affine":
+    def select(indices, fixed_values=None) -> Affine:
         """A point whose coordinates are q[indices] (indices < 0 mark fixed components)."""
         indices = np.asarray(indices, dtype=np.intp)
         free = indices >= 0

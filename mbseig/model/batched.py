@@ -32,15 +32,15 @@ __all__ = ["SpringDamperSet", "QuadraticGroup", "kernel_groups", "spring_forces"
 def _geometry(d, k, l0, label):
     """Length l = √(d·d) (complex-step safe) and direction e of each member; a zero length is
     allowed only for a zero free length (or no stiffness), with e = x̂."""
-    l = np.sqrt(np.einsum("ij,ij->i", d, d))
-    zero = l == 0.0
+    length = np.sqrt(np.einsum("ij,ij->i", d, d))
+    zero = length == 0.0
     bad = zero & (l0 != 0.0) & (k != 0.0)
     if np.any(bad):
         raise EquilibriumError("spring has zero length but a non-zero free length: its "
                                "direction is undefined", element=label(int(np.argmax(bad))))
-    e = np.divide(d, l[:, None], out=np.zeros_like(d), where=~zero[:, None])
+    e = np.divide(d, length[:, None], out=np.zeros_like(d), where=~zero[:, None])
     e[zero, 0] = 1.0
-    return l, e
+    return length, e
 
 
 def spring_forces(d, dd, k, l0, c, label):
@@ -52,8 +52,8 @@ def spring_forces(d, dd, k, l0, c, label):
     """
     if d.shape[1] == 1:
         return k[:, None] * (d - l0[:, None]) + c[:, None] * dd
-    l, e = _geometry(d, k, l0, label)
-    mag = k * (l - l0) + c * np.einsum("ij,ij->i", e, dd)
+    length, e = _geometry(d, k, l0, label)
+    mag = k * (length - l0) + c * np.einsum("ij,ij->i", e, dd)
     return mag[:, None] * e
 
 
@@ -62,18 +62,18 @@ def spring_tangents(d, dd, k, l0, c, label):
     nb, dim = d.shape
     if dim == 1:
         return k[:, None, None] * np.ones((nb, 1, 1)), c[:, None, None] * np.ones((nb, 1, 1))
-    l, e = _geometry(d, k, l0, label)
-    I = np.eye(dim)[None]
+    length, e = _geometry(d, k, l0, label)
+    eye = np.eye(dim)[None]
     E = e[:, :, None] * e[:, None, :]
-    Pn = I - E
-    safe = np.where(l > 0, l, 1.0)
-    r = np.where(l > 0, l0 / safe, 0.0)[:, None, None]
+    Pn = eye - E
+    safe = np.where(length > 0, length, 1.0)
+    r = np.where(length > 0, l0 / safe, 0.0)[:, None, None]
     kk = k[:, None, None]
-    Kf = kk * ((1.0 - r) * I + r * E)
+    Kf = kk * ((1.0 - r) * eye + r * E)
     edd = np.einsum("ij,ij->i", e, dd)[:, None, None]
-    c_l = np.where(l > 0, c / safe, 0.0)[:, None, None]
+    c_l = np.where(length > 0, c / safe, 0.0)[:, None, None]
     Kf = Kf + c_l * (np.einsum("ij,ijk->ik", dd, Pn)[:, None, :] * e[:, :, None] + edd * Pn)
-    Kf = np.where((l > 0)[:, None, None], Kf, kk * I)
+    Kf = np.where((length > 0)[:, None, None], Kf, kk * eye)
     return Kf, c[:, None, None] * E
 
 
@@ -286,5 +286,5 @@ class QuadraticGroup:
         Kz = Gt @ (self.K @ G + self.D @ Gdot) + 2.0 * np.einsum("nk,nkij->nij", f, B)
         Cz = Gt @ self.D @ G
         if self.unit:
-            return list(zip(Kz, Cz))
-        return list(zip(self.Ct @ Kz @ self.C, self.Ct @ Cz @ self.C))
+            return list(zip(Kz, Cz, strict=True))
+        return list(zip(self.Ct @ Kz @ self.C, self.Ct @ Cz @ self.C, strict=True))

@@ -1,4 +1,5 @@
-"""Spatial beams and shafts: the 3-D Timoshenko / Euler–Bernoulli element, linear and co-rotational.
+"""Spatial beams and shafts: the 3-D Timoshenko / Euler–Bernoulli element, linear and
+co-rotational.
 
 Two layers.
 
@@ -9,7 +10,8 @@ Two layers.
    of a uniform shaft element (Nelson 1980; Friswell et al., *Dynamics of Rotating Machines*,
    2010, ch. 5; the element ROSS uses), with
 
-       M d̈ + Ω G d̈ + (K + N K_g) d = f          (G skew: spin Ω about +x; N axial force, tension > 0)
+       M d̈ + Ω G d̈ + (K + N K_g) d = f          (G skew: spin Ω about +x; N axial force,
+                                                  tension > 0)
 
    Bending in the xy-plane acts on (v, θz) with v′ ≈ θz, in the xz-plane on (w, θy) with
    w′ ≈ −θy; each plane uses the interdependent Timoshenko interpolation (Friedman & Kosmatka
@@ -39,7 +41,8 @@ Two layers.
 
        u  = l − l₀                                  elongation
        θ  = ½ (c₁·b₂ − b₁·c₂)                       twist (sin of the relative rotation about x)
-       φz_i = −e·b_i,  φy_i = e·c_i                 end rotations about z and y relative to the chord
+       φz_i = −e·b_i,  φy_i = e·c_i                 end rotations about z and y relative to
+                                                    the chord
 
    all invariant under rigid motions and zero at the reference (dot products of co-rotated
    vectors), smooth, with gradients and Hessians in closed form.  The strain energy is the
@@ -180,31 +183,32 @@ class Beam3DElement(Force, ConfigurationMass):
         """p (6,), B = ∂p/∂z (6, 24) and the Hessians ∇²p_k (6, 24, 24) on the section axes z
         (None without ``hessians``)."""
         d = _D @ z
-        l = np.sqrt(d @ d)
-        if l.real == 0.0:
+        length = np.sqrt(d @ d)
+        if length.real == 0.0:
             raise EquilibriumError("beam element collapsed to zero length", element=self.name)
-        e = d / l
+        e = d / length
         P = np.eye(3) - np.outer(e, e)
         dt = z.dtype
         p = np.zeros(6, dtype=dt)
         B = np.zeros((6, 24), dtype=dt)
         H = np.zeros((6, 24, 24), dtype=dt) if hessians else None
-        p[0] = l - self.l0
+        p[0] = length - self.l0
         B[0] = e @ _D
         p[1] = 0.5 * ((_C1 @ z) @ (_B2 @ z) - (_B1 @ z) @ (_C2 @ z))
         B[1] = _H_TWIST @ z
         if hessians:
-            H[0] = _D.T @ (P / l) @ _D
+            H[0] = _D.T @ (P / length) @ _D
             H[1] = _H_TWIST
         for k, (sgn, X) in enumerate(_DOTS, start=2):
             x = X @ z
             ex = e @ x
             p[k] = sgn * ex
-            B[k] = sgn * ((x - ex * e) / l @ _D + e @ X)
+            B[k] = sgn * ((x - ex * e) / length @ _D + e @ X)
             if not hessians:
                 continue
-            Hdd = -(np.outer(x, e) + np.outer(e, x) + ex * (np.eye(3) - 3 * np.outer(e, e))) / (l * l)
-            Hdx = _D.T @ (P / l) @ X
+            Hdd = -(np.outer(x, e) + np.outer(e, x)
+                    + ex * (np.eye(3) - 3 * np.outer(e, e))) / (length * length)
+            Hdx = _D.T @ (P / length) @ X
             H[k] = sgn * (_D.T @ Hdd @ _D + Hdx + Hdx.T)
         return p, B, H
 

@@ -13,7 +13,8 @@ quantity depends on them) equal, byte for byte, those of the batch: it depends o
 so a served result is the element's own at the state asked, whatever else changed.  An element
 not in the batch is evaluated alone (a batch of one) and joins the next batch.  Each result is
 served once (the caller owns the array, and the group keeps no batch alive after its members
-were served); an element that asks again at the same state starts a new batch.  A member's numbers do not depend
+were served); an element that asks again at the same state starts a new batch.  A member's
+numbers do not depend
 on the batch it is evaluated in (:class:`~mbseig.model.beam3d_kernel.Stack`), so that, e.g.,
 M(q₀) − M_ref is exactly zero for a mass formed element by element when the model was built.
 """
@@ -71,7 +72,7 @@ class BatchGroup:
             n = q.shape[0]
             members = [m for m in members if m is element or (m.idx.size and m.idx.max() < n)]
             results = self._run(kind, members, q, qd)
-            for m, r in zip(members, results):
+            for m, r in zip(members, results, strict=True):
                 mi = m.idx
                 cache.entries[m] = (q[mi].tobytes() + (qd[mi].tobytes() if KINDS[kind] else b""),
                                     r)
@@ -92,7 +93,7 @@ class BatchGroup:
     def _stack(self, members):
         key = tuple(id(m) for m in members)
         hit = self.stacks.get(key)
-        if hit is None or any(a is not b for a, b in zip(hit[0], members)):
+        if hit is None or any(a is not b for a, b in zip(hit[0], members, strict=True)):
             if len(self.stacks) >= STACKS_KEPT:
                 self.stacks.pop(next(iter(self.stacks)))
             hit = (tuple(members), kern.Stack([m.kernel_record() for m in members]))
@@ -117,16 +118,16 @@ class BatchGroup:
         spin = bool(np.any(st.spin))
         if spin:
             TC = kern.velocity_map(z, kern.frame(z)) @ st.C
-        p, l, e, X, ex = kern.measures(z, st.l0)
+        p, length, e, X, ex = kern.measures(z, st.l0)
         Up, Upp = kern.energy_derivatives(st, p, hessian=kind == "jacobians")
         if kind == "force":
-            g = -st.to_q(kern.force_z(z, Up, l, e, X, ex))
+            g = -st.to_q(kern.force_z(z, Up, length, e, X, ex))
             if spin:  # − Ω Tᵀ G T q̇
                 v = np.einsum("nij,nj->ni", st.G, np.einsum("nim,nm->ni", TC, qd[st.idx]))
                 g = g - st.spin[:, None] * np.einsum("nim,ni->nm", TC, v)
             out = [g[k, :s] for k, s in enumerate(sizes)]
         else:
-            K = st.Ct @ kern.stiffness_z(z, Up, Upp, l, e, X, ex) @ st.C
+            K = st.Ct @ kern.stiffness_z(z, Up, Upp, length, e, X, ex) @ st.C
             if spin:
                 C = st.spin[:, None, None] * (TC.transpose(0, 2, 1) @ st.G @ TC)
             else:

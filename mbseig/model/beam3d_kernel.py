@@ -69,15 +69,15 @@ def measures(z, l0):
     """(p, l, e, X, ex): p (nb, 6) = [u, θ, φz₁, φz₂, φy₁, φy₂], the chord length l and
     direction e, the dot vectors X (nb, 4, 3) = [b₁, b₂, c₁, c₂] and ex = e·x_k (nb, 4)."""
     d = z[:, 12:15] - z[:, 0:3]
-    l = np.sqrt(_dot(d, d))
-    e = d / l[:, None]
+    length = np.sqrt(_dot(d, d))
+    e = d / length[:, None]
     X = z[:, _X_COLS]
     ex = _dot(X, e[:, None, :])
     p = np.empty((z.shape[0], 6))
-    p[:, 0] = l - l0
+    p[:, 0] = length - l0
     p[:, 1] = 0.5 * (_dot(z[:, 9:12], z[:, 18:21]) - _dot(z[:, 6:9], z[:, 21:24]))
     p[:, 2:] = SIGNS * ex
-    return p, l, e, X, ex
+    return p, length, e, X, ex
 
 
 def energy_derivatives(st, p, hessian=False):
@@ -103,19 +103,19 @@ def energy_derivatives(st, p, hessian=False):
     return Up, Upp
 
 
-def _gradients(l, e, X, ex):
+def _gradients(length, e, X, ex):
     """B = ∂p/∂z (nb, 6, 24) without the twist row (row 1, filled by the caller)."""
-    nb = l.shape[0]
+    nb = length.shape[0]
     B = np.zeros((nb, 6, 24))
     B[:, 0, 12:15], B[:, 0, 0:3] = e, -e
-    t = SIGNS[None, :, None] * (X - ex[:, :, None] * e[:, None, :]) / l[:, None, None]
+    t = SIGNS[None, :, None] * (X - ex[:, :, None] * e[:, None, :]) / length[:, None, None]
     B[:, 2:, 12:15], B[:, 2:, 0:3] = t, -t
     for k, s in enumerate(X_AT):
         B[:, 2 + k, s:s + 3] = SIGNS[k] * e
     return B
 
 
-def force_z(z, Up, l, e, X, ex):
+def force_z(z, Up, l, e, X, ex):  # noqa: E741 -- public parameter name, kept
     """Bᵀ U_p (nb, 24): the elastic force on z is its negative."""
     w = Up[:, 2:] * SIGNS  # U_p,k s_k
     f = Up[:, :1] * e + np.einsum("nk,nkj->nj", w, X - ex[:, :, None] * e[:, None, :]) \
@@ -132,7 +132,7 @@ def force_z(z, Up, l, e, X, ex):
     return out
 
 
-def stiffness_z(z, Up, Upp, l, e, X, ex):
+def stiffness_z(z, Up, Upp, l, e, X, ex):  # noqa: E741 -- public parameter name, kept
     """K_z = Bᵀ U_pp B + Σ_k U_p,k ∇²p_k (nb, 24, 24), the exact tangent on z."""
     B = _gradients(l, e, X, ex)
     B[:, 1] = 0.0

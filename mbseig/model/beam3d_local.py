@@ -59,7 +59,8 @@ class BeamProperties3D:
         return bool(self.rotary_inertia)
 
     def shear_parameters(self, L: float) -> tuple[float, float]:
-        """(Φ_y, Φ_z) = (12 E I_z/(κ_y G A L²), 12 E I_y/(κ_z G A L²)); zeros for Euler–Bernoulli."""
+        """(Φ_y, Φ_z) = (12 E I_z/(κ_y G A L²), 12 E I_y/(κ_z G A L²)); zeros for
+        Euler–Bernoulli."""
         if self.theory == "euler-bernoulli":
             return 0.0, 0.0
         c = 12.0 * self.E / (self.G * self.A * L * L)
@@ -83,7 +84,8 @@ class ElementMatrices:
 
 
 def _bending_stiffness(EI, L, Phi):
-    """Closed-form Timoshenko bending stiffness on planar (w, ψ) (Przemieniecki; Friswell eq. 5.x)."""
+    """Closed-form Timoshenko bending stiffness on planar (w, ψ) (Przemieniecki; Friswell
+    eq. 5.x)."""
     return EI / (L**3 * (1 + Phi)) * np.array([
         [12.0, 6 * L, -12, 6 * L],
         [6 * L, (4 + Phi) * L**2, -6 * L, (2 - Phi) * L**2],

@@ -73,15 +73,15 @@ def section_properties(*, shape: str, dims: dict, nu: float, element: str = "") 
     kappa = cowper_shear_coefficient(shape, dims, nu)
     if shape == "circle":
         d = dims["d"]
-        I = math.pi * d**4 / 64.0
-        return {"A": math.pi * d**2 / 4.0, "Iy": I, "Iz": I, "J": 2 * I, "kappa": kappa,
+        Ib = math.pi * d**4 / 64.0
+        return {"A": math.pi * d**2 / 4.0, "Iy": Ib, "Iz": Ib, "J": 2 * Ib, "kappa": kappa,
                 "depth": d}
     if shape == "tube":
         d, di = dims["d"], dims["d_inner"]
         if di >= d:
             raise CaseError(f"tube d_inner = {di:g} must be less than d = {d:g}", element=element)
-        I = math.pi * (d**4 - di**4) / 64.0
-        return {"A": math.pi * (d**2 - di**2) / 4.0, "Iy": I, "Iz": I, "J": 2 * I,
+        Ib = math.pi * (d**4 - di**4) / 64.0
+        return {"A": math.pi * (d**2 - di**2) / 4.0, "Iy": Ib, "Iz": Ib, "J": 2 * Ib,
                 "kappa": kappa, "depth": d}
     b, h = dims["b"], dims["h"]
     return {"A": b * h, "Iy": b * h**3 / 12.0, "Iz": h * b**3 / 12.0,

@@ -18,7 +18,8 @@ class SpinningShaft:
     """The whirl stations of a spinning beam (``spin``), read like a rigid ``rotor`` by
     :mod:`mbseig.model.spatial_whirl`: ``frame`` stacks the first node's frame [r; u; v; w] and
     the triads of the other nodes (a mode which only twists or tilts the nodes counts as body
-    motion: ``motion_idx``, their coordinates), ``axis`` the beam axis in the first node's frame, ``speed`` Ω, ``stations``
+    motion: ``motion_idx``, their coordinates), ``axis`` the beam axis in the first node's
+    frame, ``speed`` Ω, ``stations``
     (label, Affine) of every node's point.  Not an element: it adds nothing to the equations."""
 
     name: str

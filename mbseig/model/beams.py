@@ -82,7 +82,7 @@ class BeamSection:
     E: float
     G: float
     A: float
-    I: float
+    I: float  # noqa: E741 -- public field (constructor keyword, section.I)
     rho: float
     kappa: float
     theory: str = "euler-bernoulli"
@@ -166,36 +166,36 @@ class BeamElement(Force, ConfigurationMass):
     # -- kinematics --------------------------------------------------------------------------
     def _kinematics(self, w):
         d = _D @ w
-        l = math.hypot(d[0], d[1])
-        if l == 0.0:
+        length = math.hypot(d[0], d[1])
+        if length == 0.0:
             raise EquilibriumError("beam element collapsed to zero length", element=self.name)
-        e = d / l
+        e = d / length
         n = np.array([-e[1], e[0]])
         beta = math.atan2(d[1], d[0])
         phi = np.array([_wrap(w[2] - beta), _wrap(w[5] - beta)])
-        return d, l, e, n, phi
+        return d, length, e, n, phi
 
     def local_deformation(self, q):
         """(u, φ₁, φ₂): elongation and end rotations relative to the chord."""
-        _, l, _, _, phi = self._kinematics(self.nodes(q))
-        return np.array([l - self.l0, phi[0], phi[1]])
+        _, length, _, _, phi = self._kinematics(self.nodes(q))
+        return np.array([length - self.l0, phi[0], phi[1]])
 
     def strain_parts(self, w):
-        d, l, e, n, phi = self._kinematics(w)
+        d, length, e, n, phi = self._kinematics(w)
         s, l0 = self.section, self.l0
         EA = s.E * s.A
         B = np.zeros((3, 6))
         B[0, [0, 1, 3, 4]] = [-e[0], -e[1], e[0], e[1]]
         for k, col in ((1, 2), (2, 5)):
-            B[k, [0, 1, 3, 4]] = [n[0] / l, n[1] / l, -n[0] / l, -n[1] / l]
+            B[k, [0, 1, 3, 4]] = [n[0] / length, n[1] / length, -n[0] / length, -n[1] / length]
             B[k, col] = 1.0
         a = self._G @ phi
-        eps = (l - l0) / l0 + 0.5 * phi @ a
+        eps = (length - l0) / l0 + 0.5 * phi @ a
         Up = np.concatenate([[EA * eps], EA * l0 * eps * a + self._Kb @ phi])
         c = np.concatenate([[1.0 / l0], a])
         Upp = EA * l0 * np.outer(c, c)
         Upp[1:, 1:] += EA * l0 * eps * self._G + self._Kb
-        return d, l, e, n, B, Up, Upp
+        return d, length, e, n, B, Up, Upp
 
     # -- force element interface ------------------------------------------------------------
     def force(self, q, qd):
@@ -205,8 +205,8 @@ class BeamElement(Force, ConfigurationMass):
 
     def jacobians(self, q, qd):
         w = self.nodes(q)
-        d, l, e, n, B, Up, Upp = self.strain_parts(w)
-        H_l = _D.T @ (np.outer(n, n) / l) @ _D
+        d, length, e, n, B, Up, Upp = self.strain_parts(w)
+        H_l = _D.T @ (np.outer(n, n) / length) @ _D
         x, y = d
         r4 = (x * x + y * y) ** 2
         Hb = np.array([[2 * x * y, y * y - x * x], [y * y - x * x, -2 * x * y]]) / r4

@@ -4,7 +4,8 @@ arguments (q, and λ where it enters).
 A solve asks for Φ, Φ_q, g, K and H at one q several times (the Newton corrector, the force
 scale, the static stability, the linearization), and assembling them is what costs; the model
 keeps its last dense evaluations of a small model here (read-only, so that no caller changes a
-kept one) and the statics keeps the quantities of one solve here (:class:`mbseig.statics.cache.Memo`).
+kept one) and the statics keeps the quantities of one solve here
+(:class:`mbseig.statics.cache.Memo`).
 """
 
 from __future__ import annotations

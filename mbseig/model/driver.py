@@ -1,4 +1,5 @@
-"""Driving constraint: a prescribed relative angle between two planar directions (docs/design.md, "Equilibrium").
+"""Driving constraint: a prescribed relative angle between two planar directions (docs/design.md,
+"Equilibrium").
 
     Φ(q) = wrap(θ(q) − θ*),   θ = s · atan2(a × b, a · b),   s = +1 (ccw) or −1 (cw)
 

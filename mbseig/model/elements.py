@@ -173,7 +173,10 @@ class SpringDamper(Force):
     def members(self, q, qd):
         """d, ḋ and the parameters as a batch of one member (:mod:`mbseig.model.batched`)."""
         D = self.diff.C
-        arr = lambda x: np.array([x], dtype=float)
+
+        def arr(x):
+            return np.array([x], dtype=float)
+
         return (self.diff(q)[None], (D @ qd[self.idx])[None], arr(self.stiffness),
                 arr(self.free_length), arr(self.damping), lambda k: self.name)
 
@@ -206,7 +209,8 @@ def relative_angle(dirs: Affine, q, sense: float, name: str):
     # g = sense [−∇α(a); ∇α(b)], H = sense diag(−∇²α(a), ∇²α(b)) (angle_derivatives)
     g = np.array([ay / ra, -ax / ra, -by / rb, bx / rb]) * sense
     sa, sb = -sense / (ra * ra), sense / (rb * rb)
-    pa, ma, pb, mb = 2 * ax * ay * sa, (ay * ay - ax * ax) * sa, 2 * bx * by * sb, (by * by - bx * bx) * sb
+    pa, ma, pb, mb = (2 * ax * ay * sa, (ay * ay - ax * ax) * sa,
+                      2 * bx * by * sb, (by * by - bx * bx) * sb)
     H = np.array([[pa, ma, 0.0, 0.0], [ma, -pa, 0.0, 0.0], [0.0, 0.0, pb, mb], [0.0, 0.0, mb, -pb]])
     theta = sense * math.atan2(ax * by - ay * bx, ax * bx + ay * by)
     return theta, g, H

@@ -41,7 +41,8 @@ def export_fe_body(model, interface, path, *, n_modes=None, q=None, lam=None):
     """Write a model (typically one free-free beam) as a Craig–Bampton FE body.
 
     interface : point names; each contributes (P.x, P.y, θ) with θ the angle coordinate of the
-        beam node at P (in 3-D: u_x, u_y, u_z, θ_x, θ_y, θ_z, :mod:`mbseig.model.fe_body3d`).  The matrices are M(q) and K(q) + Σλ∇²Φ at q (default the initial
+        beam node at P (in 3-D: u_x, u_y, u_z, θ_x, θ_y, θ_z, :mod:`mbseig.model.fe_body3d`).
+        The matrices are M(q) and K(q) + Σλ∇²Φ at q (default the initial
         positions), on the model's coordinates when it has no constraints.  ``path`` ending in
         .npz gets arrays ``M`` and ``K``; ending in .mtx gives ``<stem>_M.mtx`` and
         ``<stem>_K.mtx`` (MatrixMarket).  Returns the written file names.

@@ -70,7 +70,7 @@ def node_matrices(model, q=None, lam=None) -> NodeMatrices:
             at_point[rec["nodes"][-1]] = rec["points"][1]
     cols, labels, used = [], [], set()
     n = len(names)
-    for i, nm in enumerate(names):
+    for _i, nm in enumerate(names):
         if nm in used:
             continue
         if nm.endswith(".u.x"):

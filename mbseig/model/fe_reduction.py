@@ -29,7 +29,8 @@ def craig_bampton(M, K, boundary, n_modes=None):
     Kii, Kib = K[np.ix_(i, i)], K[np.ix_(i, b)]
     Psi = -np.linalg.solve(Kii, Kib)
     k = i.size if n_modes is None else min(int(n_modes), i.size)
-    _, Phi = sla.eigh(Kii, M[np.ix_(i, i)], subset_by_index=[0, k - 1]) if k else (None, np.zeros((i.size, 0)))
+    _, Phi = (sla.eigh(Kii, M[np.ix_(i, i)], subset_by_index=[0, k - 1]) if k
+              else (None, np.zeros((i.size, 0))))
     T = np.zeros((n, b.size + k))
     T[b, :b.size] = np.eye(b.size)
     T[np.ix_(i, np.arange(b.size))] = Psi

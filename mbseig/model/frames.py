@@ -28,7 +28,8 @@ class CoordinateFrames:
         self.dim = int(getattr(model, "dimension", 3) or 3)
         self.n = model.n
         self.points, self.vectors, self.angles = {}, {}, {}
-        for i, (nm, kind) in enumerate(zip(model.coordinate_names, model.coordinate_kinds)):
+        for i, (nm, kind) in enumerate(zip(model.coordinate_names, model.coordinate_kinds,
+                                             strict=True)):
             head, _, axis = nm.rpartition(".")
             if kind == "length" and axis in "xyz":
                 self.points.setdefault(head, {})[axis] = i
@@ -62,7 +63,10 @@ class CoordinateFrames:
         angs = [self.angles[h] for k, h in sorted(members) if k == "a"]
         axes = "xyz"[: self.dim]
         cols, rots, labels = [], [], []
-        triad = lambda t: [t.get(a, -1) for a in "xyz"]
+
+        def triad(t):
+            return [t.get(a, -1) for a in "xyz"]
+
         P = np.array([triad(p) for p in pts], int).reshape(-1, 3)
         V = np.array([triad(v) for v in vecs], int).reshape(-1, 3)
         if pts:
@@ -74,17 +78,17 @@ class CoordinateFrames:
             g = np.zeros(self.n)
             g[P[P[:, k] >= 0, k]] = 1.0
             cols.append(g), rots.append(None), labels.append(("t", a, centre))
-        I = np.vstack([P, V])
+        ix = np.vstack([P, V])
         c = np.array([centre.get(a, 0.0) for a in "xyz"])
-        R = np.where(I >= 0, q[np.maximum(I, 0)], 0.0)
+        R = np.where(ix >= 0, q[np.maximum(ix, 0)], 0.0)
         R[: len(P)] -= np.where(P >= 0, c, 0.0)  # points about the centroid, vectors as they are
         rot_axes = "xyz" if self.dim == 3 else ("z" if self.dim == 2 else "")
         for w in rot_axes:  # rotations about the centroid
             k = "xyz".index(w)
             g = np.zeros(self.n)
-            _scatter(g, I, _cross_axis(k, R))
+            _scatter(g, ix, _cross_axis(k, R))
             g[angs] = 1.0
-            cols.append(g), rots.append((k, I))
+            cols.append(g), rots.append((k, ix))
             labels.append(("r", w, centre if pts else None))
         G = np.column_stack(cols) if cols else np.zeros((self.n, 0))
         keep = np.flatnonzero(np.abs(G).max(axis=0) > 0)
@@ -143,9 +147,9 @@ def _cross_axis(k, R):
     return out
 
 
-def _scatter(out, I, values):
-    ok = I >= 0
-    out[I[ok]] = values[ok]
+def _scatter(out, ix, values):
+    ok = ix >= 0
+    out[ix[ok]] = values[ok]
 
 
 def rotate(rot, v):
@@ -154,6 +158,6 @@ def rotate(rot, v):
     out = np.zeros_like(v)
     if rot is None:
         return out
-    k, I = rot
-    _scatter(out, I, _cross_axis(k, np.where(I >= 0, v[np.maximum(I, 0)], 0.0)))
+    k, ix = rot
+    _scatter(out, ix, _cross_axis(k, np.where(ix >= 0, v[np.maximum(ix, 0)], 0.0)))
     return out

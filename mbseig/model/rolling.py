@@ -34,7 +34,8 @@ component (n × e_f ⊥ e_f) is (n × e_f)·(Ġ − R ė_d), and whose normal co
 
 Each velocity row is ψ_k = (X_k z)·(Y_k ż) + b_k Ω with constant X_k, Y_k, b = (−R, 0), so
 
-    A_k(q) = (X_k z)ᵀ Y_k C,    ∂(A_k(q) q̇)/∂q = (Y_k ż)ᵀ X_k C,    ∂(A_k(q)ᵀ μ_k)/∂q = μ_k Cᵀ Y_kᵀ X_k C
+    A_k(q) = (X_k z)ᵀ Y_k C,    ∂(A_k(q) q̇)/∂q = (Y_k ż)ᵀ X_k C,
+    ∂(A_k(q)ᵀ μ_k)/∂q = μ_k Cᵀ Y_kᵀ X_k C
 
 exactly (z = C q + d the frame map of the wheel body).
 
@@ -68,7 +69,8 @@ __all__ = ["Motion", "RollingWheel", "WheelRows", "rolling_wheel", "wheel_proble
 
 @dataclass(frozen=True)
 class Motion:
-    """The reference of a steady motion (DESIGN §8 ``[motion]``): speed v along the unit ``direction``; ``yaw_rate`` about the gravity axis."""
+    """The reference of a steady motion (DESIGN §8 ``[motion]``): speed v along the unit
+    ``direction``; ``yaw_rate`` about the gravity axis."""
 
     speed: float
     direction: tuple = (1.0, 0.0, 0.0)
@@ -89,7 +91,8 @@ class WheelRows(QuadraticConstraint):
 def wheels_of(model) -> tuple:
     """The rolling wheels of ``model``: its velocity constraints, or the wheels carried by its
     :class:`WheelRows` constraints (the reader places the rows among the constraints)."""
-    found = tuple(v for v in getattr(model, "velocity_constraints", ()) if isinstance(v, RollingWheel))
+    found = tuple(v for v in getattr(model, "velocity_constraints", ())
+                  if isinstance(v, RollingWheel))
     if found:
         return found
     return tuple(c.wheel for c in model.constraints if isinstance(c, WheelRows))
@@ -104,17 +107,17 @@ def wheel_problem(inertia, axis, *, rtol=1e-9):
     """Why a body with ``inertia`` (3×3 about its centre of mass, global axes at the reference)
     cannot roll as an axisymmetric wheel about ``axis``, or None: ``axis`` must be a principal
     axis and the two moments normal to it must be equal."""
-    I = np.asarray(inertia, float)
+    inertia = np.asarray(inertia, float)
     a = np.asarray(axis, float)
     if not np.isfinite(a).all() or np.linalg.norm(a) == 0:
         return "axis must be a non-zero vector"
     a = a / np.linalg.norm(a)
-    scale = max(float(np.abs(I).max()), 1e-300)
-    Ia = a @ I @ a
-    if np.linalg.norm(I @ a - Ia * a) > rtol * scale:
+    scale = max(float(np.abs(inertia).max()), 1e-300)
+    Ia = a @ inertia @ a
+    if np.linalg.norm(inertia @ a - Ia * a) > rtol * scale:
         return "the wheel is not axisymmetric about its axle (axis is not a principal axis)"
     p = np.linalg.svd(a.reshape(1, 3))[2][1:]  # two unit vectors normal to a
-    It = p @ I @ p.T
+    It = p @ inertia @ p.T
     if abs(It[0, 0] - It[1, 1]) > rtol * scale or abs(It[0, 1]) > rtol * scale:
         return (f"the wheel is not axisymmetric about its axle (moments normal to it "
                 f"{It[0, 0]:.6g}, {It[1, 1]:.6g})")
@@ -202,7 +205,7 @@ class RollingWheel(VelocityConstraint):
     def multiplier_stiffness(self, mu):
         """∂(A(q)ᵀ μ)/∂q (len(idx) square, constant): Σ_k μ_k Cᵀ Y_kᵀ X_k C."""
         C = self.frame.C
-        return sum(m * C.T @ Y.T @ X @ C for m, (X, Y) in zip(mu, self._xy))
+        return sum(m * C.T @ Y.T @ X @ C for m, (X, Y) in zip(mu, self._xy, strict=True))
 
     # ---- mass and the gyroscopic moment of the spin -----------------------------------------
     def mass_correction(self):

@@ -101,7 +101,7 @@ class Input(Signal):
         elif self.kind == "moment3":
             from .spatial_forces import moment_force
 
-            for frame, sign in zip(self.frames, (-1.0, 1.0)):
+            for frame, sign in zip(self.frames, (-1.0, 1.0), strict=True):
                 if frame is not None and frame.idx.size:
                     gz = moment_force(frame(q), sign * self.axis)[0]
                     np.add.at(b, frame.idx, frame.C.T @ gz)

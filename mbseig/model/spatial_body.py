@@ -138,13 +138,13 @@ def inertia_problem(inertia, *, rtol: float = 1e-12) -> str | None:
     """Why ``inertia`` (3×3, about the centre of mass) is not a rigid body's inertia tensor, or
     None: it must be symmetric, positive definite and satisfy the triangle inequalities
     I₁ ≤ I₂ + I₃ of its principal moments (equality: a plane lamina)."""
-    I = np.asarray(inertia, float)
-    scale = float(np.max(np.abs(I), initial=0.0))
-    if not np.all(np.isfinite(I)):
+    inertia = np.asarray(inertia, float)
+    scale = float(np.max(np.abs(inertia), initial=0.0))
+    if not np.all(np.isfinite(inertia)):
         return "inertia must be finite"
-    if np.max(np.abs(I - I.T), initial=0.0) > rtol * max(scale, 1e-300):
+    if np.max(np.abs(inertia - inertia.T), initial=0.0) > rtol * max(scale, 1e-300):
         return "inertia tensor must be symmetric"
-    p = np.linalg.eigvalsh(0.5 * (I + I.T))
+    p = np.linalg.eigvalsh(0.5 * (inertia + inertia.T))
     if p[0] <= 0:
         return (f"inertia tensor must be positive definite (principal moments "
                 f"{', '.join(f'{x:.6g}' for x in p)})")

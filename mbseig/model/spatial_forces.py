@@ -162,7 +162,8 @@ class QuadraticSpringDamper(Force):
     rows: QuadraticMap
     stiffness: np.ndarray
     damping: np.ndarray
-    kernel = "quadratic strains"  # many at once: mbseig.model.batched.QuadraticGroup (this class only)
+    # many at once: mbseig.model.batched.QuadraticGroup (this class only)
+    kernel = "quadratic strains"
     affine_field = "aff"
 
     @property

@@ -233,8 +233,13 @@ def joint_rows(kind: str, frames, locals_, axes, length: float) -> QuadraticMap:
     S1, S2 = selectors()
     rows = Rows(z)
     P = (point_matrix(locals_[0]) @ S1 - point_matrix(locals_[1]) @ S2) / length
-    V1 = lambda e: vector_matrix(e) @ S1
-    V2 = lambda e: vector_matrix(e) @ S2
+
+    def V1(e):
+        return vector_matrix(e) @ S1
+
+    def V2(e):
+        return vector_matrix(e) @ S2
+
     if kind in ("spherical", "revolute", "universal", "weld"):
         rows.linear(P)
     if kind in ("revolute", "cylindrical", "prismatic"):

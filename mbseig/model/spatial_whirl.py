@@ -14,7 +14,8 @@ and every point where a joint, bushing or spring acts on that body (``Rotor.stat
 every node of a spinning beam (``SpinningShaft.stations``, casefile.flexible3d).
 
 Whirl of the mode: ``none`` when the mode hardly moves the rotor laterally: its lateral
-fraction (below) is at most ``NONE_FRACTION`` = 0.1 (axial and torsional modes); otherwise the stations whose orbit
+fraction (below) is at most ``NONE_FRACTION`` = 0.1 (axial and torsional modes); otherwise the
+stations whose orbit
 turns (|κ| > ``line_tol``) decide: ``forward`` when all turn with the spin, ``backward`` when
 all turn against it, ``mixed`` when they disagree (ROSS's convention) — and ``mixed`` too when
 every orbit is a straight line (a planar mode, the sum of equal forward and backward whirls,

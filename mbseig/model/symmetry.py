@@ -187,7 +187,7 @@ def _describe(coef, labels):
     line (through a point, along a unit vector), or for a part without points of its own (a
     triad turning about the point that carries it) a spin about an axis."""
     t, om, centre = np.zeros(3), np.zeros(3), None
-    for c, (kind, axis, cen) in zip(coef, labels):
+    for c, (kind, axis, cen) in zip(coef, labels, strict=True):
         k = "xyz".index(axis)
         (t if kind == "t" else om)[k] += c
         if cen is not None:
@@ -274,7 +274,7 @@ def rigid_directions(model, q0, lam0, Qr, N, *, label=None) -> RigidDirections:
         D, coefs, r = _part_directions(frames, members, q0, elements, Phi_q, Qr, N)
         if not coefs:
             continue
-        for col, (coef, labels) in zip(D.T, coefs):
+        for col, (coef, labels) in zip(D.T, coefs, strict=True):
             v = col - basis @ (basis.T @ col)
             nv = np.linalg.norm(v)
             if nv <= 1e-8 * np.linalg.norm(col):

@@ -131,9 +131,10 @@ class Model:
             return [getattr(e, method)(*args) for e in elements]
         out = [None] * len(elements)
         for pos, group in groups:
-            for k, v in zip(pos.tolist(), getattr(group, method)(*args)):
+            for k, v in zip(pos.tolist(), getattr(group, method)(*args), strict=True):
                 out[k] = v
-        return [getattr(e, method)(*args) if v is None else v for e, v in zip(elements, out)]
+        return [getattr(e, method)(*args) if v is None else v
+                for e, v in zip(elements, out, strict=True)]
 
     def mass_matrix(self, q=None, *, fixed=False) -> sp.csr_matrix:
         """M(q): ``mass`` with the configuration-dependent element masses evaluated at q, the
@@ -190,10 +191,10 @@ class Model:
         single = iter(self._each(1, "jacobians", q, qd))
         for f in self.forces:
             if isinstance(f, BatchForce):  # batches give COO triplets
-                for t, x in zip((kt, ct), f.jacobian_coo(q, qd)):
+                for t, x in zip((kt, ct), f.jacobian_coo(q, qd), strict=True):
                     t.append(x)
                 continue
-            for b, x in zip((kb, cb), next(single)):
+            for b, x in zip((kb, cb), next(single), strict=True):
                 b.append((f.idx, f.idx, x))
         if dense:
             K, C = (_summed(self.n, self.n, self._layout[1], b) for b in (kb, cb))
@@ -217,8 +218,11 @@ class Model:
 
     def _phi_q(self, q, dense):
         off, jacs = self._layout[0], self._each(0, "jac", q)
-        blocks = lambda: [(np.arange(off[k], off[k + 1]), c.idx, jacs[k])
-                          for k, c in enumerate(self.constraints)]
+
+        def blocks():
+            return [(np.arange(off[k], off[k + 1]), c.idx, jacs[k])
+                    for k, c in enumerate(self.constraints)]
+
         if dense:
             return _summed(self.n_constraints, self.n, self._layout[2],
                            [(None, None, J) for J in jacs], blocks)
@@ -238,7 +242,7 @@ class Model:
         hs = [None] * len(self.constraints)
         for pos, group in self._groups[0]:  # the members' multipliers, one row each
             rows = off[pos][:, None] + np.arange(group.B.shape[1])
-            for k, H in zip(pos.tolist(), group.hess(lam[rows])):
+            for k, H in zip(pos.tolist(), group.hess(lam[rows]), strict=True):
                 hs[k] = H
         blocks = [(c.idx, c.idx, c.hess(q, lam[off[k]:off[k + 1]]) if hs[k] is None else hs[k])
                   for k, c in enumerate(self.constraints)]
@@ -276,13 +280,13 @@ class Model:
                     member = f.nonfinite_member(q, qd)
                     if member is not None:
                         return member, "the force or its stiffness"
-                elif not _finite(lambda: (f.force(q, qd), *f.jacobians(q, qd))):
+                elif not _finite(lambda f=f: (f.force(q, qd), *f.jacobians(q, qd))):
                     return f.name, "the force or its stiffness"
             for e, _ in self.mass_elements:
-                if not _finite(lambda: (e.mass(q),)):
+                if not _finite(lambda e=e: (e.mass(q),)):
                     return e.name, "the mass matrix"
             for c in self.constraints:
-                if not _finite(lambda: (c.phi(q), c.jac(q), c.hess(q, np.ones(c.n_eq)))):
+                if not _finite(lambda c=c: (c.phi(q), c.jac(q), c.hess(q, np.ones(c.n_eq)))):
                     return c.name, "the constraint or its derivatives"
         return None
 
@@ -322,7 +326,8 @@ class _Layout:
             r, c = _block_pairs([(e.idx, e.idx) for e, _ in m.mass_elements], np.int64)
             self.kept["mass"] = (None,) * 3
             if M.has_canonical_format and r.size <= FAST_CSR:
-                S, keys = _Sum(n, n, r, c), np.repeat(np.arange(n), np.diff(M.indptr)) * n + M.indices
+                S, keys = (_Sum(n, n, r, c),
+                           np.repeat(np.arange(n), np.diff(M.indptr)) * n + M.indices)
                 U = _Sum(n, n, *np.divmod(np.union1d(keys, S.keys), n))
                 self.kept["mass"] = (S, [np.searchsorted(U.keys, k) for k in (keys, S.keys)], U)
         return self.kept["mass"]
@@ -362,7 +367,7 @@ def _runs(blocks):
     """(R, C) stacked row and column indices of the runs of blocks of one shape, in order."""
     blocks = [(np.asarray(r).ravel(), np.asarray(c).ravel()) for r, c in blocks]
     for _, run in groupby(blocks, key=lambda b: (b[0].size, b[1].size)):
-        yield tuple(np.array(x) for x in zip(*run))
+        yield tuple(np.array(x) for x in zip(*run, strict=True))
 
 
 def _block_keys(blocks, n_cols):

@@ -157,7 +157,7 @@ class TimedModel:
             stacked, cuts = self._kept["stacked"]
             flat = stacked(t, order)
             kept[key] = [flat[a:b].reshape(s.coeffs.shape[1:]) for a, b, s
-                         in zip(cuts[:-1], cuts[1:], series)]
+                         in zip(cuts[:-1], cuts[1:], series, strict=True)]
         return kept[key]
 
     @property
@@ -279,7 +279,7 @@ class TimedModel:
         f = [np.concatenate([x.ravel() for x in blk]) for blk in blocks]
         d1 = self._differences(h, [f[0], f[1], 0.0, f[2], f[3]])[0]  # Φ_qt: no middle term
         start = 0
-        for (k, a, b), x in zip(rows, blocks[0]):
+        for (k, a, b), x in zip(rows, blocks[0], strict=True):
             out[a:b, self.base.constraints[k].idx] += d1[start:start + x.size].reshape(x.shape)
             start += x.size
         return out
@@ -309,7 +309,7 @@ def sample_time(build_at, period, *, samples=16, check=3):
         a, b = getattr(base, kind), getattr(end, kind)
         if len(a) != len(b):
             raise CaseError("the model's elements change with time", element="motion")
-        for k, (ea, eb) in enumerate(zip(a, b)):
+        for _k, (ea, eb) in enumerate(zip(a, b, strict=True)):
             if type(ea) is not type(eb):
                 raise CaseError("the model's elements change with time", element=ea.name)
     if base.mass.shape != end.mass.shape or _differs(base.mass.toarray(), end.mass.toarray()):
@@ -359,7 +359,8 @@ def sample_time(build_at, period, *, samples=16, check=3):
             for leaf in leaves:
                 want = np.asarray(_get(ref, leaf.where), float)
                 got = leaf.series(t)
-                err = max(err, float(np.max(np.abs(got - want))) / max(1.0, float(np.max(np.abs(want)))))
+                err = max(err, float(np.max(np.abs(got - want)))
+                          / max(1.0, float(np.max(np.abs(want)))))
         if err <= 1e-12 or N >= _MAX_SAMPLES:
             return TimedModel(base, T, tuple(leaves), err, N)
         N *= 2
