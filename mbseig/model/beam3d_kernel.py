@@ -115,11 +115,11 @@ def _gradients(length, e, X, ex):
     return B
 
 
-def force_z(z, Up, l, e, X, ex):  # noqa: E741 -- public parameter name, kept
+def force_z(z, Up, length, e, X, ex):
     """Bᵀ U_p (nb, 24): the elastic force on z is its negative."""
     w = Up[:, 2:] * SIGNS  # U_p,k s_k
-    f = Up[:, :1] * e + np.einsum("nk,nkj->nj", w, X - ex[:, :, None] * e[:, None, :]) \
-        / l[:, None]
+    f = Up[:, :1] * e + np.einsum("nk,nkj->nj", w, X - ex[:, :, None] * e[:, None, :])\
+        / length[:, None]
     out = np.zeros_like(z)
     out[:, 12:15], out[:, 0:3] = f, -f
     for k, s in enumerate(X_AT):
@@ -132,15 +132,15 @@ def force_z(z, Up, l, e, X, ex):  # noqa: E741 -- public parameter name, kept
     return out
 
 
-def stiffness_z(z, Up, Upp, l, e, X, ex):  # noqa: E741 -- public parameter name, kept
+def stiffness_z(z, Up, Upp, length, e, X, ex):
     """K_z = Bᵀ U_pp B + Σ_k U_p,k ∇²p_k (nb, 24, 24), the exact tangent on z."""
-    B = _gradients(l, e, X, ex)
+    B = _gradients(length, e, X, ex)
     B[:, 1] = 0.0
     B[:, 1, 9:12], B[:, 1, 18:21] = 0.5 * z[:, 18:21], 0.5 * z[:, 9:12]
     B[:, 1, 6:9], B[:, 1, 21:24] = -0.5 * z[:, 21:24], -0.5 * z[:, 6:9]
     K = np.einsum("nki,nkl,nlj->nij", B, Upp, B)
     P = _I3 - e[:, :, None] * e[:, None, :]
-    il = 1.0 / l[:, None, None]
+    il = 1.0 / length[:, None, None]
     w = Up[:, 2:] * SIGNS
     # ∂²/∂d²: U₀ P/l + Σ s_k U_k Hdd_k, Hdd = −(x eᵀ + e xᵀ + (e·x)(I − 3 e eᵀ))/l²
     xe = np.einsum("nk,nki,nj->nij", w, X, e)

@@ -113,13 +113,13 @@ def decade_scale(ax, which, values):
     return "symlog"
 
 
-def mode_numbers(res, l):  # noqa: E741 -- public parameter name, kept
-    """Track → mode number of the sweep's line l (numbered as the mode tables at the line's
+def mode_numbers(res, li):
+    """Track → mode number of the sweep's line li (numbered as the mode tables at the line's
     first point: sorted by ω_n, then δ); plain track indices when the result has none."""
     fn = getattr(res, "mode_numbers", None)
     if fn is not None:
-        return fn(l)
-    return {j: j + 1 for j in range(res.tracks[l].shape[1])}
+        return fn(li)
+    return {j: j + 1 for j in range(res.tracks[li].shape[1])}
 
 
 def axis_label(res, name, prefix=""):
@@ -129,8 +129,8 @@ def axis_label(res, name, prefix=""):
     return f"{prefix}{name}{tail}"
 
 
-def line_label(res, l):  # noqa: E741 -- public parameter name, kept
-    line = res.lines[l] if getattr(res, "lines", None) else {}
+def line_label(res, li):
+    line = res.lines[li] if getattr(res, "lines", None) else {}
     units = getattr(res, "units", None) or {}
     return ", ".join(f"{k} = {v:g}" + (f" {units[k]}" if units.get(k) not in (None, "1") else "")
                      for k, v in line.items())
