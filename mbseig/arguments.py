@@ -96,7 +96,8 @@ FLAG = _simple("True or False", _flag)
 NUMBER = _simple("a finite number", _real, lambda v: math.isfinite(v))
 POSITIVE = _simple("a positive finite number", _real, lambda v: math.isfinite(v) and v > 0)
 NONNEGATIVE = _simple("a finite number >= 0", _real, lambda v: math.isfinite(v) and v >= 0)
-CALLBACK = _simple("True, False, None or a callable", lambda v: v is None or _flag(v) or callable(v))
+CALLBACK = _simple("True, False, None or a callable",
+                   lambda v: v is None or _flag(v) or callable(v))
 
 
 def count(minimum: int) -> Rule:
@@ -250,7 +251,8 @@ def _either_case_or_model(v, a):
 
 
 def _resume(v, a):
-    return None if isinstance(v, (str, os.PathLike)) or _is_a(v, "Checkpoint") else ArgumentTypeError
+    return (None if isinstance(v, (str, os.PathLike)) or _is_a(v, "Checkpoint")
+            else ArgumentTypeError)
 
 
 def _table(v, a):

@@ -21,7 +21,7 @@ class MbseigError(Exception):
         parts = [p for p in (self.file, self.element) if p]
         return ": ".join(parts + [self.message])
 
-    def located(self, *, file: str | None = None, element: str | None = None) -> "MbseigError":
+    def located(self, *, file: str | None = None, element: str | None = None) -> MbseigError:
         """Return a copy with the file and/or element filled in where still unknown."""
         return type(self)(self.message, file=self.file or file, element=self.element or element)
 

@@ -24,9 +24,9 @@ import scipy.sparse as sp
 
 from .errors import MbseigError, NumericalError
 
-__all__ = ["LazyModule", "min_norm_projection", "scatter", "coo_sum", "dense", "constraint_rank", "null_space_basis", "colnorm",
-           "unit_columns", "jsonable", "nonfinite", "require_finite", "watched", "DOUBLE_RANGE",
-           "blas_limit", "element_name", "user_names", "grow_columns"]
+__all__ = ["LazyModule", "min_norm_projection", "scatter", "coo_sum", "dense", "constraint_rank",
+           "null_space_basis", "colnorm", "unit_columns", "jsonable", "nonfinite", "require_finite",
+           "watched", "DOUBLE_RANGE", "blas_limit", "element_name", "user_names", "grow_columns"]
 
 
 # an element's label as the reader makes it (casefile.fields.expand): ``forces[3] 'actuator'``,
@@ -101,7 +101,8 @@ def scatter(n_rows, n_cols, blocks, *, dense=False):
             continue
         r, c = np.asarray(r).ravel(), np.asarray(c).ravel()
         # row-major (i, j) pairs of the block, as meshgrid(r, c, indexing="ij") gives them
-        triplets.append((np.repeat(r, c.size), np.tile(c, r.size), np.asarray(v, dtype=float).ravel()))
+        triplets.append((np.repeat(r, c.size), np.tile(c, r.size),
+                         np.asarray(v, dtype=float).ravel()))
     return coo_sum(n_rows, n_cols, triplets)
 
 
@@ -113,7 +114,8 @@ def _dense_sum(n_rows, n_cols, keys, vals):
     k = np.concatenate(keys)
     if k.size and (k.min() < 0 or k.max() >= n_rows * n_cols):
         raise IndexError(f"index outside a {n_rows} × {n_cols} matrix")
-    return np.bincount(k, weights=np.concatenate(vals), minlength=n_rows * n_cols).reshape(n_rows, n_cols)
+    return np.bincount(k, weights=np.concatenate(vals),
+                       minlength=n_rows * n_cols).reshape(n_rows, n_cols)
 
 
 FAST_CSR = 20000  # triplets up to which CSR is assembled by numpy (scipy's COO path costs
@@ -125,14 +127,15 @@ def coo_sum(n_rows, n_cols, triplets, *, dense=False):
     dense array when ``dense``."""
     triplets = [t for t in triplets if t[0].size]
     if dense:
-        return _dense_sum(n_rows, n_cols, [np.asarray(r) * n_cols + np.asarray(c) for r, c, _ in triplets],
+        return _dense_sum(n_rows, n_cols,
+                          [np.asarray(r) * n_cols + np.asarray(c) for r, c, _ in triplets],
                           [np.asarray(v, dtype=float) for _, _, v in triplets])
     if not triplets:
         return sp.csr_matrix((n_rows, n_cols))
     if len(triplets) == 1:  # (one triplet: its arrays as they are, no copies)
         r, c, v = (np.asarray(x).ravel() for x in triplets[0])
     else:
-        r, c, v = (np.concatenate(x) for x in zip(*triplets))
+        r, c, v = (np.concatenate(x) for x in zip(*triplets, strict=True))
     if r.size > FAST_CSR:
         return sp.coo_matrix((v, (r, c)), shape=(n_rows, n_cols)).tocsr()
     return csr_from_triplets(n_rows, n_cols, r, c, v)
@@ -212,7 +215,8 @@ def null_space_basis(Phi_q, n, rank_tol):
 def colnorm(X):
     """Column 2-norms of a real or complex block without complex temporaries."""
     if np.iscomplexobj(X):
-        return np.sqrt(np.einsum("ij,ij->j", X.real, X.real) + np.einsum("ij,ij->j", X.imag, X.imag))
+        return np.sqrt(np.einsum("ij,ij->j", X.real, X.real)
+                       + np.einsum("ij,ij->j", X.imag, X.imag))
     return np.sqrt(np.einsum("ij,ij->j", X, X))
 
 

@@ -76,12 +76,12 @@ def _undamped_eigh(M, Q, m=None):
 def diagonal_mass_eigh(Qs, m):
     """(ω², V) of Qs v = ω² diag(m) v, Qs symmetric (overwritten): diag(m) scaled out, a
     standard problem for LAPACK's divide and conquer (``syevd``); V in C order."""
-    l = np.sqrt(m)
-    if np.any(l != 1.0):
-        Qs /= l[:, None]
-        Qs /= l[None, :]
+    root = np.sqrt(m)
+    if np.any(root != 1.0):
+        Qs /= root[:, None]
+        Qs /= root[None, :]
     w, U = sla.eigh(Qs, driver="evd", overwrite_a=True, check_finite=False)
-    return w, np.divide(U, l[:, None], order="C")
+    return w, np.divide(U, root[:, None], order="C")
 
 
 def _times(A, V):
@@ -143,17 +143,20 @@ def _require_finite(A, what):
 def solve_companion(M, P, Q, opts, name, reason, norms):
     n = M.shape[0]
     if (opts["diagonal"] if "diagonal" in opts else diagonal_positive(M)):  # lumped (diagonal) M
-        l = np.sqrt(np.diagonal(M).real)
+        root = np.sqrt(np.diagonal(M).real)
         with np.errstate(over="ignore", invalid="ignore"):  # judged by _require_finite below
-            Qt = Q / np.outer(l, l)
-            Pt = P / np.outer(l, l)
-        back = lambda Y: Y / l[:, None]  # L⁻ᵀ y with L = diag(√m)
+            Qt = Q / np.outer(root, root)
+            Pt = P / np.outer(root, root)
+        def back(Y):
+            return Y / root[:, None]  # L⁻ᵀ y with L = diag(√m)
     else:
         L = opts.get("L")
         L = sla.cholesky(0.5 * (M + M.T), lower=True) if L is None else L
         Qt = _lower_solve(L, _lower_solve(L, Q).T).T
         Pt = _lower_solve(L, _lower_solve(L, P).T).T
-        back = lambda Y: _lower_solve(L, Y, trans=1)  # L⁻ᵀ y
+        def back(Y):
+            return _lower_solve(L, Y, trans=1)  # L⁻ᵀ y
+
     gamma = np.sqrt(np.linalg.norm(Qt) / np.sqrt(n)) if np.any(Qt) else 1.0
     gamma = gamma if np.isfinite(gamma) and gamma > 0 else 1.0
     A = np.zeros((2 * n, 2 * n), dtype=np.result_type(Qt, Pt), order="F")
@@ -281,9 +284,9 @@ def solve_qz(M, P, Q, opts, name, reason, norms):
     n = M.shape[0]
     gamma, delta = _flvd(norms, opts.get("scale", True))
     Ms, Ps, Qs = gamma**2 * delta * M, gamma * delta * P, delta * Q
-    I = np.eye(n)
-    A = np.block([[np.zeros((n, n)), I], [-Qs, -Ps]])
-    B = np.block([[I, np.zeros((n, n))], [np.zeros((n, n)), Ms]])
+    Id = np.eye(n)
+    A = np.block([[np.zeros((n, n)), Id], [-Qs, -Ps]])
+    B = np.block([[Id, np.zeros((n, n))], [np.zeros((n, n)), Ms]])
     _require_finite(A, "the scaled companion pencil")
     _require_finite(B, "the scaled companion pencil")
     out = _lapack(sla.eig, A, B, left=opts["left"], right=True, homogeneous_eigvals=True,
@@ -319,8 +322,8 @@ def _general_result(M, P, Q, s, X1, X2, Y, n_inf, details, opts, name, reason, n
         MX, PX = M @ X, P @ X
     kappa = conditions(s, X, Yc, MX, PX, norms)
     return QEPSolution(s, X, eta, kappa, name, reason, n_inf, norms,
-                       {**details, "second_half_vectors": n_second, "left_vectors": bool(opts["left"]),
-                        "refined_vectors": n_refined},
+                       {**details, "second_half_vectors": n_second,
+                        "left_vectors": bool(opts["left"]), "refined_vectors": n_refined},
                        None, left_vectors=Yc)
 
 

@@ -96,7 +96,8 @@ class GEPSolution(QEPSolution):
         return self.condition * self.backward_error
 
     def componentwise(self, idx=None):
-        """(η_c, κ_c): η_c = maxᵢ |r|ᵢ / ((|s||E| + |A|)|x|)ᵢ, κ_c = |y|ᵀ(|s||E| + |A|)|x| / |yᴴEx|."""
+        """(η_c, κ_c): η_c = maxᵢ |r|ᵢ / ((|s||E| + |A|)|x|)ᵢ,
+        κ_c = |y|ᵀ(|s||E| + |A|)|x| / |yᴴEx|."""
         E, A = self.problem
         idx = np.arange(self.eigenvalues.size) if idx is None else np.asarray(idx)
         eta, kap = np.empty(idx.size), np.empty(idx.size)
@@ -144,7 +145,8 @@ def solve_descriptor(E, A, *, inf_tol=1e-12, zero_tol=None, solver="descriptor-q
     cplx = np.iscomplexobj(E) or np.iscomplexobj(A)
     return GEPSolution(s[order], X[:, order], eta[order], kappa[order], solver, reason,
                        n_infinite=int((~finite).sum()), norms=(nE, nA),
-                       details={"inf_tol": inf_tol, "zero_tol": zero_tol, "n_rigid": n_rigid}, left_vectors=Yc[:, order],
+                       details={"inf_tol": inf_tol, "zero_tol": zero_tol, "n_rigid": n_rigid},
+                       left_vectors=Yc[:, order],
                        n_dof=E.shape[0], complex_problem=cplx, problem=(E, A))
 
 

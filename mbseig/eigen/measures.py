@@ -13,7 +13,8 @@ so that κ·η bounds the error of s to first order (docs/design.md, "Eigenpair 
 The componentwise pair (Higham & Higham 1998) perturbs each entry relative to itself, so a zero
 entry stays zero::
 
-    η_c = maxᵢ |r|ᵢ / ((|s|²|M| + |s||P| + |Q|)|x|)ᵢ,   κ_c = |y|ᵀ(|s|²|M| + |s||P| + |Q|)|x| / |yᴴ(2sM + P)x|
+    η_c = maxᵢ |r|ᵢ / ((|s|²|M| + |s||P| + |Q|)|x|)ᵢ,
+    κ_c = |y|ᵀ(|s|²|M| + |s||P| + |Q|)|x| / |yᴴ(2sM + P)x|
 
 and κ_c·η_c is an error bound of s as valid as κ·η (the computed pair is exact for a perturbation
 of M, P, Q bounded entrywise by η_c); it is much sharper for badly scaled models and structured

@@ -121,7 +121,8 @@ def sparse_structure(M, P, Q, *, sym_tol=1e-13, rayleigh_tol=1e-12, probes=3, se
         if ab is not None:
             return ("partial-proportional", f"P = {ab[0]:.6g} M + {ab[1]:.6g} Q (Rayleigh damping)",
                     {"alpha": ab[0], "beta": ab[1]})
-    return "partial-companion", "general damping or non-symmetric: shift-invert on the companion pencil", {}
+    return ("partial-companion",
+            "general damping or non-symmetric: shift-invert on the companion pencil", {})
 
 
 def solve_partial(M, P, Q, *, n_modes: int | None = None, target: float | None = None,
@@ -156,7 +157,8 @@ def solve_partial(M, P, Q, *, n_modes: int | None = None, target: float | None =
     M, Q = _csr(M), _csr(Q)
     P = _csr(P, n)
     if not (M.shape == P.shape == Q.shape == (n, n)):
-        raise SolverError(f"M, P, Q must be square and of one size, got {M.shape}, {P.shape}, {Q.shape}")
+        raise SolverError(f"M, P, Q must be square and of one size, got {M.shape}, {P.shape}, "
+                          f"{Q.shape}")
     for A in (M, P, Q):
         if not np.all(np.isfinite(A.data)):
             raise SolverError("M, P and Q must be finite")
@@ -169,8 +171,8 @@ def solve_partial(M, P, Q, *, n_modes: int | None = None, target: float | None =
     if target is not None and not (np.isfinite(target) and target >= 0):
         raise SolverError(f"target must be a finite angular frequency ≥ 0, got {target!r}")
     name, reason, extras = sparse_structure(M, P, Q, sym_tol=sym_tol, rayleigh_tol=rayleigh_tol)
-    name, reason, extras = contract.select_path(solver, contract.Structure(name, reason, extras), "partial",
-                                       "partial solver")
+    name, reason, extras = contract.select_path(solver, contract.Structure(name, reason, extras),
+                                                "partial", "partial solver")
     m = 0 if G is None else G.shape[0]
     if m:
         G = _csr(G) if sp.issparse(G) else sp.csr_matrix(np.asarray(G, dtype=float))
@@ -272,9 +274,11 @@ contract.register_family("partial", partial_driver)
 contract.register("partial-eigh", family="partial", needs="P = 0, M and Q symmetric",
          kernel=lambda run, want, omega_t, band, max_modes, verify_tol: symmetric_search(
              run, want, omega_t, band, max_modes), applies=contract.structured_applies("eigh"))
-contract.register("partial-proportional", family="partial", needs="P = αM + βQ with M and Q symmetric",
+contract.register("partial-proportional", family="partial",
+         needs="P = αM + βQ with M and Q symmetric",
          kernel=lambda run, want, omega_t, band, max_modes, verify_tol: symmetric_search(
-             run, want, omega_t, band, max_modes), applies=contract.structured_applies("proportional"))
+             run, want, omega_t, band, max_modes),
+         applies=contract.structured_applies("proportional"))
 contract.register("partial-companion", family="partial", needs="nothing (any sparse M, P, Q)",
          kernel=lambda run, want, omega_t, band, max_modes, verify_tol: companion_search(
              run, want, omega_t, band, max_modes))

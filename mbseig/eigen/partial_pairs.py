@@ -41,7 +41,8 @@ def take_columns(X, cols):
     """X[:, cols] in row-major order (the measures run over blocks of rows), X itself where
     ``cols`` is every column in order and X is row-major already."""
     cols = np.asarray(cols)
-    if X.flags.c_contiguous and cols.size == X.shape[1] and np.array_equal(cols, np.arange(cols.size)):
+    if (X.flags.c_contiguous and cols.size == X.shape[1]
+            and np.array_equal(cols, np.arange(cols.size))):
         return X
     return expand_pairs(X, cols, np.zeros(cols.size, bool))
 
@@ -49,7 +50,8 @@ def take_columns(X, cols):
 def _verified(name, s, eta, verify_tol):
     bad = ~(eta <= verify_tol)
     if np.any(bad):
-        worst = ", ".join(f"{z.real:.6g}{z.imag:+.6g}j (η={e:.1e})" for z, e in zip(s[bad][:5], eta[bad][:5]))
+        worst = ", ".join(f"{z.real:.6g}{z.imag:+.6g}j (η={e:.1e})"
+                          for z, e in zip(s[bad][:5], eta[bad][:5], strict=True))
         raise SolverError(f"{name}: {int(bad.sum())} returned pairs fail the backward-error check "
                           f"η ≤ {verify_tol:g}: {worst}")
 

@@ -50,8 +50,9 @@ invertible there.  With M, P, Q symmetric and M, Q positive definite on C:
 
 The coverage is *verified* when that number equals the number of refined pairs (conjugates
 counted) inside the circle, for a radius R between the farthest refined |s| and the next Ritz
-value of the last projection (the returned modes lie inside it).  The certificate takes the converged Lanczos pairs as exact (ARPACK's own convergence
-test, as every partial path does) and ρ from Arnoldi; both are said in the coverage note.
+value of the last projection (the returned modes lie inside it).  The certificate takes the
+converged Lanczos pairs as exact (ARPACK's own convergence test, as every partial path does) and
+ρ from Arnoldi; both are said in the coverage note.
 When a hypothesis fails (P not symmetric, M or Q not shown positive definite on C — by positive
 symmetric pivots of A + αGᵀG —, Rρ + R²/Ω² ≥ 1, the circle too near an eigenvalue of T_LL, the
 counts differ) the result says *not verified* and why; in the last three cases k_u is doubled
@@ -253,7 +254,8 @@ def projected_search(run, want, *, verify_tol, max_iter=MAX_ITER):
         res = _one_attempt(run, want, k_u, lu, hyp, verify_tol, max_iter, n, m, clock)
         attempts.append({"k_u": k_u, "iterations": res["iterations"], "basis": res["basis"],
                          "why": res["cert"]["why"]})
-        if res["cert"]["verified"] or not res["cert"].get("grow") or k_u >= limit or len(attempts) >= 2:
+        if (res["cert"]["verified"] or not res["cert"].get("grow") or k_u >= limit
+                or len(attempts) >= 2):
             break
         k_u = min(2 * k_u, limit)
     s, U = res["s"], res["U"]
@@ -267,7 +269,7 @@ def projected_search(run, want, *, verify_tol, max_iter=MAX_ITER):
     cols, conj, s_out = with_partners(upper[idx], s, tol)
 
     X = np.empty((U.shape[0], cols.size), complex, order="F")  # column by column: no copies
-    for j, (i, cj) in enumerate(zip(cols, conj)):
+    for j, (i, cj) in enumerate(zip(cols, conj, strict=True)):
         X[:, j] = U[:, i].conj() if cj else U[:, i]
     figures = {k: res[k] for k in ("iterations", "basis", "eta_history")}
     del res, U
@@ -278,8 +280,8 @@ def projected_search(run, want, *, verify_tol, max_iter=MAX_ITER):
     why = cert["why"]
     basis = ("count certificate (Rouché on the undamped-mode projection; Lanczos pairs taken as "
              "exact, ρ an Arnoldi estimate)")
-    cnote = (f"{basis}: the disc |s| < {cert['R']:.6g} holds {cert['n_inside']} eigenvalues and all "
-             f"were computed, so every eigenvalue with |s| ≤ {d:.6g} is listed" if verified
+    cnote = (f"{basis}: the disc |s| < {cert['R']:.6g} holds {cert['n_inside']} eigenvalues and "
+             f"all were computed, so every eigenvalue with |s| ≤ {d:.6g} is listed" if verified
              else f"not verified ({why}); the pairs returned are verified by η only")
     note = "; ".join(x for x in (note, cnote) if x)
     info = {"k_u": attempts[-1]["k_u"], "attempts": attempts, "iterations": figures["iterations"],
@@ -351,7 +353,7 @@ def _one_attempt(run, want, k_u, lu, hyp, verify_tol, max_iter, n, m, clock):
             break
     if not np.all(eta <= verify_tol):
         badv = ", ".join(f"{z.real:.6g}{z.imag:+.6g}j (η={e:.1e})" for z, e in
-                         zip(s[eta > verify_tol][:5], eta[eta > verify_tol][:5]))
+                         zip(s[eta > verify_tol][:5], eta[eta > verify_tol][:5], strict=True))
         raise SolverError(f"partial-projected: {int(np.sum(eta > verify_tol))} of the {s.size} "
                           f"Ritz pairs nearest 0 did not reach η ≤ {verify_tol:g} after {it} "
                           f"refinement rounds (basis {B.k}): {badv}")

@@ -72,7 +72,8 @@ def basis_products(P, Phi, ZP):
 def hypotheses(M, P, Q, Gc, sym_tol, sig):
     """The certificate's structural hypotheses: (ok, why)."""
     if sig != 0.0:
-        return False, f"Q_b is (nearly) singular at 0 (factorized at σ = {sig:.3g}): Q is not shown positive definite on the constraints"
+        return False, (f"Q_b is (nearly) singular at 0 (factorized at σ = {sig:.3g}): Q is not "
+                       f"shown positive definite on the constraints")
     if not is_symmetric(P, sym_tol):
         return False, "P is not symmetric"
     if not pd_on_constraints(M, Gc):
@@ -134,7 +135,8 @@ def certificate(lu, hyp, Phi, lam, products, s_found, s_ritz, M, P, n, m):
         try:
             A = spla.LinearOperator((n, n), matvec=op, dtype=float)
             th = spla.eigs(A, k=1, which="LM", ncv=min(12, n - 1), tol=1e-4, maxiter=500,
-                           return_eigenvectors=False, v0=np.random.default_rng(3).standard_normal(n))
+                           return_eigenvectors=False,
+                           v0=np.random.default_rng(3).standard_normal(n))
             rho = float(np.max(np.abs(th))) * RHO_MARGIN
         except (spla.ArpackNoConvergence, spla.ArpackError) as exc:
             out["why"] = f"ρ (damping/stiffness ratio on the high modes) not estimated: {exc}"
@@ -152,9 +154,9 @@ def certificate(lu, hyp, Phi, lam, products, s_found, s_ritz, M, P, n, m):
         R = r_sel + f * (r_next - r_sel)
         den = 1.0 - R * rho - R * R / Omega2
         if not den > 0:
-            last = (f"Rρ + R²/Ω² = {R * rho + R * R / Omega2:.3g} ≥ 1 at R = {R:.6g} (ρ = {rho:.3g} s, "
-                    f"Ω = {np.sqrt(Omega2):.6g} rad/s): the damping of the high modes is too strong "
-                    f"for the bound, or too few undamped modes")
+            last = (f"Rρ + R²/Ω² = {R * rho + R * R / Omega2:.3g} ≥ 1 at R = {R:.6g} "
+                    f"(ρ = {rho:.3g} s, Ω = {np.sqrt(Omega2):.6g} rad/s): the damping of the high "
+                    f"modes is too strong for the bound, or too few undamped modes")
             out["grow"] = R * R / Omega2 > 0.5 * (1 - R * rho) or out["grow"]
             continue
         tau = R * R * b2 / den
@@ -167,7 +169,8 @@ def certificate(lu, hyp, Phi, lam, products, s_found, s_ritz, M, P, n, m):
             out["grow"] = True
             continue
         n_ll = int(np.sum(np.abs(s_ll) < R))
-        n_in = int(np.sum(np.abs(s_found) < R)) + int(np.sum((np.abs(s_found) < R) & (np.abs(s_found.imag) > 1e-9 * np.abs(s_found))))
+        n_in = int(np.sum(np.abs(s_found) < R)) + int(np.sum(
+            (np.abs(s_found) < R) & (np.abs(s_found.imag) > 1e-9 * np.abs(s_found))))
         out.update(R=R, tau=tau, sigma_min=lo, n_projected=n_ll, n_inside=n_in)
         if n_ll != n_in:
             out["why"] = (f"the disc |s| < {R:.6g} holds {n_ll} eigenvalues (Rouché count), "

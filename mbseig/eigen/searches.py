@@ -59,7 +59,8 @@ def symmetric_search(run, want, omega_t, band, max_modes):
         lo, hi = (band if band is not None else (max(omega_t - d, 0.0), omega_t + d))
         # the selection is right when both w-intervals [lo², hi²] and [−hi², −lo²] are covered
         need = [(lo * lo, hi * hi), (-hi * hi, -lo * lo)]
-        ok = all(any(c - r * 0.999 <= a and b <= c + r * 0.999 for c, r in covered) for a, b in need)
+        ok = all(any(c - r * 0.999 <= a and b <= c + r * 0.999 for c, r in covered)
+                 for a, b in need)
         if ok or k >= run.limit:
             break
         if k >= max_modes:

@@ -119,8 +119,8 @@ def arpack(fn, what, **kw):
     except spla.ArpackNoConvergence as exc:
         got = 0 if exc.eigenvalues is None else len(exc.eigenvalues)
         raise SolverError(f"{what}: ARPACK did not converge ({got} of {kw.get('k')} eigenvalues "
-                          f"after {kw.get('maxiter') or 'default'} iterations); ask for fewer modes, "
-                          f"move the target or raise maxiter") from None
+                          f"after {kw.get('maxiter') or 'default'} iterations); ask for fewer "
+                          f"modes, move the target or raise maxiter") from None
     except spla.ArpackError as exc:
         raise SolverError(f"{what}: ARPACK failed: {exc}") from None
 
@@ -131,7 +131,8 @@ def undamped_partial(Mb, Qb, k, sigma, scale, ncv, maxiter, tol, purify, lu=None
     Q − σM already made (else one is made here)."""
     nb = Mb.shape[0]
     lu = lu if lu is not None else ShiftLU(Mb, None, Qb, sigma, scale, quadratic=False)
-    OPinv = spla.LinearOperator((nb, nb), matvec=lambda x: lu.solve(np.asarray(x).ravel()), dtype=float)
+    OPinv = spla.LinearOperator((nb, nb), matvec=lambda x: lu.solve(np.asarray(x).ravel()),
+                                dtype=float)
     w, V = arpack(spla.eigsh, "partial-eigh", A=Qb, k=k, M=Mb, sigma=lu.sigma, which="LM",
                    OPinv=OPinv, ncv=ncv, maxiter=maxiter, tol=tol)
     if purify:  # v ← (Q − σM)⁻¹ M v: the component along M's null space (multipliers) is removed
@@ -207,7 +208,8 @@ def left_vectors(Mb, Pb, Qb, s, steps=3):
             except RuntimeError:
                 continue
         if lu is None:
-            raise SolverError(f"left eigenvector of s = {z:.6g}: every factorization near it is singular")
+            raise SolverError(f"left eigenvector of s = {z:.6g}: every factorization near it "
+                              f"is singular")
         y = rng.standard_normal(nb) + 1j * rng.standard_normal(nb)
         for _ in range(steps):
             y = lu.solve(y / np.linalg.norm(y))

@@ -206,7 +206,7 @@ def _own(tmp, *pids, first=False):
 def _write_input(folder, mats, opts):
     """The worker's IN folder: each CSR array as a ``.npy`` file, the options as JSON."""
     np.save(os.path.join(folder, "shape.npy"), np.array(mats[0].shape))
-    for key, A in zip("MPQ", mats):
+    for key, A in zip("MPQ", mats, strict=True):
         A = A.tocsr(copy=True)
         A.sum_duplicates()
         A.sort_indices()

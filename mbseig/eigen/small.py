@@ -247,7 +247,9 @@ def _undamped_pairs(w, mv_norm, r_norm, a, norms):
     |1 + βs| = 1, a zero added to a non-negative sum; a zero's sign never reaches an absolute
     value)."""
     s = undamped_roots(w, 0.0, 0.0)
-    two = lambda x: np.concatenate([x, x]).astype(LD)
+    def two(x):
+        return np.concatenate([x, x]).astype(LD)
+
     with np.errstate(over="ignore", invalid="ignore", divide="ignore", under="ignore"):
         S = s.astype(np.clongdouble)
         W = two(w)
@@ -278,17 +280,20 @@ def _lower(L, B, trans=0):
 def _companion(M, P, Q, memo, norms, left):
     n = M.shape[0]
     if memo["diagonal"] if "diagonal" in memo else diagonal_positive(M):
-        l = np.sqrt(np.diagonal(M).real)
-        ll = np.outer(l, l)
+        root = np.sqrt(np.diagonal(M).real)
+        ll = np.outer(root, root)
         Qt, Pt = Q / ll, P / ll
-        back = lambda Y: Y / l[:, None]
+        def back(Y):
+            return Y / root[:, None]
     else:
         L = memo.get("L")
         if L is None or not L.flags.f_contiguous:
             return None
         Qt = _lower(L, _lower(L, Q).T).T
         Pt = _lower(L, _lower(L, P).T).T
-        back = lambda Y: _lower(L, Y, trans=1)
+        def back(Y):
+            return _lower(L, Y, trans=1)
+
     gamma = np.sqrt(np.linalg.norm(Qt) / np.sqrt(n)) if np.any(Qt) else 1.0
     gamma = gamma if np.isfinite(gamma) and gamma > 0 else 1.0
     A = np.zeros((2 * n, 2 * n), order="F")

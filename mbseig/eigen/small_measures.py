@@ -99,9 +99,14 @@ def better_half(M, P, Q, X1, X2, co):
     e1, e2 = eta[:k], eta[k:]
     take2 = e2 < e1
     if not take2.any():
-        first = lambda A: np.ascontiguousarray(A[:, :k])
+        def first(A):
+            return np.ascontiguousarray(A[:, :k])
+
         return first(Xs), np.minimum(e1, e2), first(MX), first(PX), 0
-    pick = lambda A: np.where(take2, A[:, k:], A[:, :k])
+
+    def pick(A):
+        return np.where(take2, A[:, k:], A[:, :k])
+
     return pick(Xs), np.minimum(e1, e2), pick(MX), pick(PX), int(take2.sum())
 
 

@@ -26,7 +26,8 @@ def fro(A) -> float:
     if data.size == 0:
         return 0.0
     if not sp.issparse(A) and data.size <= 10**8:
-        flat = data.reshape(-1) if data.flags.c_contiguous or data.flags.f_contiguous else np.ravel(data)
+        flat = (data.reshape(-1) if data.flags.c_contiguous or data.flags.f_contiguous
+                else np.ravel(data))
         ss = sumsq(flat)
         if SUMSQ_LO <= ss <= SUMSQ_HI:
             return float(np.sqrt(ss))

@@ -68,7 +68,9 @@ def undamped_pairs(w, mv_norm, r_norm, a, vr, alpha, beta, fit_residual, norms):
     which also keeps |s|² w(s) free of overflow.
     """
     s = undamped_roots(w, alpha, beta)
-    twice = lambda x: np.tile(np.asarray(x, dtype=LD), 2)  # s₊ and s₋ share v
+    def twice(x):
+        return np.tile(np.asarray(x, dtype=LD), 2)  # s₊ and s₋ share v
+
     with np.errstate(over="ignore", invalid="ignore", divide="ignore", under="ignore"):
         S = s.astype(np.clongdouble)
         W = twice(w)

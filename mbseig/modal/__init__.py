@@ -194,9 +194,10 @@ def modes(M, P=None, Q=None, *, solver: str = "auto", N=None, coordinate_names=N
             raise
         raise SolverError(f"singular pencil: {coordinate_text(coordinate_names, N, exc.vector)} "
                           f"has no mass, damping or stiffness (det(M s² + P s + Q) ≡ 0, every s "
-                          f"would be an eigenvalue): give it mass or a spring, or remove it") from None
-    b = error_bounds(sol, safety=safety, stability_rtol=stability_rtol, stability_atol=stability_atol,
-                rank_tol=rigid_rank_tol)
+                          f"would be an eigenvalue): give it mass or a spring, "
+                          f"or remove it") from None
+    b = error_bounds(sol, safety=safety, stability_rtol=stability_rtol,
+                     stability_atol=stability_atol, rank_tol=rigid_rank_tol)
     b = zero_pair_floor(b, sol, M, P, safety)
     md = listing(sol, b, N=N, coordinate_names=coordinate_names, n_dominant=n_dominant,
                  eta_warn=eta_warn,

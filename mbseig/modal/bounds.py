@@ -237,7 +237,8 @@ def error_bounds(sol, *, safety=10.0, stability_rtol=1e-12, stability_atol=0.0, 
             ii = np.repeat(np.arange(k), counts)
             jj = np.fromiter((j for h in hits for j in h), int, int(counts.sum()))
             ok = (jj != ii) & (np.abs(s[ii] - s[jj]) <= safety * (radius[ii] + radius[jj]))
-            pairs = set(zip(np.minimum(ii, jj)[ok].tolist(), np.maximum(ii, jj)[ok].tolist()))
+            pairs = set(zip(np.minimum(ii, jj)[ok].tolist(), np.maximum(ii, jj)[ok].tolist(),
+                            strict=True))
         cluster = components(k, pairs)
     err = err.copy()
     sizes = np.bincount(cluster, minlength=k)  # members per label (labels are indices < k)
@@ -267,7 +268,8 @@ def error_bounds(sol, *, safety=10.0, stability_rtol=1e-12, stability_atol=0.0, 
     if re_err is None:
         tol_re = tol
     else:
-        clustered = block > 1  # the path's Re s bound is first order: not inside a defective cluster
+        # the path's Re s bound is first order: not inside a defective cluster
+        clustered = block > 1
         re_bound = np.where(clustered, err, np.minimum(err, re_err))
         tol_re = np.maximum.reduce([safety * re_bound, *floor])
     return Bounds(err, tol, tol_re, np.abs(s) <= tol, cluster, block, geometric)
@@ -345,7 +347,7 @@ def modal_forms(X, cand, M, P):
         if P is not None:
             px += np.einsum("ij,ij->j", Xr, P[r] @ Xc)
         xx += np.einsum("ij,ij->j", Xr, Xc[r]).real
-    return list(zip(np.abs(mx).tolist(), np.abs(px).tolist(), xx.tolist()))
+    return list(zip(np.abs(mx).tolist(), np.abs(px).tolist(), xx.tolist(), strict=True))
 
 
 def tolerances(sol, *, safety=10.0, stability_rtol=1e-12, stability_atol=0.0, rank_tol=1e-6):
@@ -358,8 +360,8 @@ def tolerances(sol, *, safety=10.0, stability_rtol=1e-12, stability_atol=0.0, ra
     zero-pair floor of :func:`zero_pair_floor` (from the problem the pairs refer to).  The one
     definition used by :func:`modes` and by the sweeps.
     """
-    b = error_bounds(sol, safety=safety, stability_rtol=stability_rtol, stability_atol=stability_atol,
-                rank_tol=rank_tol)
+    b = error_bounds(sol, safety=safety, stability_rtol=stability_rtol,
+                     stability_atol=stability_atol, rank_tol=rank_tol)
     prob = sol.problem
     if isinstance(prob, tuple) and len(prob) == 4:  # the zero-pair floor, as modes() applies it
         Ms, Ps, Qs, gamma = prob

@@ -21,7 +21,8 @@ def coordinate_text(coordinate_names, N, vector, limit=4):
     v = np.asarray(vector)
     full = v if N is None else np.asarray(N @ v)
     n = full.size
-    names = list(coordinate_names) if coordinate_names is not None else [f"x{k + 1}" for k in range(n)]
+    names = (list(coordinate_names) if coordinate_names is not None
+             else [f"x{k + 1}" for k in range(n)])
     mag = np.abs(full)
     if not mag.size or mag.max() == 0:
         return "?"
@@ -30,7 +31,8 @@ def coordinate_text(coordinate_names, N, vector, limit=4):
     idx = [i for i in np.argsort(-mag, kind="stable")[:limit] if mag[i] >= 1e-3 * mag.max()]
     if len(idx) == 1:
         return names[idx[0]]
-    terms = " ".join(f"{'−' if full[i].real < 0 else '+'} {abs(full[i]):.3g} {names[i]}" for i in idx)
+    terms = " ".join(f"{'−' if full[i].real < 0 else '+'} {abs(full[i]):.3g} {names[i]}"
+                     for i in idx)
     return f"{', '.join(names[i] for i in idx)} (combination {terms.lstrip('+ ')})"
 
 
@@ -43,8 +45,12 @@ def band_of(md: Modes, band) -> Modes:
     if not (0 <= lo <= hi):
         raise SolverError(f"band must be (ω_lo, ω_hi) with 0 ≤ ω_lo ≤ ω_hi, got {band!r}")
     keep = np.flatnonzero((md.omega_n >= lo) & (md.omega_n <= hi))
-    cut = lambda a: None if a is None else (a[..., keep] if np.ndim(a) > 1 else a[keep])
-    pick = lambda seq: [seq[k] for k in keep]
+    def cut(a):
+        return None if a is None else (a[..., keep] if np.ndim(a) > 1 else a[keep])
+
+    def pick(seq):
+        return [seq[k] for k in keep]
+
     coverage = (f"{keep.size} modes of {md.vectors.shape[0]} DOF; every eigenvalue with "
                 f"{lo:.6g} ≤ |s| ≤ {hi:.6g} rad/s found (dense solve of the whole spectrum); "
                 f"modes outside were not listed")
@@ -69,7 +75,8 @@ def band_of(md: Modes, band) -> Modes:
 # ---------------------------------------------------------------------------------------------
 def rigid_representatives(sol, rigid_idx, rank_tol):
     """One rigid-body eigenvalue per independent vector, the largest Re s first (greedy)."""
-    order = rigid_idx[np.lexsort((-sol.eigenvalues[rigid_idx].imag, -sol.eigenvalues[rigid_idx].real))]
+    order = rigid_idx[np.lexsort((-sol.eigenvalues[rigid_idx].imag,
+                                  -sol.eigenvalues[rigid_idx].real))]
     chosen, basis = [], None
     for i in order:
         v = sol.vectors[:, i]
@@ -138,11 +145,12 @@ def listing(sol, b, *, N, coordinate_names, n_dominant, eta_warn, tolerances_use
         flags[k].append(f"η = {eta[k]:.1e} above {eta_warn:g}")
     if bad.size:
         names_ = ", ".join(f"{z.real:.6g}{z.imag:+.6g}j (η={e:.1e})"
-                           for z, e in zip(s[bad][:8], eta[bad][:8]))
+                           for z, e in zip(s[bad][:8], eta[bad][:8], strict=True))
         warnings.warn(f"{bad.size} eigenvalues miss the backward-error target {eta_warn:g} "
                       f"({sol.solver}): {names_}", RuntimeWarning, stacklevel=3)
     coverage = coverage_text(sol, len(s)) if sol.partial else ""
-    verdict = Verdict(worst(stability_), f"of the modes computed ({coverage})" if sol.partial else "")
+    verdict = Verdict(worst(stability_),
+                      f"of the modes computed ({coverage})" if sol.partial else "")
     numeric_details = {k: v for k, v in sol.details.items()}
     return Modes(
         eigenvalues=s, delta=delta, omega_n=wn, omega_d=omega, freq_hz=omega / (2 * np.pi),
@@ -219,7 +227,8 @@ def mode_shapes(X, N, coordinate_names, n_dominant):
     mode, over all modes at once (the per-mode arithmetic of one column at a time)."""
     full = X if N is None or _identity(N) else N @ X
     n_full, k = full.shape
-    names = list(coordinate_names) if coordinate_names is not None else [f"q{k + 1}" for k in range(n_full)]
+    names = (list(coordinate_names) if coordinate_names is not None
+             else [f"q{k + 1}" for k in range(n_full)])
     if k == 0 or n_full == 0:
         return np.zeros_like(full), [[] for _ in range(k)]
     cols = np.arange(k)
@@ -249,6 +258,6 @@ def mode_shapes(X, N, coordinate_names, n_dominant):
             cand = np.argpartition(-m, n_dominant)[:n_dominant]
             top[:, c] = cand[np.lexsort((cand, -m[cand]))]
     topmag = np.take_along_axis(mag, top, 0).T.tolist()
-    dominant = [[(names[i], m) for i, m in zip(t, tm) if m >= 0.05]
-                for t, tm in zip(top.T.tolist(), topmag)]
+    dominant = [[(names[i], m) for i, m in zip(t, tm, strict=True) if m >= 0.05]
+                for t, tm in zip(top.T.tolist(), topmag, strict=True)]
     return shapes, dominant

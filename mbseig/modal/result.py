@@ -69,7 +69,8 @@ class Modes:
     all_eigenvalues: np.ndarray
     tolerances: dict = field(default_factory=dict)
     left_vectors: object = None  # conjugated left vectors ȳ of the listed modes (or None)
-    multiplicity: np.ndarray = None  # algebraic multiplicity each listed s stands for (rigid: share)
+    # algebraic multiplicity each listed s stands for (rigid: share)
+    multiplicity: np.ndarray = None
     accounting: dict = field(default_factory=dict)  # every eigenvalue accounted (module doc)
     coverage: str = ""  # partial spectrum: what was computed ("" for the full spectrum)
     partial: bool = False
@@ -154,7 +155,8 @@ class Modes:
                 f"{k + 1:>3} {v['re'][k]:>13.6g} {v['im'][k]:>13.6g} {v['delta'][k]:>11.4g} "
                 f"{v['omega_n'][k]:>11.6g} {v['freq_n_hz'][k]:>11.6g} {v['freq_hz'][k]:>11.6g} "
                 f"{v['zeta'][k]:>10.3g} "
-                f"{self.backward_error[k]:>8.1e}  {self.stability[k]:<9} {self.kind[k]:<11} {dom}{note}"
+                f"{self.backward_error[k]:>8.1e}  {self.stability[k]:<9} {self.kind[k]:<11} "
+                f"{dom}{note}"
             )
         if self.coverage:
             rows.append(f"partial spectrum: {self.coverage}")

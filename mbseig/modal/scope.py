@@ -92,10 +92,10 @@ def apply_scope(md, directions, names, *, shape_fn=None):
     if Din.shape[1] > len(k_rigid):
         Din, inside = Din[:, :len(k_rigid)], _first(inside, len(k_rigid))
     c = Din.shape[1]
-    missing = tuple(nm for nm, ok in zip(names, inside) if not ok)
+    missing = tuple(nm for nm, ok in zip(names, inside, strict=False) if not ok)
     if c == 0:
         return _replace(md, verdict(md.stability, rigid_body, _partial(md)), rigid_body, missing)
-    found = [nm for nm, ok in zip(names, inside) if ok]
+    found = [nm for nm, ok in zip(names, inside, strict=False) if ok]
     # the zero eigenspace: the declared directions (within it), then an orthonormal rest
     P, _ = np.linalg.qr(Z @ (Z.conj().T @ Din))
     rest = Z - P @ (P.conj().T @ Z)
@@ -148,7 +148,7 @@ def spectrum_verdict(stabilities, rigid, vectors, rigid_directions=None, N=None,
     declared directions found among them (``rigid_directions()``: a RigidDirections in full
     coordinates, called only when an eigenvalue is rigid-body); any other zero counts."""
     rigid = np.asarray(rigid, bool)
-    others = [st for st, r in zip(stabilities, rigid) if not r]
+    others = [st for st, r in zip(stabilities, rigid, strict=True) if not r]
     if not rigid.any() or rigid_directions is None:
         return verdict(list(stabilities))
     got = rigid_directions() if callable(rigid_directions) else rigid_directions
@@ -157,7 +157,7 @@ def spectrum_verdict(stabilities, rigid, vectors, rigid_directions=None, N=None,
     X = X / np.maximum(np.linalg.norm(X, axis=0), np.finfo(float).tiny)
     U, sv, _ = np.linalg.svd(X, full_matrices=False)
     Z = U[:, sv > rank_tol * max(sv.max(initial=0.0), np.finfo(float).tiny)]
-    inside = [nm for nm, d in zip(got.names, D.T)
+    inside = [nm for nm, d in zip(got.names, D.T, strict=True)
               if np.linalg.norm(d - Z @ (Z.conj().T @ d)) <= ANGLE_TOL]
     extra = Z.shape[1] > len(inside)
     counted = others + (["critical"] * (Z.shape[1] - len(inside)) if extra else [])

@@ -95,7 +95,8 @@ def bounds(sol, safety, stability_rtol, stability_atol, rank_tol):
         if mask.sum() > k:
             ii, jj = np.nonzero(mask)
             ok = (jj != ii) & (np.abs(s[ii] - s[jj]) <= safety * (radius[ii] + radius[jj]))
-            pairs = set(zip(np.minimum(ii, jj)[ok].tolist(), np.maximum(ii, jj)[ok].tolist()))
+            pairs = set(zip(np.minimum(ii, jj)[ok].tolist(), np.maximum(ii, jj)[ok].tolist(),
+                            strict=True))
         cluster = components(k, pairs)
     sizes = np.bincount(cluster, minlength=k)
     alone = (sizes[cluster] == 1) & ~np.isfinite(err)

@@ -128,8 +128,8 @@ def _shapes(X, N, coordinate_names, n_dominant):
             top[:, c] = cand[np.lexsort((cand, -m[cand]))]
     names = list(coordinate_names) if coordinate_names is not None else \
         [f"q{i + 1}" for i in range(n_full)]
-    dominant = [[(names[i], m) for i, m in zip(t, tm) if m >= 0.05]
-                for t, tm in zip(top.T.tolist(), mag[top, cols].T.tolist())]
+    dominant = [[(names[i], m) for i, m in zip(t, tm, strict=True) if m >= 0.05]
+                for t, tm in zip(top.T.tolist(), mag[top, cols].T.tolist(), strict=True)]
     return shapes, dominant
 
 

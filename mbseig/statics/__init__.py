@@ -120,7 +120,8 @@ def _equilibrium_api(model, *, tol, max_iter, rank_tol, q_init, xtol, floor_tol,
             "floor_tol": floor_tol, "continuation": continuation}
     if getattr(model, "commands", ()):
         try:
-            model = resolve_commands(model, lambda m, q_init: solve_statics(m, q_init=q_init, **opts))
+            model = resolve_commands(model,
+                                     lambda m, q_init: solve_statics(m, q_init=q_init, **opts))
         except MbseigError as exc:
             raise exc.located(file=getattr(model, "source", None)) from None
     if any(c.single_sided for c in model.constraints):

@@ -114,7 +114,8 @@ class _Follower:
         self.segment = 0
         t = tangent(fam, y0, values[0], direction=self.dirn)
         if t is None:
-            raise EquilibriumError("no tangent at the first point of the sweep", element="continuation")
+            raise EquilibriumError("no tangent at the first point of the sweep",
+                                   element="continuation")
         z = np.concatenate([y0, [values[0]]])
         cur = branch_point_at(fam, z, t, "start", self.segment)
         cur.grid_index = 0

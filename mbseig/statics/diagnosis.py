@@ -31,7 +31,7 @@ def diagnose(model, q0, first: Stall, second, s: Settings):
             f"after {last.iterations} Newton iterations)", element="equilibrium")
     q = last.q if last.q is not None else q0
     moved = s.scales.largest(q - q0, names)
-    kind = dict(zip(names, model.coordinate_kinds))
+    kind = dict(zip(names, model.coordinate_kinds, strict=True))
     moved_txt = ", ".join(f"{nm} ({dq:+.3g}{_unit(kind[nm])})" for nm, dq in moved) or "none"
     hint = ("hint: start nearer the expected equilibrium (positions of the case, or q_init)")
     if second is not None:

@@ -118,7 +118,8 @@ def stable_alternative(model, eq, opts):
     def accept(sol, how):
         if s.scales.size(sol.q - eq.q) <= 1e-6:
             return None
-        st = static_stability(model, sol.q, static_multipliers(model, sol.q, s), rank_tol=s.rank_tol)
+        st = static_stability(model, sol.q, static_multipliers(model, sol.q, s),
+                              rank_tol=s.rank_tol)
         if st["verdict"] != "stable":
             return None
         alt = finish(model, sol.q, s, iterations=sol.iterations, correction=sol.correction,

@@ -122,8 +122,9 @@ class Family:
 
     def known(self, p, q) -> dict:
         """The evaluations of model(p) at q the family made, by name ("g", "phi", "phi_q"; Φ_q
-        as model.phi_q(q, dense=model.dense_assembly) gives it): a :class:`~mbseig.statics.cache.Memo`
-        of the model starts from them instead of evaluating them again."""
+        as model.phi_q(q, dense=model.dense_assembly) gives it): a
+        :class:`~mbseig.statics.cache.Memo` of the model starts from them instead of evaluating
+        them again."""
         model = self.model(p)
         out = {}
         for what, owner in (("g", model), ("phi", model.constraints),

@@ -47,7 +47,8 @@ def resolve_commands(model, equilibrium, *, tol=1e-12, max_iter=30, hint=None, c
     """The model with every pending command (``model.commands``) resolved: commanded elements
     set, ``drivers`` holding one record per driver, ``q_init`` at the commanded posture.
 
-    equilibrium(model, q_init=...) is the static solve (:func:`mbseig.statics.newton.solve_statics`).
+    equilibrium(model, q_init=...) is the static solve
+    (:func:`mbseig.statics.newton.solve_statics`).
     hint : a resolved model of the same family (a neighbouring point of a sweep): its commanded
         posture starts the first static solve and its free lengths the secant, so that a sweep
         continues from the previous point instead of from the reference configuration.  The
@@ -75,7 +76,7 @@ def resolve_commands(model, equilibrium, *, tol=1e-12, max_iter=30, hint=None, c
         pre_constraints = [c for k, c in enumerate(constraints) if k not in lock_idx] + [driver]
         row = sum(c.n_eq for c in pre_constraints) - 1  # the driver's multiplier (last row)
 
-        def solve(pre_forces, q_init):
+        def solve(pre_forces, q_init, pre_constraints=pre_constraints, driver=driver, row=row):
             model = make_model(pre_forces, pre_constraints, q_init)
             try:
                 eq = equilibrium(model, q_init=q_init)
@@ -106,7 +107,7 @@ def resolve_commands(model, equilibrium, *, tol=1e-12, max_iter=30, hint=None, c
                "iterations": 0, "tol": tol, "sets": [],
                "unloaded": [forces[k].name for k in sorted(followers)]}
 
-        def with_spring(l0):
+        def with_spring(l0, spring_k=spring_k):
             """The pre-solve forces with the commanded spring at free length l0."""
             return [dataclasses.replace(f, free_length=l0) if k == spring_k else f
                     for k, f in enumerate(forces) if k not in followers]
@@ -180,7 +181,8 @@ def _newton_free_length(make_model, with_spring, pre_constraints, eq, row, l_sta
 
 
 def _same_elements(model, other):
-    return (len(model.forces) == len(other.forces) and len(model.constraints) == len(other.constraints)
+    return (len(model.forces) == len(other.forces)
+            and len(model.constraints) == len(other.constraints)
             and [f.name for f in model.forces] == [f.name for f in other.forces]
             and [c.name for c in model.constraints] == [c.name for c in other.constraints]
             and np.shape(getattr(other, "q_init", None)) == np.shape(model.q_init))
@@ -192,7 +194,8 @@ def reuse_commands(model, resolved):
     the commanded posture taken over.  For a family of models that differ only in parameters
     the commands do not depend on (a sweep that found the settings equal at two values);
     None when the two models do not have the same elements."""
-    if (len(model.forces) != len(resolved.forces) or len(model.constraints) != len(resolved.constraints)
+    if (len(model.forces) != len(resolved.forces)
+            or len(model.constraints) != len(resolved.constraints)
             or [f.name for f in model.forces] != [f.name for f in resolved.forces]
             or [c.name for c in model.constraints] != [c.name for c in resolved.constraints]):
         return None
@@ -200,9 +203,11 @@ def reuse_commands(model, resolved):
     for _, targets in model.commands:
         for kind, k, _ in targets:
             if kind == "force":
-                forces[k] = dataclasses.replace(forces[k], free_length=resolved.forces[k].free_length)
+                forces[k] = dataclasses.replace(forces[k],
+                                                free_length=resolved.forces[k].free_length)
             else:
-                constraints[k] = dataclasses.replace(constraints[k], length=resolved.constraints[k].length)
+                constraints[k] = dataclasses.replace(constraints[k],
+                                                     length=resolved.constraints[k].length)
     return dataclasses.replace(model, forces=tuple(forces), constraints=tuple(constraints),
                                q_init=resolved.q_init, commands=(), drivers=resolved.drivers)
 
@@ -237,7 +242,9 @@ def held_tension(model, prev, *, tol=1e-12, posture_tol=1e-10, cache=None):
     k = springs[0][1]
     spring, old = model.forces[k], prev.forces[k]
     if (len(model.forces) != len(prev.forces) or model.constraints != prev.constraints
-            or any(a is not b for j, (a, b) in enumerate(zip(model.forces, prev.forces)) if j != k)
+            or any(a is not b
+                   for j, (a, b) in enumerate(zip(model.forces, prev.forces, strict=True))
+                   if j != k)
             or spring.diff is not old.diff or not spring.stiffness > 0
             or model.g_const is not prev.g_const or model.mass is not prev.mass):
         return None
@@ -272,9 +279,10 @@ def _device_phi_q(device, prev, driver, q, cache):
     the same ``prev``, driver and q (then the same constraint elements at the same q)."""
     if cache is not None:
         hit = cache.get("device_phi_q")
-        if (hit is not None and hit[0] is prev and hit[1] is driver and hit[2] is device.constraints[-1]
+        if (hit is not None and hit[0] is prev and hit[1] is driver
+                and hit[2] is device.constraints[-1]
                 and hit[3] == q.tobytes() and len(hit[4]) == len(device.constraints)
-                and all(a is b for a, b in zip(hit[4], device.constraints))):
+                and all(a is b for a, b in zip(hit[4], device.constraints, strict=True))):
             return hit[5]
     G = np.asarray(device.phi_q(q, dense=True))
     if cache is not None:

@@ -112,7 +112,8 @@ class StepScales:
         if self.D is not None:
             dd = (self.D @ dq) * self.inv_len
             k = self.dims
-            rot = np.sqrt(np.add.reduceat(dd * dd, np.arange(0, dd.size, k))) if k > 1 else np.abs(dd)
+            rot = (np.sqrt(np.add.reduceat(dd * dd, np.arange(0, dd.size, k))) if k > 1
+                   else np.abs(dd))
             s = max(s, float(np.max(rot, initial=0.0)))
         return s
 

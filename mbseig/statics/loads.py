@@ -70,8 +70,8 @@ def continue_loads(model, q_start, s, *, t_start=0.0):
         mt = scaled_loads(model, t)
         A, _ = augmented(mt, q, lam)
         try:
-            tangent = NewtonMatrix(A, weights=s.scales.weights(A.shape[0])).solve(np.concatenate([_load_vector(model, q),
-                                                            np.zeros(model.n_constraints)]))[0][:n]
+            tangent = NewtonMatrix(A, weights=s.scales.weights(A.shape[0])).solve(
+                np.concatenate([_load_vector(model, q), np.zeros(model.n_constraints)]))[0][:n]
         except Exception:  # a singular matrix: no predictor, the corrector starts at q
             tangent = np.zeros(n)
         pred = dt * tangent

@@ -357,7 +357,8 @@ def force_scale(model, q, rank_tol):
                multipliers(Phi_q, g, rank_tol, check=False)[0])
         if sp.issparse(K):
             K = K.tocsr()
-            knorm = (float(np.max(np.add.reduceat(np.abs(K.data), K.indptr[:-1][np.diff(K.indptr) > 0])))
+            knorm = (float(np.max(np.add.reduceat(np.abs(K.data),
+                                                  K.indptr[:-1][np.diff(K.indptr) > 0])))
                      if K.nnz else 0.0)  # ‖K‖_∞ (row sums of the nonempty rows)
         else:
             knorm = float(np.max(np.abs(K).sum(axis=1), initial=0.0))

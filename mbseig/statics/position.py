@@ -153,7 +153,8 @@ def _unsatisfiable(model, phi, cscale, iterations):
     rel = np.abs(phi) / cscale
     k = int(np.argmax(rel))
     name = model.constraint_row_names()[k]
-    others = sorted({model.constraint_row_names()[i] for i in np.flatnonzero(rel > 0.1 * rel[k])} - {name})
+    others = sorted({model.constraint_row_names()[i] for i in np.flatnonzero(rel > 0.1 * rel[k])}
+                    - {name})
     also = f" (also off: {', '.join(others[:3])})" if others else ""
     return ConstraintsUnsatisfiable(
         f"the constraints cannot be satisfied: the position solve of Φ = 0 alone stops at a "

@@ -85,7 +85,7 @@ def bounded(A, lam, dlam, scale=None):
 
 
 def zeroed(values, err):  # + 0.0: no "-0" in reports
-    return [0.0 if abs(v) <= e else float(v) + 0.0 for v, e in zip(values, err)]
+    return [0.0 if abs(v) <= e else float(v) + 0.0 for v, e in zip(values, err, strict=True)]
 
 
 def linear_map(fn, n):

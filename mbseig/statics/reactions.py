@@ -105,7 +105,7 @@ def reaction_forces(model, eq) -> list[dict]:
     for name, (c, lam) in _constraint_multipliers(model, eq.lam).items():
         gen, gen_err = bounded(-_dense(c.jac(eq.q)).T, lam, dlam)
         forces, errors = {}, {}
-        for i, val, err in zip(c.idx, gen, gen_err):
+        for i, val, err in zip(c.idx, gen, gen_err, strict=True):
             point, _, axis = names[i].rpartition(".")
             forces.setdefault(point, {})[axis] = val
             errors.setdefault(point, {})[axis] = err
@@ -129,7 +129,9 @@ def reaction_forces(model, eq) -> list[dict]:
 def _reaction_value(c, q, lam, dlam):
     """The element's own reaction (a number or a list, linear in λ) and its bounds."""
     scalar = not isinstance(c.reaction(q, lam)["value"], list)
-    own = lambda x: np.atleast_1d(np.asarray(c.reaction(q, x)["value"], float))
+    def own(x):
+        return np.atleast_1d(np.asarray(c.reaction(q, x)["value"], float))
+
     _, err = bounded(linear_map(own, lam.size), lam, dlam)
     value = zeroed(own(lam), err)
     return (value[0], err[0]) if scalar else (value, err)
@@ -281,7 +283,7 @@ def actuator_effort(model, eq) -> list[dict]:
     model = solved(model, eq)
     rows = []
     mult = _constraint_multipliers(model, eq.lam)
-    for kind, index, label in model.report.get("actuator", []):
+    for kind, index, _label in model.report.get("actuator", []):
         if kind == "force":
             f = model.forces[index]
             if not isinstance(f, SpringDamper):

@@ -151,7 +151,8 @@ def finish(model, q, s, *, iterations, correction, method, path, lam=None, memo=
     return Equilibrium(
         q=q, lam=lam, residual=max(fr, cr), force_residual=fr, constraint_residual=cr,
         iterations=int(iterations), rank=rank, n_redundant=m - rank, redundant=tuple(redundant),
-        reactions=reaction_records(model, lam), tolerances={**s.record(), "rank_method": rank_method},
+        reactions=reaction_records(model, lam),
+        tolerances={**s.record(), "rank_method": rank_method},
         method=method, model=model, correction=float(correction), path=dict(path))
 
 

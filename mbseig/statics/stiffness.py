@@ -199,7 +199,8 @@ def _positive_definite_sparse(K, stiffness_tol, symmetry_tol):
             "direction": None, "verdict": "stable"}
 
 
-BANDED_MAX = 1 / 16  # half-bandwidth, relative to the order, up to which the banded factorization runs
+# half-bandwidth, relative to the order, up to which the banded factorization runs
+BANDED_MAX = 1 / 16
 
 
 def _cholesky_succeeds(A, shift) -> bool:
