@@ -34,6 +34,19 @@ def internal(default=None):
     return field(default=default, metadata={"internal": True}, repr=False, compare=False)
 
 
+_FIELDS: dict = {}  # record class → {field name: whether it is optional}, in declaration order
+
+
+def _fields(cls) -> dict:
+    """The field list of a record class, read once (a sweep reads its points and their static
+    records by key many times per point)."""
+    spec = _FIELDS.get(cls)
+    if spec is None:
+        spec = _FIELDS[cls] = {f.name: bool(f.metadata.get("optional"))
+                               for f in dataclasses.fields(cls)}
+    return spec
+
+
 class Record:
     """Mixin of frozen dataclasses: read access by field name, ordered JSON (module docstring)."""
 
@@ -47,21 +60,23 @@ class Record:
             yield f, value
 
     def keys(self):
-        return [f.name for f, _ in self._present()]
+        return [k for k, opt in _fields(type(self)).items()
+                if not (opt and getattr(self, k) is None)]
 
     def items(self):
-        return [(f.name, v) for f, v in self._present()]
+        return [(k, getattr(self, k)) for k in self.keys()]
 
     def __contains__(self, key) -> bool:
-        return key in self.keys()
+        opt = _fields(type(self)).get(key)
+        return opt is not None and not (opt and getattr(self, key) is None)
 
     def __getitem__(self, key):
-        if key not in self.keys():
+        if key not in self:
             raise KeyError(key)
         return getattr(self, key)
 
     def get(self, key, default=None):
-        return self[key] if key in self.keys() else default
+        return getattr(self, key) if key in self else default
 
     def to_json(self) -> dict:
         """The fields in declaration order, without the internal and the unset optional ones."""

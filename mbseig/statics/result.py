@@ -3,7 +3,6 @@ multipliers, the residuals, the rank and redundancy of the constraints."""
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -54,43 +53,8 @@ class Equilibrium:
     contacts: tuple = ()  # single-sided contacts: ({"name", "force", "active"}, ...) (DESIGN §8)
 
 
-_FIELDS: dict = {}  # record class → {field name: whether it is optional}, in declaration order
-
-
-def _fields(cls) -> dict:
-    spec = _FIELDS.get(cls)
-    if spec is None:
-        spec = _FIELDS[cls] = {f.name: bool(f.metadata.get("optional"))
-                               for f in dataclasses.fields(cls)}
-    return spec
-
-
-class KeyedRecord(Record):
-    """:class:`~mbseig.records.Record`'s mapping view with the field list of each class read
-    once (a sweep reads its points and their static records by key many times per point): the
-    same keys, values and misses as the mixin's."""
-
-    __slots__ = ()
-
-    def keys(self):
-        return [k for k, opt in _fields(type(self)).items()
-                if not (opt and getattr(self, k) is None)]
-
-    def __contains__(self, key) -> bool:
-        opt = _fields(type(self)).get(key)
-        return opt is not None and not (opt and getattr(self, key) is None)
-
-    def __getitem__(self, key):
-        if key not in self:
-            raise KeyError(key)
-        return getattr(self, key)
-
-    def get(self, key, default=None):
-        return getattr(self, key) if key in self else default
-
-
 @dataclass(frozen=True, eq=False)
-class StaticStability(KeyedRecord):
+class StaticStability(Record):
     """The static stability of an equilibrium (:func:`mbseig.statics.stiffness.static_stability`):
     the verdict (stable, neutral, unstable, undetermined, not examined) from the reduced tangent
     stiffness K_r = Nᵀ(K + H(λ))N, its size ``dof``, whether it is symmetric (``asymmetry``

@@ -13,13 +13,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..records import internal, optional
-from ..statics.result import KeyedRecord as StudyRecord
+from ..records import Record, internal, optional
 
 __all__ = ["SweepPoint", "CampbellPoint", "Boundary", "Fold", "BoundaryCurve"]
 
+
 @dataclass(frozen=True, eq=False)
-class PointRecord(StudyRecord):
+class PointRecord(Record):
     """What every study point has: its parameters, the one-line error of a failed point, and
     (when it did not fail) its eigenvalues, their unit shapes and stability tolerances."""
 
@@ -68,7 +68,7 @@ class CampbellPoint(PointRecord):
 
 
 @dataclass(frozen=True, eq=False)
-class Boundary(StudyRecord):
+class Boundary(Record):
     """A loss or recovery of stability along the first axis of line ``line``.
 
     value : the parameter there; kind : flutter (a complex pair crosses) or divergence (a real
@@ -123,7 +123,7 @@ class Boundary(StudyRecord):
 
 
 @dataclass(frozen=True, eq=False)
-class Fold(StudyRecord):
+class Fold(Record):
     """A fold or branch point located on the branch of line ``line``: what the branch does
     there, the stability before and after, the degrees of freedom and the named angles."""
 
@@ -140,7 +140,7 @@ class Fold(StudyRecord):
 
 
 @dataclass(frozen=True, eq=False)
-class BoundaryCurve(StudyRecord):
+class BoundaryCurve(Record):
     """A boundary of the first line followed across the second axis ``along``: ``points``
     (p2, value, band, test), with the bend and insertion rules that placed them."""
 
