@@ -5,6 +5,11 @@ Pipeline (each stage a function from one result object to the next; docs/design.
     load_case(path) ─► equilibrium(model) ─► linearize(model, eq) ─► modes(M, P, Q) ─► check_modes
        Model              Equilibrium           LinearModel               Modes          CheckResult
 
+and for any reference motion the case declares (rest, steady or periodic;
+:mod:`mbseig.studies.reference`)::
+
+    find_reference(case) ─► linearize(model, reference) ─► analyze(case).verdict
+
 Packages, in the order of the pipeline (a stage imports only those before it; the layers
 contract in pyproject.toml is checked by the test suite):
 
@@ -19,8 +24,8 @@ contract in pyproject.toml is checked by the test suite):
 ``modal``           classification: the only place a verdict is made
 ``check``           time-domain verification against the nonlinear model
 ``casefile``        the reader: TOML → Model; called only by the entry points below
-``studies``         analyze, sweeps, refinement, runners
-``report``          report blocks and rendering
+``report``          report blocks and rendering of computed data (it computes nothing)
+``studies``         the reference motion, analyze, sweeps, refinement, report data, runners
 ``bench``           speed against accuracy
 ``cli``             one thin module per command
 ==================  ===========================================================================
