@@ -242,7 +242,7 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
         dyn = ForwardDynamics(model, lin.q0, redundant=redundant, mass_tol=mass_tol,
                               rank_tol=float(lin.tolerances.get("rank_tol", 1e-10)))
     except SimulationError as exc:
-        raise exc.located(file=getattr(model, "source", None)) from None
+        raise exc.located(file=model.source) from None
     length = 1.0 if isinstance(model, LinearCase) else float(model.length_scale)
     Mr, Pr, Qr, N = (np.asarray(lin.M, float), np.asarray(lin.P, float), np.asarray(lin.Q, float),
                      np.asarray(lin.N, float))
@@ -291,7 +291,7 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
                                               {**opts, "amplitude": opts["amplitude"] / 10})
                 mc, eff = smaller_amplitude(mc, small), max(eff, eff_small)
         except SimulationError as exc:
-            raise exc.located(file=getattr(model, "source", None), element=f"mode {k}") from None
+            raise exc.located(file=model.source, element=f"mode {k}") from None
         results.append(replace(judge(replace(mc, amplification=amp), s, delta_rtol, omega_rtol,
                                       zero_delta_tol, resolution_k, eff),
                                elapsed=time.perf_counter() - t0))
@@ -327,7 +327,7 @@ def _tangent(dyn, redundant, model):
     try:
         return TangentCoordinates(dyn)
     except SimulationError as exc:
-        raise exc.located(file=getattr(model, "source", None)) from None
+        raise exc.located(file=model.source) from None
 
 
 def _check_one(dyn, Mr, Pr, N, s, x, yh, names, base, o):

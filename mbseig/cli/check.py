@@ -99,7 +99,7 @@ def _checked(a, args):
                 raise NumericalError(f"mode {m.index}: the measured delta or omega is not finite; "
                                      f"likely cause: {CHECK_CAUSE}", element="check")
     except MbseigError as exc:
-        raise exc.located(file=getattr(a.model, "source", None)) from None
+        raise exc.located(file=a.model.source) from None
     finally:
         if bar is not None:
             bar.close()

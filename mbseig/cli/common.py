@@ -271,7 +271,7 @@ def number_option(name, value, *, positive=False, nonnegative=False, minimum=Non
 def output_notes(model, eq):
     """What the reported warnings said (mbseig.errors.ReportedWarning), for the output: the
     beam-theory guidance of every beam and the equilibrium's notes."""
-    bodies = (getattr(model, "flexible", None) or {}).get("bodies") or {}
+    bodies = (model.flexible or {}).get("bodies") or {}
     return ([f"beam {nm}: {w}" for nm, r in bodies.items() for w in r.get("warnings", ())]
             + [f"equilibrium: {n}" for n in equilibrium_notes(eq)])
 

@@ -90,7 +90,7 @@ def _refine_request(args):
 
 
 def _print_flexible(a):
-    bodies = (getattr(a.model, "flexible", None) or {}).get("bodies") or {}
+    bodies = (a.model.flexible or {}).get("bodies") or {}
     ref = a.refinement
     for nm, r in bodies.items():
         if r.get("type") != "beam":

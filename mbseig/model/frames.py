@@ -98,7 +98,7 @@ class CoordinateFrames:
         """The name a user wrote for frame (or point) ``key``: a beam node by its station or
         arc length, anything else as it is."""
         m = _NODE.match(key)
-        beams = ((getattr(model, "flexible", None) or {}).get("bodies") or {})
+        beams = ((model.flexible or {}).get("bodies") or {})
         rec = beams.get(m["beam"]) if m else None
         if rec is None or "nodes" not in rec:
             return key

@@ -53,7 +53,7 @@ NONE_FRACTION = 0.1  # whirl "none" at or below this lateral fraction (module do
 def rotors(model) -> list:
     """The rotor elements of a model, then its spinning 3-D beams
     (:class:`mbseig.model.beam3d.SpinningShaft`: the same fields) (empty without either)."""
-    shafts = (getattr(model, "flexible", None) or {}).get("shafts", ())
+    shafts = (model.flexible or {}).get("shafts", ())
     return [f for f in getattr(model, "forces", ()) if isinstance(f, Rotor)] + list(shafts)
 
 

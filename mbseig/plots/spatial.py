@@ -131,7 +131,7 @@ def _beams(model):
     """The 3-D beams: node point names (start, BEAM.n1 ..., end), each node's triad
     coordinates (None without one), the reference axis and which ends are clamped."""
     index = {n: i for i, n in enumerate(getattr(model, "coordinate_names", ()) or ())}
-    records = (getattr(model, "flexible", None) or {}).get("bodies") or {}
+    records = (model.flexible or {}).get("bodies") or {}
     q_ref = getattr(model, "q_init", None)
     out = []
     for name, rec in records.items():
@@ -264,7 +264,7 @@ def spin_axes(model, layout, q):
         f = np.asarray(d["frame"](q), float)
         a = d["axis"]
         out.append(a[0] * f[3:6] + a[1] * f[6:9] + a[2] * f[9:12])
-    records = (getattr(model, "flexible", None) or {}).get("bodies") or {}
+    records = (model.flexible or {}).get("bodies") or {}
     for beam in layout.get("beams", ()):
         if (records.get(beam["name"]) or {}).get("spin"):
             out.append(np.asarray(beam["axis"], float))

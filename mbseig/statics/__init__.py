@@ -123,7 +123,7 @@ def _equilibrium_api(model, *, tol, max_iter, rank_tol, q_init, xtol, floor_tol,
             model = resolve_commands(model,
                                      lambda m, q_init: solve_statics(m, q_init=q_init, **opts))
         except MbseigError as exc:
-            raise exc.located(file=getattr(model, "source", None)) from None
+            raise exc.located(file=model.source) from None
     if any(c.single_sided for c in model.constraints):
         from .contacts import solve_with_contacts
 
@@ -134,7 +134,7 @@ def _equilibrium_api(model, *, tol, max_iter, rank_tol, q_init, xtol, floor_tol,
         return examine(eq, offer_stable=offer_stable, self_stress=self_stress,
                        compliance=compliance, opts=opts)
     except MbseigError as exc:
-        raise exc.located(file=getattr(model, "source", None)) from None
+        raise exc.located(file=model.source) from None
 
 
 def resolve(model, *, tol: float = 1e-12, max_iter: int = 50, rank_tol: float = 1e-10, hint=None,
@@ -150,4 +150,4 @@ def resolve(model, *, tol: float = 1e-12, max_iter: int = 50, rank_tol: float = 
         return resolve_commands(model, lambda m, q_init: solve_statics(m, q_init=q_init, **opts),
                                 hint=hint, cache=cache)
     except MbseigError as exc:
-        raise exc.located(file=getattr(model, "source", None)) from None
+        raise exc.located(file=model.source) from None

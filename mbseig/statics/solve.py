@@ -35,7 +35,7 @@ def solve_statics(model, *, tol: float = 1e-12, max_iter: int = 50, rank_tol: fl
         return _equilibrium(model, tol=tol, xtol=xtol, floor_tol=floor_tol, max_iter=max_iter,
                             rank_tol=rank_tol, q_init=q_init, continuation=continuation)
     except MbseigError as exc:
-        raise exc.located(file=getattr(model, "source", None)) from None
+        raise exc.located(file=model.source) from None
 
 
 def _equilibrium(model, *, tol, xtol, floor_tol, max_iter, rank_tol, q_init, continuation):

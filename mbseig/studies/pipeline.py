@@ -75,7 +75,7 @@ def analyze(case=None, *, config=None, params=None, solver="auto", constraint_st
     if kind != "rest":  # the motion the case declares, never analysed as if at rest
         return _analyze_moving(spec, kind, config, params, refine=refine, **opts)
     model = spec.build(config, **(params or {}))
-    if refine or (getattr(model, "flexible", None) or {}).get("refinement"):
+    if refine or (model.flexible or {}).get("refinement"):
         from .refine import refine_analysis  # cases with beams to refine only
 
         return refine_analysis(spec, config=config, params=params, request=refine, model=model,

@@ -156,7 +156,7 @@ def modes_json(a: Analysis) -> dict:
     }
     if eq.contacts:  # DESIGN §8: each single-sided contact's force and state
         out["contacts"] = [dict(c) for c in eq.contacts]
-    flexible = (getattr(model, "flexible", None) or {}).get("bodies")
+    flexible = (model.flexible or {}).get("bodies")
     if flexible:  # extension: theory, slenderness and mesh of each beam / FE body
         out["flexible_bodies"] = {nm: dict(r) for nm, r in flexible.items()}
     if a.refinement is not None:

@@ -95,7 +95,7 @@ def refine_analysis(spec, *, config=None, params=None, request=None, solver="aut
     path = spec.source
     if model is None:
         model = spec.build(config, **(params or {}))
-    fl = getattr(model, "flexible", {}) or {}
+    fl = model.flexible or {}
     req = dict(fl.get("refinement") or {})
     req.update({k: v for k, v in (request or {}).items() if v is not None})
     if req.get("modes") is None and req.get("f_max") is None:

@@ -264,7 +264,7 @@ def unbalance_point(model, at):
     stations = [n for n in model.points if "." in n and not re.search(r"\.(n?\d+)$", n)]
     known = ", ".join(sorted(set(stations) | set(model.bodies))[:12]) or "none"
     raise CaseError(f"unknown point, station or body {at!r} for the unbalance (stations and "
-                    f"bodies: {known})", element="--at", file=getattr(model, "source", None))
+                    f"bodies: {known})", element="--at", file=model.source)
 
 
 def spinning_beams(case) -> bool:
@@ -280,7 +280,7 @@ def require_rotor(model, case=None):
     if not rs and not (case is not None and spinning_beams(case)):
         raise CaseError("the case has no spinning rotor (a [[forces]] rotor element or a beam "
                         "with spin): no unbalance response", element="unbalance",
-                        file=getattr(model, "source", None))
+                        file=model.source)
     return rs
 
 
