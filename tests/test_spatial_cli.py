@@ -34,7 +34,8 @@ def test_modes_and_check_on_every_spatial_case(name, capsys):
 
 @pytest.mark.parametrize("name", SPATIAL)
 def test_report_on_every_spatial_case(name, tmp_path):
-    assert main(["report", str(CASES / f"{name}.toml"), "--out", str(tmp_path), "--no-check"]) == 0
+    assert main(["report", str(CASES / f"{name}.toml"), "--out", str(tmp_path), "--no-check",
+                 "--no-animations"]) == 0
     text = (tmp_path / "report.md").read_text()
     assert "verdict: critical" in text
 

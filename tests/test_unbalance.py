@@ -190,7 +190,7 @@ def test_report_rotor_section_from_the_command_line(tmp_path, capsys):
     rotor = str(CASES / "rigid_rotor.toml")
     assert main(["report", rotor, "--speeds", "Omega=0:800:5", "--unbalance",
                  "rotor:2e-4", "--no-check", "--no-sensitivities", "--no-studies",
-                 "--out", str(out)]) == 0
+                 "--no-animations", "--out", str(out)]) == 0
     md = (out / "report.md").read_text()
     assert "Campbell diagram and critical speeds" in md
     assert "m·e = 0.0002 kg m" in md
@@ -238,7 +238,8 @@ def test_report_study_names_its_unbalance(tmp_path, capsys):
 
     out = tmp_path / "own"
     case = _rotor_study_case(tmp_path, '{ at = "rotor", me = 2e-4 }')
-    assert main(["report", case, "--no-check", "--no-sensitivities", "--out", str(out)]) == 0
+    assert main(["report", case, "--no-check", "--no-sensitivities", "--no-animations", "--out",
+                 str(out)]) == 0
     assert "m·e = 0.0002 kg m at rotor" in (out / "report.md").read_text()
     [path] = out.glob("*/unbalance.csv")
     with open(path) as fh:

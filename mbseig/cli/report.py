@@ -24,6 +24,8 @@ def register(sub):
     p.add_argument("--no-studies", action="store_true", help="skip the [[report.studies]] sweeps")
     p.add_argument("--no-sensitivities", action="store_true",
                    help="leave out the eigenvalue sensitivities of the summary")
+    p.add_argument("--no-animations", action="store_true",
+                   help="leave out the animated mode shapes (one looping GIF a mode)")
     p.add_argument("--jobs", type=int, default=None, metavar="N",
                    help="local worker processes for the studies' sweeps (default: CPU count)")
     p.add_argument("--speeds", default=None, metavar="NAME=START:STOP:COUNT",
@@ -71,7 +73,8 @@ def run_any(args, spec) -> int:
     md, page = write_report(spec, out_dir=args.out, configs=args.config,
                             all_configs=args.all_configs, run_check=not args.no_check,
                             jobs=args.jobs, studies=not args.no_studies,
-                            sensitivities=not args.no_sensitivities, speeds=speeds,
+                            sensitivities=not args.no_sensitivities,
+                            animations=not args.no_animations, speeds=speeds,
                             unbalance=unbalance)
     print(f"wrote {md} and {page}")
     return 0
