@@ -114,7 +114,7 @@ def _enc(x, arrays):
     import numpy as np
     import scipy.sparse as sp
 
-    if x is None or isinstance(x, (bool, str)) and type(x) in (bool, str):
+    if x is None or type(x) in (bool, str):  # (a str subclass such as Verdict: below)
         return x
     if isinstance(x, (np.ndarray, np.generic)):
         a = np.asarray(x)

@@ -10,8 +10,8 @@ import math
 import numpy as np
 import scipy.linalg as la
 
-from ..modal.rules import kind_of, stability
-from ..modal.rules import stability as rule
+from ..modal.rules import kind_of
+from ..modal.rules import stability as rule  # (exponent_modes names its result stability)
 from .periodic_motion import sample_linearization
 
 __all__ = ["exponent_modes", "periodic_json", "partial_json", "frozen_time", "frozen_summary",
@@ -116,7 +116,7 @@ def frozen_summary(a) -> dict:
     _, lam = frozen_time(a)
     worst = float(lam.real.max()) + 0.0 if lam.size else 0.0  # (no -0)
     tol = 1e-9 * max(1.0, float(abs(lam).max()) if lam.size else 1.0)
-    verdict = stability(-worst, tol)
+    verdict = rule(-worst, tol)
     return {"instants": int(lam.shape[0]), "max_real_part": worst, "verdict": verdict,
             "note": "eigenvalues at frozen instants: not a stability criterion of a periodic "
                     "motion"}
