@@ -36,11 +36,8 @@ import dataclasses
 import numpy as np
 
 from ..casefile.element_readers import ScalarUpdate
-from ..eigen import Problem, Request, solve
 from ..errors import MbseigError
 from ..linear import linearize
-from ..modal import classify, tolerances
-from ..modal.scope import spectrum_verdict
 from ..model import Model
 from ..model.linear_case import LinearCase
 from ..statics import equilibrium, examine, resolve
@@ -53,8 +50,10 @@ from ..statics.result import finish
 from ..statics.solve import solve_statics
 from ..statics.stiffness import static_stability
 from .records import SweepPoint
+from .spectra import point_spectra
 
-__all__ = ["sweep_line", "family_maker", "modal_point", "release", "DIAGRAM_MODES_MAX"]
+__all__ = ["sweep_line", "family_maker", "modal_point", "linear_point", "point_record", "release",
+           "DIAGRAM_MODES_MAX"]
 
 DIAGRAM_MODES_MAX = 60  # DOF up to which every branch point of the diagram gets its modal verdict
 
@@ -136,33 +135,40 @@ def family_maker(spec, config, params, axis, *, lean=True):
     return make, state
 
 
-def modal_point(model, eq, params, *, safety, stability_rtol, postures=posture, basis=None,
-                kept=None, **fields):
-    """The sweep's record of one point: all eigenpairs, their tolerances, the verdict.
-    postures(model, q): :func:`mbseig.statics.reactions.posture` (or a kept copy of its
-    result); basis: the null-space basis of this equilibrium when known (:func:`linearize`),
-    kept: a list the linearization's basis is appended to; fields: more fields of the
-    :class:`SweepPoint` (how the statics reached it)."""
-    lin = linearize(model, eq, signals=False, basis=basis)  # a sweep point uses the modes alone
+def linear_point(model, eq, *, basis=None, kept=None):
+    """The linear model of a sweep point (the modes alone: no signals); basis: the null-space
+    basis of this equilibrium when known, kept: a list the linearization's basis is appended
+    to."""
+    lin = linearize(model, eq, signals=False, basis=basis)
     if kept is not None and isinstance(lin.N, np.ndarray):
         kept.append((lin.N, lin.rank, lin.independent, lin.tolerances.get("basis_min_cosine")))
-    if lin.M.shape[0] == 0:  # no degree of freedom (a driven mechanism): no modes
-        s, X, tol, verdict, solver = (np.zeros(0, complex), np.zeros((model.n, 0), complex),
-                                      np.zeros(0), "stable", "none (no degree of freedom)")
-    else:
-        sol = solve(Problem(lin.M, lin.P, lin.Q), Request())
-        s, solver = sol.eigenvalues, sol.solver
-        _, _, tol, rigid = tolerances(sol, safety=safety, stability_rtol=stability_rtol)
-        X = lin.N @ sol.vectors
-        X = X / np.maximum(np.linalg.norm(X, axis=0), np.finfo(float).tiny)
-        verdict = spectrum_verdict(classify(-s.real, tol, rigid), rigid, sol.vectors,
-                                   lin.rigid, lin.N)
+    return lin
+
+
+def point_record(model, eq, params, spectrum, *, postures=posture, **fields):
+    """The :class:`SweepPoint` of one point from its equilibrium and its
+    :class:`~mbseig.studies.spectra.PointSpectrum`; fields: how the statics reached it."""
     out_of_range = ([p["name"] for p in postures(model, eq.q) if not p["in_range"]]
                     if (getattr(model, "report", None) or {}).get("angles") else [])
-    return SweepPoint(params=dict(params), error=None, eigenvalues=s, shapes=X, tol=tol,
-                      verdict=verdict, out_of_range=out_of_range, solver=solver,
+    return SweepPoint(params=dict(params), error=None, eigenvalues=spectrum.eigenvalues,
+                      shapes=spectrum.shapes, tol=spectrum.tol, verdict=spectrum.verdict,
+                      out_of_range=out_of_range, solver=spectrum.solver,
                       q=np.asarray(eq.q, float), iterations=int(eq.iterations),
                       static=(eq.static or {}).get("verdict"), **fields)
+
+
+def modal_point(model, eq, params, *, safety, stability_rtol, postures=posture, basis=None,
+                kept=None, **fields):
+    """The sweep's record of one point: all eigenpairs, their tolerances, the verdict; the
+    modes stage of :func:`modal_points` with a batch of one.
+    postures(model, q): :func:`mbseig.statics.reactions.posture` (or a kept copy of its
+    result); basis, kept: :func:`linear_point`; fields: more fields of the
+    :class:`SweepPoint` (how the statics reached it)."""
+    lin = linear_point(model, eq, basis=basis, kept=kept)
+    spectrum = point_spectra([lin], safety=safety, stability_rtol=stability_rtol)[0]
+    if isinstance(spectrum, BaseException):
+        raise spectrum
+    return point_record(model, eq, params, spectrum, postures=postures, **fields)
 
 
 def _angles(model, q, postures=posture):
@@ -234,7 +240,8 @@ def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rto
         model_at, grid = fam.model, []
     else:
         fam, branch, model_at = shared["fam"], shared["branch"], make
-    points = []
+    # the statics and linear model of every grid point, then the modes of all of them at once
+    staged = []
     for k, v in enumerate(values):
         kept = []
         try:
@@ -244,12 +251,19 @@ def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rto
             else:  # the same equilibrium record (and null-space basis), of this line's model
                 eq, how, where, kept = shared["grid"][k]
                 eq = dataclasses.replace(eq, model=make(v), q=eq.q.copy(), lam=eq.lam.copy())
-            pt = modal_point(eq.model, eq, point_params(v), **opts, postures=postures,
-                             statics=how, basis=kept[0] if shared and kept else None,
-                             kept=None if shared else kept, **where)
+            lin = linear_point(eq.model, eq, basis=kept[0] if shared and kept else None,
+                               kept=None if shared else kept)
+            staged.append((eq, {"statics": how, **where}, lin))
         except MbseigError as exc:
-            pt = SweepPoint.failed(point_params(v), exc.one_line())
-        points.append(pt)
+            staged.append((None, None, exc))
+    spectra = point_spectra([lin for _, _, lin in staged], **opts)
+    points = []
+    for v, (eq, fields, _), spectrum in zip(values, staged, spectra, strict=True):
+        if isinstance(spectrum, MbseigError):
+            points.append(SweepPoint.failed(point_params(v), spectrum.one_line()))
+        else:
+            points.append(point_record(eq.model, eq, point_params(v), spectrum,
+                                       postures=postures, **fields))
     out = {"points": points, "branch": [], "events": [], "record": {}}
     if branch is None:
         out["record"] = {"continuation": f"failed: {failure}"}

@@ -1,0 +1,159 @@
+"""The batched modes stage (mbseig.eigen.batch, mbseig.modal.batch, mbseig.studies.spectra)
+against the one-point general driver (mbseig.eigen.solve with mbseig.modal.tolerances).
+
+Reference: the general driver on each problem alone, an independent path (its own LAPACK calls:
+geev with left vectors, sygvd, the proportional path, QZ; its own bounds by a k-d tree).
+Tolerances: two computed eigenvalues of one exact eigenvalue lie within the sum of their error
+bounds (each bound covers its own eigenvalue's error), so matched eigenvalues must differ by at
+most err₁ + err₂; the stabilities and rigid-body flags must be equal (the bounds separate each
+eigenvalue from the imaginary axis and from 0 by a safety factor of 10, far more than the two
+bounds differ); boundaries of a sweep within its xtol.
+"""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.optimize import linear_sum_assignment
+
+from mbseig.casefile import read_case
+from mbseig.eigen import Problem, Request, solve
+from mbseig.eigen.batch import solve_batch
+from mbseig.modal import classify, tolerances
+from mbseig.modal.batch import WORDS, batch_tolerances
+from mbseig.studies import run_sweep
+from mbseig.studies import spectra as spectra_module
+
+CASES = Path(__file__).resolve().parents[1] / "cases"
+
+
+def _spd(rng, B, n, shift):
+    A = rng.standard_normal((B, n, n))
+    return A @ A.transpose(0, 2, 1) + shift * np.eye(n)
+
+
+def _problems(kind, rng, B=12, n=5):
+    M = _spd(rng, B, n, n)
+    K = _spd(rng, B, n, 0.0)
+    D = 0.1 * _spd(rng, B, n, 0.0)
+    if kind == "undamped":
+        return M, None, K
+    if kind == "damped":
+        return M, D, K
+    if kind == "gyroscopic":
+        G = rng.standard_normal((B, n, n))
+        return M, D + 3.0 * (G - G.transpose(0, 2, 1)), K
+    if kind == "follower":  # a circulatory (non-symmetric) stiffness: flutter at some points
+        F = rng.standard_normal((B, n, n))
+        return M, D, K + 2.0 * (F - F.transpose(0, 2, 1))
+    if kind == "rigid":  # a free body: K singular, a double zero eigenvalue (one vector)
+        K[:, :, 0] = 0.0
+        K[:, 0, :] = 0.0
+        return M, None, K
+    if kind == "repeated":  # two equal blocks: every eigenvalue double
+        h = n // 2 + 1
+        Mh, Kh, Dh = M[:, :h, :h], K[:, :h, :h], D[:, :h, :h]
+        Z = np.zeros((B, h, h))
+        blk = [np.block([[A[b], Z[b]], [Z[b], A[b]]]) for A in (Mh, Dh, Kh) for b in range(B)]
+        Mb, Db, Kb = (np.stack(blk[i * B:(i + 1) * B]) for i in range(3))
+        return Mb, Db, Kb
+    if kind == "negative":  # divergence: an indefinite stiffness
+        return M, D, K - 2.0 * np.eye(n) * np.abs(K).max()
+    raise ValueError(kind)
+
+
+def _match(s1, s2):
+    r, c = linear_sum_assignment(np.abs(s1[:, None] - s2[None, :]))
+    return r, c
+
+
+SEEDS = {"undamped": 1, "damped": 2, "gyroscopic": 3, "follower": 4, "rigid": 5, "repeated": 6,
+         "negative": 7}
+
+
+@pytest.mark.parametrize("kind", ["undamped", "damped", "gyroscopic", "follower", "rigid",
+                                  "repeated", "negative"])
+def test_batch_agrees_with_the_general_driver(kind):
+    rng = np.random.default_rng(SEEDS[kind])
+    M, P, Q = _problems(kind, rng)
+    sol = solve_batch(M, P, Q)
+    bb = batch_tolerances(sol, M, P, Q)
+    assert sol.covered.any()
+    compared = 0
+    for b in range(M.shape[0]):
+        one = solve(Problem(M[b], None if P is None else P[b], Q[b]), Request())
+        err1, _, tol1, rig1 = tolerances(one)
+        st1 = classify(-one.eigenvalues.real, tol1, rig1)
+        if not sol.covered[b]:
+            assert sol.reason[b]
+            continue
+        compared += 1
+        r, c = _match(one.eigenvalues, sol.eigenvalues[b])
+        d = np.abs(one.eigenvalues[r] - sol.eigenvalues[b][c])
+        assert np.all(d <= err1[r] + bb.err[b][c]), (kind, b, d, err1[r], bb.err[b][c])
+        assert [st1[i] for i in r] == list(WORDS[bb.stability[b][c]])
+        assert np.array_equal(np.asarray(rig1)[r], bb.rigid[b][c])
+    assert compared >= M.shape[0] // 2
+
+
+def test_uncovered_problems_are_named_not_dropped():
+    rng = np.random.default_rng(7)
+    M, P, Q = _problems("damped", rng, B=4)
+    M[1, 0, 0] = np.nan
+    M[2] = -M[2]  # not positive definite
+    Q[3] *= 1e120  # magnitudes that need scaling
+    sol = solve_batch(M, P, Q)
+    assert list(sol.covered) == [True, False, False, False]
+    assert "non-finite" in sol.reason[1]
+    assert "positive definite" in sol.reason[2]
+    assert "scaling" in sol.reason[3]
+
+
+def _points_agree(a, b):
+    assert len(a) == len(b)
+    for pa, pb in zip(a, b, strict=True):
+        assert (pa.get("error") is None) == (pb.get("error") is None)
+        if pa.get("error"):
+            continue
+        assert str(pa["verdict"]) == str(pb["verdict"])
+        sa, sb = pa["eigenvalues"], pb["eigenvalues"]
+        assert sa.size == sb.size
+        r, c = _match(sa, sb)
+        # tol = safety·err ≥ err of each: the sum of the tolerances covers the sum of the bounds
+        assert np.all(np.abs(sa[r] - sb[c]) <= pa["tol"][r] + pb["tol"][c])
+
+
+SWEEPS = [
+    ("hand_device", "C4", [("f", np.linspace(0.0, 3.0, 13))]),
+    ("hand_device", "C1", [("k_a", np.linspace(200.0, 2000.0, 10))]),
+    ("ziegler_pendulum", None, [("p", np.linspace(1.5, 2.5, 9))]),
+    ("rigid_rotor", None, [("Omega", np.linspace(0.0, 800.0, 21))]),
+    ("spatial_double_pendulum", None, [("m1", np.linspace(0.5, 3.0, 9))]),
+    ("chain_damped", None, [("c", np.linspace(0.1, 3.0, 9))]),
+]
+
+
+@pytest.mark.parametrize("case,config,axes", SWEEPS, ids=[f"{c}-{k or ''}" for c, k, _ in SWEEPS])
+def test_sweep_batched_equals_one_at_a_time(case, config, axes, monkeypatch):
+    spec = read_case(CASES / f"{case}.toml")
+    names = set(spec.data.get("parameters", {}))
+    if axes[0][0] not in names:
+        pytest.skip(f"{case} has no parameter {axes[0][0]}")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        batched = run_sweep(spec, axes, config=config, jobs=1, progress=False, curves=False)
+        monkeypatch.setattr(spectra_module, "BATCH_MAX", 0)  # every point: the general driver
+        single = run_sweep(spec, axes, config=config, jobs=1, progress=False, curves=False)
+    pts_b, pts_s = batched.points[0], single.points[0]
+    assert any("batched" in (p.get("solver") or "") for p in pts_b)
+    assert not any("batched" in (p.get("solver") or "") for p in pts_s)
+    _points_agree(pts_b, pts_s)
+    xtol = 1e-10 * abs(axes[0][1][-1] - axes[0][1][0])
+    assert len(batched.boundaries) == len(single.boundaries)
+    for x, y in zip(sorted(batched.boundaries, key=lambda r: r.value),
+                    sorted(single.boundaries, key=lambda r: r.value), strict=True):
+        assert x.kind == y.kind
+        assert abs(x.value - y.value) <= 2 * xtol + 1e-12 * abs(y.value)
