@@ -25,6 +25,7 @@ from mbseig.eigen.batch import solve_batch
 from mbseig.modal import classify, tolerances
 from mbseig.modal.batch import WORDS, batch_tolerances
 from mbseig.studies import run_sweep
+from mbseig.studies import continuation as line_module
 from mbseig.studies import spectra as spectra_module
 
 CASES = Path(__file__).resolve().parents[1] / "cases"
@@ -133,11 +134,17 @@ SWEEPS = [
     ("rigid_rotor", None, [("Omega", np.linspace(0.0, 800.0, 21))]),
     ("spatial_double_pendulum", None, [("m1", np.linspace(0.5, 3.0, 9))]),
     ("chain_damped", None, [("c", np.linspace(0.1, 3.0, 9))]),
+    ("four_bar", None, [("k_crank", np.linspace(5.0, 200.0, 9))]),
 ]
 
 
 @pytest.mark.parametrize("case,config,axes", SWEEPS, ids=[f"{c}-{k or ''}" for c, k, _ in SWEEPS])
 def test_sweep_batched_equals_one_at_a_time(case, config, axes, monkeypatch):
+    """The default sweep (a line's points solved together where the batch can, their modes in
+    one batch) against every point on its own: the branch followed point by point by the
+    continuation, every point's modes by the general driver.  Postures agree to a few CTOL
+    (both converge each point to a correction of CTOL = 1e-11 in the model's scales; 1e-8
+    allowed), eigenvalues within the sum of the two tolerances."""
     spec = read_case(CASES / f"{case}.toml")
     names = set(spec.data.get("parameters", {}))
     if axes[0][0] not in names:
@@ -146,14 +153,39 @@ def test_sweep_batched_equals_one_at_a_time(case, config, axes, monkeypatch):
         warnings.simplefilter("ignore")
         batched = run_sweep(spec, axes, config=config, jobs=1, progress=False, curves=False)
         monkeypatch.setattr(spectra_module, "BATCH_MAX", 0)  # every point: the general driver
+        monkeypatch.setattr(line_module, "BATCH_LINES", False)  # the branch point by point
         single = run_sweep(spec, axes, config=config, jobs=1, progress=False, curves=False)
     pts_b, pts_s = batched.points[0], single.points[0]
     assert any("batched" in (p.get("solver") or "") for p in pts_b)
     assert not any("batched" in (p.get("solver") or "") for p in pts_s)
+    assert not any(p.get("statics") == "batch" for p in pts_s)
     _points_agree(pts_b, pts_s)
+    for pa, pb in zip(pts_b, pts_s, strict=True):
+        if pa.get("error") is None:
+            assert np.max(np.abs(pa["q"] - pb["q"])) <= 1e-8
     xtol = 1e-10 * abs(axes[0][1][-1] - axes[0][1][0])
     assert len(batched.boundaries) == len(single.boundaries)
     for x, y in zip(sorted(batched.boundaries, key=lambda r: r.value),
                     sorted(single.boundaries, key=lambda r: r.value), strict=True):
         assert x.kind == y.kind
         assert abs(x.value - y.value) <= 2 * xtol + 1e-12 * abs(y.value)
+
+
+@pytest.mark.parametrize("case,config,axes", SWEEPS[:5], ids=[c for c, _, _ in SWEEPS[:5]])
+def test_line_tracking_at_once_equals_point_by_point(case, config, axes, monkeypatch):
+    """Reference: the general tracking loop (one point after the other, reference shapes
+    updated per match).  A line whose points hold equal numbers of eigenvalues is tracked with
+    the cost matrices of all consecutive pairs formed at once; the assignments decide, so the
+    tracks must be equal exactly."""
+    import mbseig.studies.tracking as tracking
+
+    spec = read_case(CASES / f"{case}.toml")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = run_sweep(spec, axes, config=config, jobs=1, progress=False, curves=False)
+    pts = res.points[0]
+    S1, T1, _ = tracking.track_line(pts)
+    assert tracking._track_whole(pts, linear_sum_assignment) is not None  # the path taken
+    monkeypatch.setattr(tracking, "_track_whole", lambda *a: None)
+    S2, T2, _ = tracking.track_line(pts)
+    assert np.array_equal(S1, S2, equal_nan=True) and np.array_equal(T1, T2, equal_nan=True)

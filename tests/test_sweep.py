@@ -182,5 +182,6 @@ def test_continuation_identical_in_process_and_on_processes(tmp_path):
     serial = json.dumps(run_sweep(case, axes, jobs=1).to_json())
     procs = json.dumps(run_sweep(case, axes, jobs=2).to_json())
     assert serial == procs
-    assert all(p["statics"] == "continuation" for p in json.loads(serial)["lines"][0]["points"])
+    assert all(p["statics"] in ("continuation", "batch")
+               for p in json.loads(serial)["lines"][0]["points"])
 

@@ -35,7 +35,10 @@ def device():
 
 @pytest.fixture
 def follows(monkeypatch):
-    """The number of branches followed (one per line that does not share)."""
+    """The number of branches followed (one per line that does not share); lines are followed
+    point by point (the batched line, which shares nothing and needs no sharing, is compared
+    with this path in tests/test_batch_modes.py)."""
+    monkeypatch.setattr(cont, "BATCH_LINES", False)
     calls = []
     real = cont.follow
 

@@ -110,7 +110,11 @@ def _line(values, monkeypatch=None, exact=False):
 def test_difference_tangents_reach_the_same_equilibria(monkeypatch):
     """Reference: the same line with forward-difference tangents at every point.  Both
     converge every grid point to CTOL = 1e-11 in the model's scales, so the postures agree to a
-    few CTOL (1e-9 m/rad allowed) and the eigenvalues to 1e-7 relative."""
+    few CTOL (1e-9 m/rad allowed) and the eigenvalues to 1e-7 relative.  (The line followed
+    point by point: the batched line has no tangents.)"""
+    import mbseig.studies.continuation as line
+
+    monkeypatch.setattr(line, "BATCH_LINES", False)
     values = np.linspace(800.0, 1200.0, 6)
     fast = _line(values)
     assert fast["record"]["tangents_by_difference"] >= 3  # the fast path was taken

@@ -49,6 +49,7 @@ from ..statics.reactions import posture
 from ..statics.result import finish
 from ..statics.solve import solve_statics
 from ..statics.stiffness import static_stability
+from .batch_line import batch_line
 from .records import SweepPoint
 from .spectra import point_spectra
 
@@ -58,6 +59,10 @@ __all__ = ["sweep_line", "family_maker", "modal_point", "linear_point", "point_r
 DIAGRAM_MODES_MAX = 60  # DOF up to which every branch point of the diagram gets its modal verdict
 
 _SHARED: dict = {}  # the last lines whose statics later lines of their sweep may share
+
+#: solve a line's grid points together where the batch can (:mod:`mbseig.studies.batch_line`);
+#: False follows every line point by point (the continuation alone: its tests, comparisons)
+BATCH_LINES = True
 
 
 def family_maker(spec, config, params, axis, *, lean=True):
@@ -196,7 +201,7 @@ def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rto
     """One line of a sweep by continuation (module docstring); a pure, picklable function.
 
     Returns {"points": [point dicts as :func:`mbseig.studies.sweep.evaluate_point`, with
-    ``statics`` = "continuation" | "cold"], "branch": [diagram points], "events": [folds,
+    ``statics`` = "continuation" | "batch" | "cold"], "branch": [diagram points], "events": [folds,
     branch points, switches, jumps], "record": {...}} or, when the first point fails,
     {"error": message}.
 
@@ -231,6 +236,10 @@ def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rto
         def restart(p, q_start):
             return solve_statics(make(p), q_init=q_start).q
 
+        batched = (batch_line(fam, values, eq0) if BATCH_LINES and len(values) > 1
+                   else (None, None, None))
+        if batched[0] is not None:
+            return _batched_line(batched, values, point_params, opts, postures, state)
         try:
             branch = follow(fam, values, fam.start(eq0.q, values[0]), stability=_static_verdict,
                             restart=restart, switch=switch)
@@ -283,6 +292,32 @@ def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rto
     out.update(branch=diagram, events=events,
                record={**branch.record, "model": state["model"], "commands": commands})
     return out
+
+
+def _batched_line(batched, values, point_params, opts, postures, state):
+    """The line's result from :func:`mbseig.studies.batch_line.batch_line`: every grid point's
+    record from the batched equilibria and linear models, the modes of all at once; the branch
+    is the grid itself (no fold or branch point lies on it: the batch checked that)."""
+    eqs, lins, record = batched
+    spectra = point_spectra(lins, **opts)
+    points = []
+    for v, eq, spectrum in zip(values, eqs, spectra, strict=True):
+        if isinstance(spectrum, MbseigError):
+            points.append(SweepPoint.failed(point_params(v), spectrum.one_line()))
+            continue
+        points.append(point_record(eq.model, eq, point_params(v), spectrum, postures=postures,
+                                   statics="batch", segment=0, branch_kind="regular",
+                                   corrector_iterations=int(eq.iterations)))
+    diagram = [{"p": float(v), "kind": "regular", "segment": 0,
+                "q": [float(x) for x in eq.q] if eq.q.size <= 500 else None,
+                "angles": _angles(eq.model, eq.q, postures), "pdot": 1.0,
+                "static": pt.get("static"), "verdict": pt.get("verdict")}
+               for v, eq, pt in zip(values, eqs, points, strict=True)]
+    commands = ("reused (the swept parameter does not enter them)" if state["reuse"] is not None
+                else f"resolved at {state['resolved']} values, the spring's tension held at "
+                     f"{state['held']}" if state["held"] else "resolved at every value")
+    return {"points": points, "branch": diagram, "events": [],
+            "record": {**record, "model": state["model"], "commands": commands}}
 
 
 def _static_verdict(model, q, lam):

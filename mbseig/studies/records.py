@@ -37,7 +37,8 @@ class SweepPoint(PointRecord):
     eigenvalues, shapes (unit, full coordinates), tol : every eigenpair and the stability
         tolerance of each; verdict : the worst stability; out_of_range : joints outside their
         range of motion; solver; q, iterations : the equilibrium; static : its static verdict;
-    statics : how the equilibrium was found ("continuation" or "cold"); segment, branch_kind,
+    statics : how the equilibrium was found ("continuation", "batch": the line's points solved
+        together, or "cold"); segment, branch_kind,
         corrector_iterations : where the followed branch put it.
     """
 

@@ -1,0 +1,163 @@
+"""A sweep line's equilibria and linear models with a batch axis (the points of a line at once).
+
+:func:`batch_line` solves the equilibria of every grid point of a line together
+(:func:`mbseig.statics.batch.newton_batch` on the :class:`~mbseig.model.stacked.ModelStack` of
+the line's models): Newton from the first point's equilibrium on all points, then, for the
+points that did not converge, from their nearest converged neighbour (continuation from a
+converged neighbour), in rounds while any converges.  The branch is then checked as the
+continuation checks it, for every point at once:
+
+- each point is reached again by Newton from its left neighbour's equilibrium (the corrector
+  of a continuation step), to within ``SAME`` in the model's scales: no point of the line lies
+  on another branch;
+- the reduced stiffness K_r keeps its inertia (the counts of negative and of zero eigenvalues)
+  along the line: no fold or branch point lies between two grid points (there the
+  continuation's events, diagram and switches are needed);
+- the static verdict (:func:`mbseig.statics.batch.static_verdicts`) does not become "unstable"
+  (where the followed branch loses static stability the continuation may switch branches).
+
+Where all hold, the line's equilibrium records, static verdicts and linear models (null-space
+basis by stacked SVD, reduced M, P, Q by stacked products) are formed for all points at once.
+Otherwise :func:`batch_line` returns None with the reason, and the line is followed by the
+continuation (:func:`mbseig.statics.continuation.follow`) point by point: the same equilibria
+(the corrector is the same Newton), with its events.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..linear import DeclaredRigid, Displayed, LinearModel
+from ..model.stacked import ModelStack, stackable
+from ..statics.batch import (
+    _size,
+    newton_batch,
+    null_bases,
+    residual,
+    singular,
+    static_verdicts,
+)
+from ..statics.family import CTOL
+from ..statics.result import Equilibrium
+
+__all__ = ["batch_line", "SAME", "ROUNDS"]
+
+#: two equilibria of one model reached by Newton from two starts are the same point when they
+#: differ by at most this in the model's scales (each is within ≈ CTOL² of the root after a
+#: last correction below CTOL; distinct branches of a mechanism lie orders of magnitude apart)
+SAME = 1e3 * CTOL
+#: rounds of restarts from converged neighbours before the line is handed to the continuation
+ROUNDS = 6
+RANK_TOL = 1e-10
+
+
+def _nearest_done(done):
+    """For each point the index of the nearest converged point (−1: none)."""
+    idx = np.flatnonzero(done)
+    if not idx.size:
+        return np.full(done.size, -1)
+    pos = np.arange(done.size)
+    j = np.searchsorted(idx, pos)
+    left = idx[np.clip(j - 1, 0, idx.size - 1)]
+    right = idx[np.clip(j, 0, idx.size - 1)]
+    return np.where(np.abs(pos - left) <= np.abs(right - pos), left, right)
+
+
+def batch_line(fam, values, eq0):
+    """(equilibria, linear models, record) of every grid point of the line, or (None, None,
+    reason) (module docstring).  ``fam``: the line's :class:`~mbseig.statics.family.Family`;
+    eq0: the first point's equilibrium (solved on its own)."""
+    if fam.rows.size != fam.m:
+        return None, None, "redundant constraints (self-stress: examined point by point)"
+    models = [fam.model(v) for v in values]
+    why = stackable(models)
+    if why is not None:
+        return None, None, why
+    if any(c.single_sided for c in models[0].constraints):
+        return None, None, "single-sided contacts"
+    stack = ModelStack(models)
+    n, B = stack.n, len(models)
+    y0 = fam.start(eq0.q, values[0])
+    Y = np.tile(y0, (B, 1))
+    kw = {"min_norm": singular(residual(stack, Y, fam.rows)[1][:1])}
+    Y, its, done, last = newton_batch(stack, Y, fam.rows, fam.scales, **kw)
+    for _ in range(ROUNDS):
+        if done.all():
+            break
+        near = _nearest_done(done)
+        todo = np.flatnonzero(~done & (near >= 0))
+        if not todo.size:
+            break
+        start = Y.copy()
+        start[todo] = Y[near[todo]]
+        active = np.zeros(B, bool)
+        active[todo] = True
+        Y2, its2, done2, last2 = newton_batch(stack, start, fam.rows, fam.scales, active=active,
+                                              **kw)
+        Y[todo], its[todo], last[todo] = Y2[todo], its[todo] + its2[todo], last2[todo]
+        if not done2[todo].any():
+            break
+        done[todo] = done2[todo]
+    if not done.all():
+        return None, None, f"{int((~done).sum())} of {B} points did not converge in the batch"
+    # every point again from its left neighbour: the same point (no jump to another branch)
+    if B > 1:
+        start = np.vstack([Y[:1], Y[:-1]])
+        active = np.ones(B, bool)
+        active[0] = False
+        Yc, _, okc, _ = newton_batch(stack, start, fam.rows, fam.scales, active=active,
+                                              **kw)
+        if not okc[1:].all() or np.any(_size(fam.scales, Yc[1:, :n] - Y[1:, :n]) > SAME):
+            return None, None, "a point is not reached from its neighbour (another branch)"
+    Q = Y[:, :n]
+    Lf = np.zeros((B, stack.m))
+    Lf[:, fam.rows] = Y[:, n:]
+    Phi_q = stack.phi_q(Q)
+    nb = null_bases(Phi_q, RANK_TOL)
+    if nb is None:
+        return None, None, "the rank of the constraint Jacobian changes along the line"
+    N, rank = nb
+    K, C = stack.jacobians(Q)
+    Kt = K + stack.hessian(Q, Lf) if stack.m else K
+    Nt = np.swapaxes(N, 1, 2)
+    Kr = Nt @ Kt @ N
+    statics = static_verdicts(Kr, N)
+    if any(s["verdict"] == "unstable" for s in statics):
+        return None, None, "the branch is statically unstable at a grid point"
+    # no eigenvalue of K_r crosses zero between grid points (a fold or branch point: there det S,
+    # which is det K_r times a factor of one sign on a line of constant rank, changes sign)
+    counts = {(s["index"], s["zero"]) for s in statics}
+    if len(counts) > 1:
+        return None, None, "the reduced stiffness changes its inertia (a fold or branch point)"
+    Mr = Nt @ np.broadcast_to(stack.M, (B, n, n)) @ N
+    Pr = Nt @ C @ N
+    G = stack.g(Q)
+    force = G - np.einsum("bkn,bk->bn", Phi_q, Lf)
+    fscale = np.maximum.reduce([np.max(np.abs(G), axis=1, initial=0.0),
+                                np.max(np.abs(K).sum(axis=2), axis=1, initial=0.0)
+                                * models[0].length_scale,
+                                np.max(np.abs(G - force), axis=1, initial=0.0)])
+    fscale = np.where(np.isfinite(fscale) & (fscale > 0), fscale, 1.0)
+    fr = np.max(np.abs(force), axis=1, initial=0.0) / fscale
+    phi = stack.phi(Q)
+    eqs, lins = [], []
+    scales = models[0].constraint_scales()
+    for b, model in enumerate(models):
+        if model.constraints is not models[0].constraints:
+            scales = model.constraint_scales()
+        cr = float(np.max(np.abs(phi[b]) / scales, initial=0.0)) if stack.m else 0.0
+        eq = Equilibrium(
+            q=Q[b].copy(), lam=Lf[b].copy(), residual=max(float(fr[b]), cr),
+            force_residual=float(fr[b]), constraint_residual=cr, iterations=int(its[b]),
+            rank=int(rank), n_redundant=0, tolerances={"rank_tol": RANK_TOL, "xtol": CTOL},
+            method="batch", model=model, correction=float(last[b]),
+            static=statics[b], path={"start": "batch", "kind": "regular", "segment": 0})
+        eqs.append(eq)
+        lins.append(LinearModel(
+            M=Mr[b], P=Pr[b], Q=Kr[b], N=N[b], q0=eq.q, lam0=eq.lam,
+            coordinate_names=model.coordinate_names, name=model.name,
+            parameters=model.parameters, rank=int(rank), n_constraints=stack.m,
+            constraint_stiffness=True, tolerances={"rank_tol": RANK_TOL},
+            rigid=DeclaredRigid(model, eq.q, eq.lam, Kr[b], N[b]),
+            display=Displayed(model, eq.q)))
+    return eqs, lins, {"statics": "batch", "newton_iterations": int(its.sum())}
