@@ -135,7 +135,16 @@ SWEEPS = [
     ("spatial_double_pendulum", None, [("m1", np.linspace(0.5, 3.0, 9))]),
     ("chain_damped", None, [("c", np.linspace(0.1, 3.0, 9))]),
     ("four_bar", None, [("k_crank", np.linspace(5.0, 200.0, 9))]),
+    ("heavy_top", None, [("Omega", np.linspace(40.0, 120.0, 9))]),
+    ("overhung_rotor_friswell", None, [("Omega", np.linspace(0.0, 800.0, 5))]),
+    ("double_pendulum", None, [("m", np.linspace(0.5, 2.0, 7))]),
+    ("spherical_pendulum", None, [("l", np.linspace(0.5, 2.0, 7))]),
+    ("rssr_four_bar", None, [("m1", np.linspace(0.5, 2.0, 7))]),
+    ("cantilever_beam", None, [("P", np.linspace(0.0, 1.0, 5))]),
 ]
+
+
+UNBATCHED = {"overhung_rotor_friswell"}
 
 
 @pytest.mark.parametrize("case,config,axes", SWEEPS, ids=[f"{c}-{k or ''}" for c, k, _ in SWEEPS])
@@ -156,7 +165,9 @@ def test_sweep_batched_equals_one_at_a_time(case, config, axes, monkeypatch):
         monkeypatch.setattr(line_module, "BATCH_LINES", False)  # the branch point by point
         single = run_sweep(spec, axes, config=config, jobs=1, progress=False, curves=False)
     pts_b, pts_s = batched.points[0], single.points[0]
-    assert any("batched" in (p.get("solver") or "") for p in pts_b)
+    # the batch covers the small models whose mass is well conditioned (not the overhung rotor's
+    # massless nodes: the general driver's QZ, one point at a time, in both runs)
+    assert any("batched" in (p.get("solver") or "") for p in pts_b) == (case not in UNBATCHED)
     assert not any("batched" in (p.get("solver") or "") for p in pts_s)
     assert not any(p.get("statics") == "batch" for p in pts_s)
     _points_agree(pts_b, pts_s)

@@ -294,6 +294,30 @@ def write_report(res, out_dir):
             spread = "{:.2f}–{:.2f}".format(*r["spread"]) if "spread" in r else ""
             L.append(f"| {r['method']} | {r['workers']} | {r['time']:.2f} s | {r['rate']:.1f} | "
                      f"{r['speedup']:.2f}× | {vs} | {spread} |")
+    batch = _rows(res, "batch")
+    if batch:
+        r0 = batch[0]
+        L += ["", "## Many points at once", "",
+              "Sweeps in-process on one core (`jobs=1`, one BLAS thread): the points of a line "
+              "solved together (equilibria, linear models, modes and tracking with a batch axis) "
+              "where the batch can, point by point where it cannot (statics column). Time: the "
+              "median of the runs after one warm-up run; spread: fastest and slowest / median. "
+              f"Load average before and after: {r0.get('load', {}).get('start')} → "
+              f"{r0.get('load', {}).get('end')}.", "",
+              "| sweep | grid | points | time | points/s | per point | goal | met | boundaries "
+              "| statics | spread | runs |",
+              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+        for r in batch:
+            goal = r.get("goal", "")
+            if "ratio" in r:
+                goal += f" (floor {r['floor_per_point'] * 1e3:.3f} ms: {r['ratio']:.1f}×)"
+            elif "floor_per_point" in r:
+                goal += " (EXUDYN not installed: floor not timed)"
+            met = "" if "met" not in r else ("yes" if r["met"] else "**no**")
+            L.append(f"| {r['method']} | {r.get('grid', '')} | {r['n']} | {r['time']:.2f} s | "
+                     f"{r['rate']:.0f} | {r['per_point'] * 1e3:.3f} ms | {goal} | {met} | "
+                     f"{r['boundaries']} | {', '.join(str(x) for x in r.get('statics', []))} | "
+                     "{:.2f}–{:.2f}".format(*r["spread"]) + f" | {r['repeats']} |")
     small = _rows(res, "small")
     if small:
         _table(L, "Small models, stage by stage",

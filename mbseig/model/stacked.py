@@ -19,6 +19,8 @@ on its own.
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
 from .base import BatchForce
@@ -300,6 +302,30 @@ class ModelStack:
 
     def _Z(self, Q, idx):
         return Q[:, idx]
+
+    def take(self, idx):
+        """The stack of the models ``idx`` (their rows of every stacked array; an array shared
+        by all, of leading size 1, stays shared)."""
+        idx = np.asarray(idx)
+        out = copy.copy(self)
+        B = self.B
+
+        def part(ker):
+            k = copy.copy(ker)
+            for name, v in vars(ker).items():
+                if isinstance(v, np.ndarray) and v.ndim and v.shape[0] == B and B > 1:
+                    setattr(k, name, v[idx])
+                elif isinstance(v, list) and len(v) == B and B > 1:
+                    setattr(k, name, [v[i] for i in idx])
+            return k
+
+        out.models = [self.models[i] for i in idx]
+        out.B = idx.size
+        out.forces = [(i, part(k)) for i, k in self.forces]
+        out.constraints = [(i, a, b, part(k)) for i, a, b, k in self.constraints]
+        out.g_const = self.g_const[idx] if self.g_const.shape[0] == B and B > 1 else self.g_const
+        out.M = self.M[idx] if self.M.shape[0] == B and B > 1 else self.M
+        return out
 
     def g(self, Q):
         G = np.broadcast_to(self.g_const, Q.shape).copy()

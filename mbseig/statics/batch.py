@@ -111,8 +111,8 @@ def newton_batch(stack, Y0, rows, scales, *, max_iter=CORRECTOR_ITER, tol=CTOL, 
             idx = np.flatnonzero(active)
             if not idx.size:
                 break
-            R, S = residual(stack, Y, rows)  # (every point: one stacked evaluation)
-            R, S = R[idx], S[idx]
+            sub = stack if idx.size == B else stack.take(idx)
+            R, S = residual(sub, Y[idx], rows)
             weights = np.concatenate([scales.ell, np.ones(R.shape[1] - stack.n)])
             dY = _steps(S, R, weights, min_norm)
             size = _size(scales, dY[:, :stack.n])

@@ -246,26 +246,28 @@ def _crossing_searches(case, config, params, axis0, values0, points, S, T, event
                        opts):
     """The boundary searches of line ``li``: every bracket where a tracked eigenvalue's
     δ + tol changes sign on one branch segment, away from folds, branch points and jumps."""
-    shapes = track_shapes(points, S)
     H = -S.real + T
     event_ps = [e["p"] for e in events if e.get("type") in ("fold", "branch point", "jump")]
     searches = []
-    for j in range(S.shape[1]):
-        for k in range(len(values0) - 1):
-            a, b = H[k, j], H[k + 1, j]
-            if np.isnan(a) or np.isnan(b) or (a < 0) == (b < 0):
-                continue
-            pa, pb = points[k], points[k + 1]
-            if pa.get("segment") != pb.get("segment"):
-                continue  # a jump or a switch between them: no crossing on one branch
-            lo, hi = float(values0[k]), float(values0[k + 1])
-            if any(min(lo, hi) <= p <= max(lo, hi) for p in event_ps):
-                continue  # a fold or branch point: reported from the branch itself
-            anchors = [(lo, pa["q"]), (hi, pb["q"])]
-            refs = [(complex(S[k, j]), shapes[(k, j)]), (complex(S[k + 1, j]), shapes[(k + 1, j)])]
-            stable_end = "lo" if a >= 0 else "hi"
-            searches.append(((li, j, k), (case, config, params, axis0, lo, hi,
-                                         anchors, refs[0], refs[1], xtol, stable_end), opts))
+    # the brackets where δ + tol changes sign (in the order of the loop over tracks, then points)
+    with np.errstate(invalid="ignore"):
+        change = (~np.isnan(H[:-1]) & ~np.isnan(H[1:]) & ((H[:-1] < 0) != (H[1:] < 0)))
+    js, ks = (x.tolist() for x in np.nonzero(change.T))
+    wanted = {(k, j) for j, k in zip(js, ks, strict=True)}
+    shapes = track_shapes(points, S, only=wanted | {(k + 1, j) for k, j in wanted})
+    for j, k in zip(js, ks, strict=True):
+        a = H[k, j]
+        pa, pb = points[k], points[k + 1]
+        if pa.get("segment") != pb.get("segment"):
+            continue  # a jump or a switch between them: no crossing on one branch
+        lo, hi = float(values0[k]), float(values0[k + 1])
+        if any(min(lo, hi) <= p <= max(lo, hi) for p in event_ps):
+            continue  # a fold or branch point: reported from the branch itself
+        anchors = [(lo, pa["q"]), (hi, pb["q"])]
+        refs = [(complex(S[k, j]), shapes[(k, j)]), (complex(S[k + 1, j]), shapes[(k + 1, j)])]
+        stable_end = "lo" if a >= 0 else "hi"
+        searches.append(((li, j, k), (case, config, params, axis0, lo, hi,
+                                     anchors, refs[0], refs[1], xtol, stable_end), opts))
     return searches
 
 

@@ -155,14 +155,19 @@ def _track_whole(points, assign):
     return S_tr, T_tr, ref
 
 
-def track_shapes(points, S):
-    """Shape of each track at each point (for boundary location), None where absent."""
+def track_shapes(points, S, only=None):
+    """Shape of each track at each point (for boundary location), None where absent; ``only``:
+    the (point, track) pairs wanted (default all)."""
     out = {}
-    for k, pt in enumerate(points):
+    pts = range(len(points)) if only is None else sorted({k for k, _ in only})
+    for k in pts:
+        pt = points[k]
         if pt.get("error"):
             continue
         s, X = pt["eigenvalues"], pt["shapes"]  # read once: a record's lookup is not free
         for j in np.flatnonzero(~np.isnan(S[k])):
+            if only is not None and (k, int(j)) not in only:
+                continue
             c = int(np.flatnonzero(s == S[k, j])[0])
             out[(k, int(j))] = X[:, c]
     return out
