@@ -11,7 +11,9 @@ Q (B, n) as dense arrays:
     g (B, n),  K, C (B, n, n),  Φ (B, m),  Φ_q (B, m, n),  H (B, n, n),  M (B, n, n).
 
 An element class without a batched kernel is evaluated by its own methods, one model at a time
-(:class:`_Each`): the same numbers, at Python's cost per model.  :func:`stackable` says why a
+(:class:`_Each`: ``force``/``jacobians`` on its coordinates, which a batch of repeated elements,
+:class:`~mbseig.model.batched.SpringDamperSet`, also offers): the same numbers, at Python's cost
+per model.  :func:`stackable` says why a
 set of models cannot be stacked (different structure, a configuration-dependent mass, pending
 inverse-statics commands, non-holonomic rows, a large model); the caller then takes each model
 on its own.
@@ -23,7 +25,6 @@ import copy
 
 import numpy as np
 
-from .base import BatchForce
 from .elements import (
     DistanceConstraint,
     FollowerForce,
@@ -47,16 +48,19 @@ def stackable(models) -> str | None:
     if m0.n + m0.n_constraints > STACK_MAX:
         return f"{m0.n + m0.n_constraints} unknowns (above {STACK_MAX})"
     for m in models:
-        if m.mass_elements or m.velocity_constraints or m.commands:
-            return "a configuration-dependent mass, rolling rows or pending commands"
+        if m.mass_elements:
+            return "a configuration-dependent mass (co-rotational beams)"
+        if m.velocity_constraints:
+            return "rolling (non-holonomic) rows"
+        if m.commands:
+            return "inverse-statics commands pending"
         if (m.n != m0.n or len(m.forces) != len(m0.forces)
                 or len(m.constraints) != len(m0.constraints)):
             return "models of different structure"
         for a, b in zip(m.forces + m.constraints, m0.forces + m0.constraints, strict=True):
             if a is b:
                 continue
-            if type(a) is not type(b) or isinstance(a, BatchForce) or a.idx is None \
-                    or not np.array_equal(a.idx, b.idx):
+            if type(a) is not type(b) or a.idx is None or not np.array_equal(a.idx, b.idx):
                 return "models of different structure"
     return None
 

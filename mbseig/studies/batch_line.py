@@ -2,9 +2,10 @@
 
 :func:`batch_line` solves the equilibria of every grid point of a line together
 (:func:`mbseig.statics.batch.newton_batch` on the :class:`~mbseig.model.stacked.ModelStack` of
-the line's models): Newton from the first point's equilibrium on all points, then, for the
-points that did not converge, from their nearest converged neighbour (continuation from a
-converged neighbour), in rounds while any converges.  The branch is then checked as the
+the line's models): Newton from the first point's equilibrium on all points, then, in rounds
+while any converges, the points next to converged ones, each from its converged neighbour
+extrapolated linearly in p from the next (a continuation's secant predictor; continuation from
+a converged neighbour).  The branch is then checked as the
 continuation checks it, for every point at once:
 
 - each point is reached again by Newton from its left neighbour's equilibrium (the corrector
@@ -47,20 +48,28 @@ __all__ = ["batch_line", "SAME", "ROUNDS"]
 #: last correction below CTOL; distinct branches of a mechanism lie orders of magnitude apart)
 SAME = 1e3 * CTOL
 #: rounds of restarts from converged neighbours before the line is handed to the continuation
-ROUNDS = 6
+#: (each round solves the points next to the converged ones, together)
+ROUNDS = 40
 RANK_TOL = 1e-10
 
 
-def _nearest_done(done):
-    """For each point the index of the nearest converged point (−1: none)."""
-    idx = np.flatnonzero(done)
-    if not idx.size:
-        return np.full(done.size, -1)
-    pos = np.arange(done.size)
-    j = np.searchsorted(idx, pos)
-    left = idx[np.clip(j - 1, 0, idx.size - 1)]
-    right = idx[np.clip(j, 0, idx.size - 1)]
-    return np.where(np.abs(pos - left) <= np.abs(right - pos), left, right)
+def _frontier(done, values, Y):
+    """(points, starts): the points not converged next to a converged one, each started from
+    its converged neighbour, extrapolated linearly in p from the next one where that converged
+    too (the secant predictor of a continuation step)."""
+    B = done.size
+    starts = Y.copy()
+    todo = []
+    for k in np.flatnonzero(~done):
+        for j, i in ((k - 1, k - 2), (k + 1, k + 2)):
+            if 0 <= j < B and done[j]:
+                starts[k] = Y[j]
+                if 0 <= i < B and done[i] and values[j] != values[i]:
+                    starts[k] = Y[j] + (values[k] - values[j]) / (values[j] - values[i]) \
+                        * (Y[j] - Y[i])
+                todo.append(k)
+                break
+    return np.array(todo, int), starts
 
 
 def batch_line(fam, values, eq0):
@@ -81,23 +90,21 @@ def batch_line(fam, values, eq0):
     Y = np.tile(y0, (B, 1))
     kw = {"min_norm": singular(residual(stack, Y, fam.rows)[1][:1])}
     Y, its, done, last = newton_batch(stack, Y, fam.rows, fam.scales, **kw)
+    values = np.asarray(values, float)
     for _ in range(ROUNDS):
         if done.all():
             break
-        near = _nearest_done(done)
-        todo = np.flatnonzero(~done & (near >= 0))
+        todo, start = _frontier(done, values, Y)
         if not todo.size:
             break
-        start = Y.copy()
-        start[todo] = Y[near[todo]]
         active = np.zeros(B, bool)
         active[todo] = True
         Y2, its2, done2, last2 = newton_batch(stack, start, fam.rows, fam.scales, active=active,
                                               **kw)
-        Y[todo], its[todo], last[todo] = Y2[todo], its[todo] + its2[todo], last2[todo]
         if not done2[todo].any():
             break
-        done[todo] = done2[todo]
+        ok = todo[done2[todo]]
+        Y[ok], its[ok], last[ok], done[ok] = Y2[ok], its[ok] + its2[ok], last2[ok], True
     if not done.all():
         return None, None, f"{int((~done).sum())} of {B} points did not converge in the batch"
     # every point again from its left neighbour: the same point (no jump to another branch)

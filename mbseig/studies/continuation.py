@@ -221,6 +221,7 @@ def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rto
     def point_params(p):
         return {**params, axis: float(p)}
 
+    why_not = None
     if shared is None:
         if key is not None:
             state["kept"] = {}
@@ -236,8 +237,15 @@ def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rto
         def restart(p, q_start):
             return solve_statics(make(p), q_init=q_start).q
 
-        batched = (batch_line(fam, values, eq0) if BATCH_LINES and len(values) > 1
-                   else (None, None, None))
+        batched = (None, None, None)
+        if BATCH_LINES and len(values) > 1:
+            try:
+                batched = batch_line(fam, values, eq0)
+            except MbseigError as exc:  # an element refused a point: followed point by point
+                batched = (None, None, exc.one_line())
+            except (np.linalg.LinAlgError, ValueError, FloatingPointError) as exc:
+                batched = (None, None, f"{type(exc).__name__}: {exc}")
+        why_not = batched[2] if batched[0] is None else None
         if batched[0] is not None:
             return _batched_line(batched, values, point_params, opts, postures, state)
         try:
@@ -290,7 +298,8 @@ def sweep_line(case, config, params, axis, values, *, safety=10.0, stability_rto
                         "grid": grid, "commands": commands, "models": state["kept"]}
     diagram, events = _diagram(fam, branch, points, model_at, point_params, opts, postures)
     out.update(branch=diagram, events=events,
-               record={**branch.record, "model": state["model"], "commands": commands})
+               record={**branch.record, "model": state["model"], "commands": commands,
+                       **({"batch": f"declined: {why_not}"} if why_not else {})})
     return out
 
 
