@@ -200,3 +200,25 @@ def test_line_tracking_at_once_equals_point_by_point(case, config, axes, monkeyp
     monkeypatch.setattr(tracking, "_track_whole", lambda *a: None)
     S2, T2, _ = tracking.track_line(pts)
     assert np.array_equal(S1, S2, equal_nan=True) and np.array_equal(T1, T2, equal_nan=True)
+
+
+def test_a_long_load_line_is_batched_and_equals_the_followed_one(monkeypatch):
+    """C4's tendon load over 0..2.5 N on 200 points: the equilibrium moves too far for Newton
+    from the first point alone, so the batch restarts the others from converged neighbours
+    (secant predictor); the line is still batched, and equals the followed line (postures to
+    1e-8 in the model's scales, eigenvalues within the sum of the tolerances, the flutter
+    boundary within xtol)."""
+    spec = read_case(CASES / "hand_device.toml")
+    axes = [("f", np.linspace(0.0, 2.5, 200))]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        batched = run_sweep(spec, axes, config="C4", jobs=1, progress=False, curves=False)
+        monkeypatch.setattr(line_module, "BATCH_LINES", False)
+        followed = run_sweep(spec, axes, config="C4", jobs=1, progress=False, curves=False)
+    assert batched.records[0]["statics"] == "batch"
+    assert batched.records[0]["newton_iterations"] > 0
+    _points_agree(batched.points[0], followed.points[0])
+    for pa, pb in zip(batched.points[0], followed.points[0], strict=True):
+        assert np.max(np.abs(pa["q"] - pb["q"])) <= 1e-8
+    (b1,), (b2,) = batched.boundaries, followed.boundaries
+    assert abs(b1.value - b2.value) <= 2 * 1e-10 * 2.5

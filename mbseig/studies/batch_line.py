@@ -3,9 +3,9 @@
 :func:`batch_line` solves the equilibria of every grid point of a line together
 (:func:`mbseig.statics.batch.newton_batch` on the :class:`~mbseig.model.stacked.ModelStack` of
 the line's models): Newton from the first point's equilibrium on all points, then, in rounds
-while any converges, the points next to converged ones, each from its converged neighbour
-extrapolated linearly in p from the next (a continuation's secant predictor; continuation from
-a converged neighbour).  The branch is then checked as the
+while any converges, every point not converged from its nearest converged neighbour,
+extrapolated linearly in p from the next converged point beyond it (a continuation's secant
+predictor; continuation from a converged neighbour).  The branch is then checked as the
 continuation checks it, for every point at once:
 
 - each point is reached again by Newton from its left neighbour's equilibrium (the corrector
@@ -48,28 +48,35 @@ __all__ = ["batch_line", "SAME", "ROUNDS"]
 #: last correction below CTOL; distinct branches of a mechanism lie orders of magnitude apart)
 SAME = 1e3 * CTOL
 #: rounds of restarts from converged neighbours before the line is handed to the continuation
-#: (each round solves the points next to the converged ones, together)
+#: (each round solves every point not converged yet, together)
 ROUNDS = 40
 RANK_TOL = 1e-10
 
 
-def _frontier(done, values, Y):
-    """(points, starts): the points not converged next to a converged one, each started from
-    its converged neighbour, extrapolated linearly in p from the next one where that converged
-    too (the secant predictor of a continuation step)."""
+def _restarts(done, values, Y):
+    """(points, starts): every point not converged, started from its nearest converged point
+    j, extrapolated linearly in p from the converged point next to j on the same side (the
+    secant predictor of a continuation step) where there is one."""
     B = done.size
+    conv = np.flatnonzero(done)
+    todo = np.flatnonzero(~done)
     starts = Y.copy()
-    todo = []
-    for k in np.flatnonzero(~done):
-        for j, i in ((k - 1, k - 2), (k + 1, k + 2)):
-            if 0 <= j < B and done[j]:
-                starts[k] = Y[j]
-                if 0 <= i < B and done[i] and values[j] != values[i]:
-                    starts[k] = Y[j] + (values[k] - values[j]) / (values[j] - values[i]) \
-                        * (Y[j] - Y[i])
-                todo.append(k)
-                break
-    return np.array(todo, int), starts
+    if not conv.size or not todo.size:
+        return np.zeros(0, int), starts
+    pos = np.searchsorted(conv, todo)
+    left = conv[np.clip(pos - 1, 0, conv.size - 1)]
+    right = conv[np.clip(pos, 0, conv.size - 1)]
+    j = np.where(np.abs(todo - left) <= np.abs(right - todo), left, right)
+    step = np.where(j < todo, -1, 1)  # the next point beyond j, away from the point
+    i = j + step
+    ok = (i >= 0) & (i < B)
+    ok[ok] &= done[i[ok]] & (values[j[ok]] != values[i[ok]])
+    starts[todo] = Y[j]
+    if ok.any():
+        a, b, c = todo[ok], j[ok], i[ok]
+        starts[a] = Y[b] + ((values[a] - values[b]) / (values[b] - values[c]))[:, None] \
+            * (Y[b] - Y[c])
+    return todo, starts
 
 
 def batch_line(fam, values, eq0):
@@ -94,7 +101,7 @@ def batch_line(fam, values, eq0):
     for _ in range(ROUNDS):
         if done.all():
             break
-        todo, start = _frontier(done, values, Y)
+        todo, start = _restarts(done, values, Y)
         if not todo.size:
             break
         active = np.zeros(B, bool)
