@@ -256,7 +256,7 @@ def held_tension(model, prev, *, tol=1e-12, posture_tol=1e-10, cache=None):
     device = dataclasses.replace(model, forces=tuple(f for f in forces if not f.scalable_load),
                                  constraints=model.constraints + (driver,), commands=())
     with np.errstate(all="ignore"):
-        g = device.generalized_force(q)
+        g = _device_force(device, prev, driver, q, k, cache)
         G = _device_phi_q(device, prev, driver, q, cache)
         lam, _, rank, _ = np.linalg.lstsq(G.T, g, rcond=None)
         r = g - G.T @ lam
@@ -272,6 +272,26 @@ def held_tension(model, prev, *, tol=1e-12, posture_tol=1e-10, cache=None):
                         "tension": spring.stiffness * (length_now - l0)}]}
     return dataclasses.replace(model, forces=tuple(forces), q_init=q, commands=(),
                                drivers=(record,))
+
+
+def _device_force(device, prev, driver, q, k, cache):
+    """g at q of the device: its forces other than the commanded spring (the same elements at
+    every value of the line: kept in ``cache`` for the same ``prev``, driver and q) plus the
+    spring's own, which is all that changes with its stiffness."""
+    spring = device.forces[[j for j, f in enumerate(prev.forces) if not f.scalable_load].index(k)]
+    rest = None
+    if cache is not None:
+        hit = cache.get("device_force")
+        if hit is not None and hit[0] is prev and hit[1] is driver and hit[2] == q.tobytes():
+            rest = hit[3]
+    if rest is None:
+        others = tuple(f for j, f in enumerate(prev.forces) if j != k and not f.scalable_load)
+        rest = dataclasses.replace(device, forces=others).generalized_force(q)
+        if cache is not None:
+            cache["device_force"] = (prev, driver, q.tobytes(), rest)
+    g = rest.copy()
+    np.add.at(g, spring.idx, spring.force(q, np.zeros(q.size)))
+    return g
 
 
 def _device_phi_q(device, prev, driver, q, cache):
