@@ -3,11 +3,11 @@ against the one-point general driver (mbseig.eigen.solve with mbseig.modal.toler
 
 Reference: the general driver on each problem alone, an independent path (its own LAPACK calls:
 geev with left vectors, sygvd, the proportional path, QZ; its own bounds by a k-d tree).
-Tolerances: two computed eigenvalues of one exact eigenvalue lie within the sum of their error
-bounds (each bound covers its own eigenvalue's error), so matched eigenvalues must differ by at
-most err₁ + err₂; the stabilities and rigid-body flags must be equal (the bounds separate each
-eigenvalue from the imaginary axis and from 0 by a safety factor of 10, far more than the two
-bounds differ); boundaries of a sweep within its xtol.
+Tolerances: two computed eigenvalues of one exact eigenvalue lie within the sum of their stated
+bounds (each tolerance, safety × κη, covers its own eigenvalue's error), so matched eigenvalues
+must differ by at most tol₁ + tol₂; the stabilities and rigid-body flags must be equal (the
+bounds separate each eigenvalue from the imaginary axis and from 0 by a safety factor of 10, far
+more than the two bounds differ); boundaries of a sweep within its xtol.
 """
 
 from __future__ import annotations
@@ -86,15 +86,18 @@ def test_batch_agrees_with_the_general_driver(kind):
     compared = 0
     for b in range(M.shape[0]):
         one = solve(Problem(M[b], None if P is None else P[b], Q[b]), Request())
-        err1, _, tol1, rig1 = tolerances(one)
-        st1 = classify(-one.eigenvalues.real, tol1, rig1)
+        _, tol1, tol1_re, rig1 = tolerances(one)
+        st1 = classify(-one.eigenvalues.real, tol1_re, rig1)
         if not sol.covered[b]:
             assert sol.reason[b]
             continue
         compared += 1
         r, c = _match(one.eigenvalues, sol.eigenvalues[b])
         d = np.abs(one.eigenvalues[r] - sol.eigenvalues[b][c])
-        assert np.all(d <= err1[r] + bb.err[b][c]), (kind, b, d, err1[r], bb.err[b][c])
+        # the stated bound of each: its tolerance, safety × κη (κη is a first-order estimate,
+        # and η at the rounding level is itself evaluated to about γ_{n+2}: the factor 10
+        # covers both; κη alone was exceeded by 6 % under another BLAS kernel)
+        assert np.all(d <= tol1[r] + bb.tol[b][c]), (kind, b, d, tol1[r], bb.tol[b][c])
         assert [st1[i] for i in r] == list(WORDS[bb.stability[b][c]])
         assert np.array_equal(np.asarray(rig1)[r], bb.rigid[b][c])
     assert compared >= M.shape[0] // 2
@@ -185,9 +188,11 @@ def test_sweep_batched_equals_one_at_a_time(case, config, axes, monkeypatch):
 @pytest.mark.parametrize("case,config,axes", SWEEPS[:5], ids=[c for c, _, _ in SWEEPS[:5]])
 def test_line_tracking_at_once_equals_point_by_point(case, config, axes, monkeypatch):
     """Reference: the general tracking loop (one point after the other, reference shapes
-    updated per match).  A line whose points hold equal numbers of eigenvalues is tracked with
-    the cost matrices of all consecutive pairs formed at once; the assignments decide, so the
-    tracks must be equal exactly."""
+    updated per match).  A line whose points hold equal numbers of eigenvalues is tracked
+    without the loop's bookkeeping, each assignment made on the same cost matrix (the same
+    function on the same arrays), so the tracks must be equal exactly, on any BLAS (a cost
+    formed another way would differ by rounding and could break a near tie the other way: past
+    Ziegler's flutter collision the two partners have equal MAC to the reference)."""
     import mbseig.studies.tracking as tracking
 
     spec = read_case(CASES / f"{case}.toml")

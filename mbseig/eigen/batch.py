@@ -230,7 +230,8 @@ def solve_batch(M, P, Q, *, sym_tol=1e-13, companion_cond=COMPANION_COND,
     den = np.abs(np.einsum("bij,bij->bj", Yr, MX * co["dM"][:, None, :]
                            + PX * co["dP"][:, None, :]))
     kappa = ratio(co["w"], den)  # unit x and y: ‖x‖‖y‖ = 1
-    kappa = np.where(co["big"], kappa * np.abs(s), kappa)
+    with np.errstate(invalid="ignore"):  # (∞·0 where den = 0: replaced by ∞ below)
+        kappa = np.where(co["big"], kappa * np.abs(s), kappa)
     kappa = np.where(den > 0, kappa, np.inf)
     kappa = np.where(co["w"] == 0, 0.0, kappa)
     good = (np.isfinite(s).all(axis=1) & ~np.isnan(eta).any(axis=1)

@@ -11,8 +11,6 @@ import numpy as np
 from ..errors import CaseError, MbseigError
 from ..statics import equilibrium
 from .boundaries import (
-    CONJUGATE_PENALTY,
-    DISTANCE_WEIGHT,
     Evaluator,
     follow_boundary,
     locate,
@@ -115,40 +113,31 @@ def track_line(points):
 def _track_whole(points, assign):
     """:func:`track_line` for a line whose points all hold the same number of eigenvalues (no
     failed point): every track is matched at every point, so the reference of a point is the
-    previous point in track order.  The cost matrices of all consecutive pairs are formed at
-    once (stacked MAC), each is put in track order and assigned as the general loop assigns it;
-    None for any other line."""
+    previous point in track order, and the assignment is made on the same cost matrix as the
+    general loop makes it (:func:`match_cost` on the same arrays), without its per-track
+    bookkeeping; None for any other line."""
     if not points or any(pt.get("error") for pt in points):
         return None
     S = [pt["eigenvalues"] for pt in points]
     k = S[0].size
     if k == 0 or any(s.size != k for s in S):
         return None
+    X = [pt["shapes"] for pt in points]
     Sa = np.stack(S)  # (P, k)
-    X = np.stack([pt["shapes"] for pt in points])  # (P, n, k)
     T = np.stack([pt["tol"] for pt in points])
-    A, Bm = X[:-1], X[1:]
-    num = np.abs(np.einsum("pni,pnj->pij", A.conj(), Bm)) ** 2
-    na = np.einsum("pni,pni->pi", A.conj(), A).real
-    nb = np.einsum("pnj,pnj->pj", Bm.conj(), Bm).real
-    mac = num / np.maximum(na[:, :, None] * nb[:, None, :], np.finfo(float).tiny)
-    rs, s = Sa[:-1], Sa[1:]
-    real_tol = 1e-8 * np.maximum(np.abs(rs)[:, :, None], np.abs(s)[:, None, :]) + 1e-300
-    crossing = ((rs.imag[:, :, None] * s.imag[:, None, :] < 0)
-                & (np.abs(rs.imag)[:, :, None] > real_tol)
-                & (np.abs(s.imag)[:, None, :] > real_tol))
-    scale = np.maximum(np.maximum(np.abs(rs).max(axis=1), np.abs(s).max(axis=1)), 1e-300)
-    cost = (1.0 - mac) + CONJUGATE_PENALTY * crossing \
-        + DISTANCE_WEIGHT * np.abs(rs[:, :, None] - s[:, None, :]) / scale[:, None, None]
     order = np.arange(k)  # order[j]: the index of track j's eigenvalue at the current point
     idx = np.empty((len(points), k), int)
     idx[0] = order
-    for p in range(cost.shape[0]):
-        rows, cols = assign(cost[p][order])
+    for p in range(1, len(points)):
+        ref_s, ref_X = Sa[p - 1][order], np.column_stack([X[p - 1][:, c] for c in order])
+        s = Sa[p]
+        scale = max(float(np.max(np.abs(ref_s), initial=0.0)),
+                    float(np.max(np.abs(s), initial=0.0)), 1e-300)
+        rows, cols = assign(_match_cost(ref_s, ref_X, s, X[p], scale))
         nxt = np.empty(k, int)
         nxt[rows] = cols
         order = nxt
-        idx[p + 1] = order
+        idx[p] = order
     S_tr = np.take_along_axis(Sa, idx, axis=1)
     T_tr = np.take_along_axis(T, idx, axis=1)
     ref = [(S_tr[-1, j], X[-1][:, idx[-1, j]]) for j in range(k)]
