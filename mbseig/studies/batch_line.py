@@ -165,7 +165,8 @@ def batch_line(fam, values, eq0):
             force_residual=float(fr[b]), constraint_residual=cr, iterations=int(its[b]),
             rank=int(rank), n_redundant=0, tolerances={"rank_tol": RANK_TOL, "xtol": CTOL},
             method="batch", model=model, correction=float(last[b]),
-            static=statics[b], path={"start": "batch", "kind": "regular", "segment": 0})
+            static=statics[b], path={"start": "batch", "kind": "start" if b == 0 else "grid",
+                                      "segment": 0})
         eqs.append(eq)
         lins.append(LinearModel(
             M=Mr[b], P=Pr[b], Q=Kr[b], N=N[b], q0=eq.q, lam0=eq.lam,

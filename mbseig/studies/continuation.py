@@ -165,7 +165,7 @@ def point_record(model, eq, params, spectrum, *, postures=posture, **fields):
 def modal_point(model, eq, params, *, safety, stability_rtol, postures=posture, basis=None,
                 kept=None, **fields):
     """The sweep's record of one point: all eigenpairs, their tolerances, the verdict; the
-    modes stage of :func:`modal_points` with a batch of one.
+    modes stage of a line (:func:`~mbseig.studies.spectra.point_spectra`) with a batch of one.
     postures(model, q): :func:`mbseig.statics.reactions.posture` (or a kept copy of its
     result); basis, kept: :func:`linear_point`; fields: more fields of the
     :class:`SweepPoint` (how the statics reached it)."""
@@ -310,18 +310,20 @@ def _batched_line(batched, values, point_params, opts, postures, state):
     eqs, lins, record = batched
     spectra = point_spectra(lins, **opts)
     points = []
-    for v, eq, spectrum in zip(values, eqs, spectra, strict=True):
+    kinds = ["start"] + ["grid"] * (len(values) - 1)  # as the continuation names its points
+    for v, eq, spectrum, kind in zip(values, eqs, spectra, kinds, strict=True):
         if isinstance(spectrum, MbseigError):
             points.append(SweepPoint.failed(point_params(v), spectrum.one_line()))
             continue
         points.append(point_record(eq.model, eq, point_params(v), spectrum, postures=postures,
-                                   statics="batch", segment=0, branch_kind="regular",
+                                   statics="batch", segment=0, branch_kind=kind,
                                    corrector_iterations=int(eq.iterations)))
-    diagram = [{"p": float(v), "kind": "regular", "segment": 0,
+    diagram = [{"p": float(v), "kind": kind, "segment": 0,
                 "q": [float(x) for x in eq.q] if eq.q.size <= 500 else None,
-                "angles": _angles(eq.model, eq.q, postures), "pdot": 1.0,
+                "angles": _angles(eq.model, eq.q, postures),
+                "pdot": None,  # (no tangent is formed on a batched line)
                 "static": pt.get("static"), "verdict": pt.get("verdict")}
-               for v, eq, pt in zip(values, eqs, points, strict=True)]
+               for v, eq, pt, kind in zip(values, eqs, points, kinds, strict=True)]
     commands = ("reused (the swept parameter does not enter them)" if state["reuse"] is not None
                 else f"resolved at {state['resolved']} values, the spring's tension held at "
                      f"{state['held']}" if state["held"] else "resolved at every value")
