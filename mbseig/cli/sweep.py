@@ -101,8 +101,10 @@ def _sweep(args, spec, ranges, fixed, stem, out_dir, bar, kept) -> int:
     n_pts = sum(len(line) for line in res.points)
     failed = sum(1 for line in res.points for pt in line if pt.get("error"))
     cold = sum(1 for line in res.points for pt in line if pt.get("statics") == "cold")
+    batch = sum(1 for line in res.points for pt in line if pt.get("statics") == "batch")
     how = "by continuation" if args.continuation else "each on its own"
     print(f"sweep {stem}: {n_pts} points {how} ({failed} failed"
+          + (f", {batch} solved together with their line" if batch else "")
           + (f", {cold} solved on their own" if args.continuation and cold else "")
           + f") on {res.runner}, {len(res.boundaries)} stability boundaries "
           f"(xtol {res.tolerances['xtol']:.3g})")
