@@ -77,6 +77,11 @@ def _affine(maps):
     return _stack([a.C for a in maps]), _stack([a.d for a in maps])
 
 
+def _values(els, *fields):
+    """(B,) arrays of the scalar ``fields`` of the members (one member: shape (1,), broadcast)."""
+    return tuple(np.array([getattr(e, f) for e in els], float) for f in fields)
+
+
 def _apply(C, d, Z):
     """r = C z + d per member: C (B|1, r, m), Z (B, m) → (B, r)."""
     return np.einsum("brm,bm->br", np.broadcast_to(C, (Z.shape[0], *C.shape[1:])), Z) + d
@@ -186,9 +191,7 @@ class _Quadratic:
 class _Spring:
     def __init__(self, els):
         self.C, self.d = _affine([e.diff for e in els])
-        self.k = np.array([e.stiffness for e in els], float)
-        self.l0 = np.array([e.free_length for e in els], float)
-        self.c = np.array([e.damping for e in els], float)
+        self.k, self.l0, self.c = _values(els, "stiffness", "free_length", "damping")
         self.names = [e.name for e in els]
 
     def _args(self, Z):
@@ -211,10 +214,8 @@ class _Spring:
 class _Torsional:
     def __init__(self, els):
         self.C, self.d = _affine([e.dirs for e in els])
-        self.k = np.array([e.stiffness for e in els], float)
-        self.c = np.array([e.damping for e in els], float)
-        self.a0 = np.array([e.angle0 for e in els], float)
-        self.sense = np.array([e.sense for e in els], float)
+        self.k, self.c, self.a0, self.sense = _values(els, "stiffness", "damping", "angle0",
+                                                      "sense")
         self.names = [e.name for e in els]
 
     def _parts(self, Z):
@@ -258,7 +259,7 @@ class _Torsional:
 class _Follower:
     def __init__(self, els):
         self.C, self.d = _affine([e.stacked for e in els])
-        self.f = np.array([e.magnitude for e in els], float)
+        (self.f,) = _values(els, "magnitude")
 
     def force(self, Z, Q):
         u = _apply(self.C[:, 2:], self.d[:, 2:], Z)
