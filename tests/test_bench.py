@@ -143,3 +143,24 @@ def test_bench_spatial_chain_reads_its_bodies(tmp_path):
     assert model.n == 12 * 20 and model.n_constraints == 6 * 20 and len(model.forces) == 21
     assert np.max(np.abs(model.phi(model.q_init))) <= 1e-12
     assert set(times) == {"read + assemble", "first Φ, Φ_q, g, K, C", "floor"}
+
+
+def test_bench_batch_rows_state_goal_and_floor(tmp_path):
+    """The batch section's rows (issue 42's goals) say whether each goal is met from the rate
+    or from the ratio to the EXUDYN floor, and the report prints both (no timing asserted: the
+    rows are built from given times)."""
+    from mbseig.bench.batch_rows import _row
+    from mbseig.bench.report import write_report
+
+    fast = _row("device C4 over f", 2000, [0.5, 0.6, 0.55], 1, 3000.0, statics=["batch"])
+    slow = _row("spatial double pendulum over m1 × l1", 100, [1.0], 0, floor=2e-4)
+    assert fast["met"] and fast["rate"] == 2000 / 0.55 and fast["spread"] == (0.5 / 0.55,
+                                                                              0.6 / 0.55)
+    assert not slow["met"] and slow["ratio"] == (1.0 / 100) / 2e-4
+    write_report({"config": {"quick": True, "repeats": 1, "threads": 1}, "rows": [fast, slow],
+                  "machine": {"python": "3", "numpy": "2", "scipy": "1", "cpus": 2,
+                              "platform": "x"}, "elapsed": 1.0}, tmp_path)
+    md = (tmp_path / "benchmarks.md").read_text()
+    assert "## Many points at once" in md
+    assert "| device C4 over f |" in md and "| yes |" in md
+    assert "(floor 0.200 ms: 50.0×) | **no** |" in md
