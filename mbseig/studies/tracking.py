@@ -129,7 +129,7 @@ def _track_whole(points, assign):
     idx = np.empty((len(points), k), int)
     idx[0] = order
     for p in range(1, len(points)):
-        ref_s, ref_X = Sa[p - 1][order], np.column_stack([X[p - 1][:, c] for c in order])
+        ref_s, ref_X = Sa[p - 1][order], X[p - 1][:, order]  # (as the loop's column_stack)
         s = Sa[p]
         scale = max(float(np.max(np.abs(ref_s), initial=0.0)),
                     float(np.max(np.abs(s), initial=0.0)), 1e-300)
