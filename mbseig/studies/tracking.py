@@ -11,6 +11,8 @@ import numpy as np
 from ..errors import CaseError, MbseigError
 from ..statics import equilibrium
 from .boundaries import (
+    CONJUGATE_PENALTY,
+    DISTANCE_WEIGHT,
     Evaluator,
     follow_boundary,
     locate,
@@ -110,12 +112,39 @@ def track_line(points):
     return S, T, ref
 
 
+#: a consecutive pair is assigned by its row minima where each row's minimum beats the row's
+#: other entries by this: any other assignment then costs at least this much more, far beyond
+#: the rounding (≈ 1e-15) by which two ways of forming the cost differ, so the loop's assignment
+#: is the same; a pair with a nearer entry takes the loop's own cost and assignment
+MARGIN = 1e-8
+
+
+def _stacked_costs(Sa, X):
+    """The cost matrices of :func:`match_cost` of all consecutive pairs (P − 1, k, k), in the
+    points' own order, formed at once (equal to the loop's to rounding)."""
+    A, Bm = X[:-1], X[1:]
+    num = np.abs(np.einsum("pni,pnj->pij", A.conj(), Bm)) ** 2
+    na = np.einsum("pni,pni->pi", A.conj(), A).real
+    nb = np.einsum("pnj,pnj->pj", Bm.conj(), Bm).real
+    mac = num / np.maximum(na[:, :, None] * nb[:, None, :], np.finfo(float).tiny)
+    rs, s = Sa[:-1], Sa[1:]
+    real_tol = 1e-8 * np.maximum(np.abs(rs)[:, :, None], np.abs(s)[:, None, :]) + 1e-300
+    crossing = ((rs.imag[:, :, None] * s.imag[:, None, :] < 0)
+                & (np.abs(rs.imag)[:, :, None] > real_tol)
+                & (np.abs(s.imag)[:, None, :] > real_tol))
+    scale = np.maximum(np.maximum(np.abs(rs).max(axis=1), np.abs(s).max(axis=1)), 1e-300)
+    return (1.0 - mac) + CONJUGATE_PENALTY * crossing \
+        + DISTANCE_WEIGHT * np.abs(rs[:, :, None] - s[:, None, :]) / scale[:, None, None]
+
+
 def _track_whole(points, assign):
     """:func:`track_line` for a line whose points all hold the same number of eigenvalues (no
     failed point): every track is matched at every point, so the reference of a point is the
-    previous point in track order, and the assignment is made on the same cost matrix as the
-    general loop makes it (:func:`match_cost` on the same arrays), without its per-track
-    bookkeeping; None for any other line."""
+    previous point in track order.  The cost matrices of all consecutive pairs are formed at
+    once; a pair whose row minima are distinct columns, each ahead of its row by ``MARGIN``, is
+    assigned by them (the unique optimum, whatever the rounding); any other pair takes the
+    loop's own cost (:func:`match_cost` on the same arrays) and assignment.  None for any other
+    line."""
     if not points or any(pt.get("error") for pt in points):
         return None
     S = [pt["eigenvalues"] for pt in points]
@@ -125,18 +154,26 @@ def _track_whole(points, assign):
     X = [pt["shapes"] for pt in points]
     Sa = np.stack(S)  # (P, k)
     T = np.stack([pt["tol"] for pt in points])
+    cost = _stacked_costs(Sa, np.stack(X)) if len(points) > 1 else np.zeros((0, k, k))
+    part = np.partition(cost, 1, axis=2) if k > 1 else np.concatenate([cost, cost + 1], axis=2)
+    best = np.argmin(cost, axis=2)  # (P − 1, k): per previous eigenvalue its nearest
+    clear = (part[:, :, 1] - part[:, :, 0] >= MARGIN).all(axis=1)
+    clear &= (np.sort(best, axis=1) == np.arange(k)).all(axis=1)  # the minima: a permutation
     order = np.arange(k)  # order[j]: the index of track j's eigenvalue at the current point
     idx = np.empty((len(points), k), int)
     idx[0] = order
     for p in range(1, len(points)):
-        ref_s, ref_X = Sa[p - 1][order], X[p - 1][:, order]  # (as the loop's column_stack)
-        s = Sa[p]
-        scale = max(float(np.max(np.abs(ref_s), initial=0.0)),
-                    float(np.max(np.abs(s), initial=0.0)), 1e-300)
-        rows, cols = assign(_match_cost(ref_s, ref_X, s, X[p], scale))
-        nxt = np.empty(k, int)
-        nxt[rows] = cols
-        order = nxt
+        if clear[p - 1]:
+            order = best[p - 1][order]
+        else:
+            ref_s, ref_X = Sa[p - 1][order], X[p - 1][:, order]  # (as the loop's column_stack)
+            s = Sa[p]
+            scale = max(float(np.max(np.abs(ref_s), initial=0.0)),
+                        float(np.max(np.abs(s), initial=0.0)), 1e-300)
+            rows, cols = assign(_match_cost(ref_s, ref_X, s, X[p], scale))
+            nxt = np.empty(k, int)
+            nxt[rows] = cols
+            order = nxt
         idx[p] = order
     S_tr = np.take_along_axis(Sa, idx, axis=1)
     T_tr = np.take_along_axis(T, idx, axis=1)
