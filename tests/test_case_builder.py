@@ -73,30 +73,6 @@ def test_to_toml_rejects_what_toml_cannot_hold():
         to_toml({1: 2})
 
 
-def four_bar_builder() -> CaseBuilder:
-    """cases/four_bar.toml written with CaseBuilder (its numbers and expressions as in the file)."""
-    c = CaseBuilder(
-        dimension=2, title="Four-bar linkage, elbow-up, crank spring, gravity",
-        description="Ground pivots A = (0, 0) and D = (1, 0) m. Uniform slender bars: "
-                    "crank AB 0.3 m 1 kg, coupler BC 1.0 m 2 kg, rocker DC 0.8 m 1.5 kg "
-                    "(I_G = m L^2 / 12), elbow-up. Torsional spring 50 N m/rad between ground "
-                    "and crank, zero torque at crank angle 60 deg. Gravity g along -y.",
-        source="independent check: tests/test_four_bar.py derives the 1-DOF reduction in the "
-               "crank angle (potential energy and generalized mass from loop closure) and "
-               "compares.",
-        gravity=[0.0, "-g"])
-    c.parameters(g=9.81, k_crank=50.0, theta0="deg(60)")
-    c.point("A", [0.0, 0.0], fixed=True).point("D", [1.0, 0.0], fixed=True)
-    c.point("B", [0.15, 0.2598]).point("C", [0.9916, 0.8000])
-    c.body("crank", points=["A", "B"], length=0.3, mass=1.0, inertia="1.0*0.3**2/12")
-    c.body("coupler", points=["B", "C"], length=1.0, mass=2.0, inertia="2.0*1.0**2/12")
-    c.body("rocker", points=["D", "C"], length=0.8, mass=1.5, inertia="1.5*0.8**2/12")
-    c.force("torsional", "crank spring", bodies=["ground", "crank"], stiffness="k_crank",
-            angle0="theta0")
-    c.expected(source="tests/test_four_bar.py (independent 1-DOF reduction)", verdict="critical")
-    return c
-
-
 # ---------------------------------------------------------------------------------------------
 # Notebook-sized models: the four-bar (2-D) and the spatial double pendulum (3-D) in Python
 # ---------------------------------------------------------------------------------------------
