@@ -90,9 +90,10 @@ def _in_range(norms, lo=1e-100, hi=1e100, gamma_range=1e50):
 
 
 def _unit(X):
+    """X (B, n, k) with unit columns (a zero column stays zero)."""
     nrm = np.sqrt(np.einsum("bij,bij->bj", X.real, X.real) + np.einsum("bij,bij->bj", X.imag,
                                                                      X.imag))
-    return X / np.where(nrm > 0, nrm, 1.0)[:, None, :], nrm
+    return X / np.where(nrm > 0, nrm, 1.0)[:, None, :]
 
 
 def _residual_eta(M, P, Q, X, co):
@@ -178,7 +179,7 @@ def solve_batch(M, P, Q, *, sym_tol=1e-13, companion_cond=COMPANION_COND,
         sp_ = np.where(w >= 0, 1j * root, -root + 0j)  # s₊ (s² = −ω²), then s₋ = −s₊
         s[und] = np.concatenate([sp_, -sp_], axis=1)
         V2 = np.concatenate([V, V], axis=2).astype(complex)
-        X[und] = _unit(V2)[0]
+        X[und] = _unit(V2)
         Yc[und] = X[und]
     comp = ~und
     if comp.any():
@@ -198,7 +199,7 @@ def solve_batch(M, P, Q, *, sym_tol=1e-13, companion_cond=COMPANION_COND,
         with np.errstate(divide="ignore", invalid="ignore"):
             X2 = (LT @ Z[:, n:]) / np.where(mu != 0, mu, 1.0)[:, None, :]
         co = coefficients(sc, norms[idx][comp].T[:, :, None])
-        X1u, X2u = _unit(X1)[0], _unit(X2)[0]
+        X1u, X2u = _unit(X1), _unit(X2)
         Mi, Pi, Qi = Mz[idx][comp], Pz[idx][comp], Qz[idx][comp]
         e1 = _residual_eta(Mi, Pi, Qi, X1u, co)[0]
         e2 = _residual_eta(Mi, Pi, Qi, X2u, co)[0]
@@ -214,7 +215,7 @@ def solve_batch(M, P, Q, *, sym_tol=1e-13, companion_cond=COMPANION_COND,
             except np.linalg.LinAlgError:
                 W = np.full_like(Zl, np.nan)
             Y = LT[left] @ W[:, n:]
-            Yu = _unit(Y)[0].conj()
+            Yu = _unit(Y).conj()
             Yc[np.flatnonzero(comp)[left]] = Yu
     # η and κ of every pair of every covered problem
     co = coefficients(s, norms[idx].T[:, :, None])

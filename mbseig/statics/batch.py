@@ -106,6 +106,7 @@ def newton_batch(stack, Y0, rows, scales, *, max_iter=CORRECTOR_ITER, tol=CTOL, 
     last = np.full(B, np.inf)
     active = np.ones(B, bool) if active is None else np.array(active, bool)
     done = np.zeros(B, bool)
+    weights = np.concatenate([scales.ell, np.ones(Y.shape[1] - stack.n)])  # (λ: unscaled)
     with np.errstate(all="ignore"):
         for it in range(1, max_iter + 1):
             idx = np.flatnonzero(active)
@@ -113,7 +114,6 @@ def newton_batch(stack, Y0, rows, scales, *, max_iter=CORRECTOR_ITER, tol=CTOL, 
                 break
             sub = stack if idx.size == B else stack.take(idx)
             R, S = residual(sub, Y[idx], rows)
-            weights = np.concatenate([scales.ell, np.ones(R.shape[1] - stack.n)])
             dY = _steps(S, R, weights, min_norm)
             size = _size(scales, dY[:, :stack.n])
             grow = ~np.isfinite(size) | (size >= last[idx])
