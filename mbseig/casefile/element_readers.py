@@ -9,6 +9,7 @@ import re
 
 import numpy as np
 
+from ..errors import MbseigError
 from ..model.affine import Affine, combine
 from ..model.driver import AngleDriver
 from ..model.elements import (
@@ -348,3 +349,90 @@ class ScalarUpdate:
             forces[k] = dataclasses.replace(forces[k], **{
                 LEAN_FIELDS[kind][key]: force_scalar(f, kind, key) for key in keys})
         return dataclasses.replace(self.model0, forces=tuple(forces), parameters=params)
+
+
+class MotionUpdate(ScalarUpdate):
+    """The model of a steady-motion case along one parameter that enters only its ``[motion]``
+    table (the speed, a yaw rate): the model of one full build serves every value, and the
+    motion is read again at each value (:func:`~mbseig.casefile.motion_readers.read_motion`,
+    with its checks).  ``reason`` says where else the parameter, or a parameter computed from
+    it, appears (then every value is built)."""
+
+    def __init__(self, data, config, overrides, axis, model0):
+        self.data, self.axis, self.model0, self.reason = data, axis, model0, None
+        self.raw = dict(data.get("parameters", {}))
+        chosen = dict((data.get("configurations") or {}).get(config, {})) if config else {}
+        chosen.pop("description", None)
+        self.raw.update(chosen)
+        self.raw.update({k: v for k, v in overrides.items() if k != axis})
+        deps = {axis}
+        for key, value in self.raw.items():
+            if isinstance(value, str) and deps & set(_NAME.findall(value)):
+                deps.add(key)
+        self.deps, self.updates = deps, []
+        self.order = [key for key in self.raw if key in deps]
+        if axis not in self.raw:
+            self.reason = f"{axis} is not a parameter of the case"
+            return
+        if not isinstance(data.get("motion"), dict):
+            self.reason = "no [motion] table"
+            return
+        where = self._anywhere({k: v for k, v in data.items() if k != "motion"}, "")
+        if where is not None:
+            self.reason = f"{axis} enters {where}"
+
+    def _anywhere(self, node, path):
+        """The first place whose expression uses the swept parameter (force scalars included:
+        a steady motion's model is never updated in place)."""
+        if isinstance(node, str):
+            return path if self._uses(node) else None
+        if isinstance(node, dict):
+            for key, value in node.items():
+                sub = f"{path}.{key}" if path else key
+                if (not path and key in _NOT_MODEL) or sub == "report.studies":
+                    continue
+                hit = self._anywhere(value, sub)
+                if hit is not None:
+                    return hit
+        elif isinstance(node, list):
+            for k, value in enumerate(node):
+                hit = self._anywhere(value, f"{path}[{k}]")
+                if hit is not None:
+                    return hit
+        return None
+
+    def make(self, p):
+        """The one model (with the parameters at axis = p), or None where a build is needed."""
+        if self.reason is not None:
+            return None
+        return dataclasses.replace(self.model0, parameters=self.parameters(p))
+
+    def motion(self, p, *, file=None):
+        """The ``[motion]`` at axis = p: :func:`~mbseig.casefile.motion_readers.read_motion` at
+        the first value; at the others its scalar fields that use the swept parameter (speed,
+        yaw rate) evaluated again, where direction and gravity do not use it.  A value that is
+        not a finite number in range takes :func:`read_motion` itself (its error)."""
+        from .fields import in_range
+        from .motion_readers import read_motion
+
+        params = self.parameters(p)
+        ref = getattr(self, "_motion", None)
+        if ref is None:
+            m = read_motion(self.data, params, file=file)
+            table = self.data["motion"]
+            keys = [k for k, v in table.items() if isinstance(v, str) and self._uses(v)]
+            lean = set(keys) <= {"speed", "yaw_rate"} and not self._anywhere(
+                self.data.get("gravity"), "gravity")
+            self._motion = (m, keys if lean else None)
+            return m
+        m, keys = ref
+        if keys is None:
+            return read_motion(self.data, params, file=file)
+        table = self.data["motion"]
+        try:
+            values = {k: evaluate(table[k], params) for k in keys}
+        except MbseigError:
+            return read_motion(self.data, params, file=file)
+        if not all(isinstance(x, float) and in_range(x) for x in values.values()):
+            return read_motion(self.data, params, file=file)
+        return dataclasses.replace(m, **{k: float(x) for k, x in values.items()})

@@ -221,6 +221,8 @@ def _write(args, spec, res, name, values, folder) -> int:
         return 0
     print(f"case {spec.name}: steady motion swept over {name} = {values[0]:g} … {values[-1]:g} "
           f"({len(values)} points)")
+    print(f"  points analysed together (the case built once: {name} enters [motion] alone)"
+          if res.batch is None else f"  points analysed one at a time ({res.batch})")
     for b in res.boundaries:
         extra = f", {b['contact']}" if "contact" in b else (
             f", ω = {b['frequency']:.6g} rad/s" if "frequency" in b else "")

@@ -33,11 +33,15 @@ from .dense import COMPANION_COND, STRUCTURED_COND
 from .dense_paths import REFINE_ETA
 from .small_measures import coefficients, ratio
 
-__all__ = ["BatchSolution", "solve_batch", "batch_norms"]
+__all__ = ["BatchSolution", "solve_batch", "batch_norms", "solve_descriptor_batch", "E_COND"]
 
 #: a left vector from Z⁻ᴴ is kept where its own backward error ‖yᴴT(s)‖/(w(s)‖y‖) is at most
 #: this (a nearly defective pair's inverse is inaccurate; the general driver's geev then decides)
 LEFT_ETA = REFINE_ETA
+#: a first-order pencil is solved as E⁻¹A where cond₂ E is at most this
+#: (:func:`solve_descriptor_batch`)
+E_COND = 1e8
+_EPS = np.finfo(float).eps
 
 
 @dataclass
@@ -262,3 +266,57 @@ def problem_solution(batch, b, M, P, Q):
                        {"implementation": "batched"}, None, left_vectors=Yc, n_dof=n,
                        complex_problem=False, problem=(M, P, Q, 1.0))
 
+
+def solve_descriptor_batch(E, A, *, e_cond=E_COND):
+    """Eigenvalues of B first-order pencils s E − A (B, k, k) at once: stacked ``eig`` of E⁻¹A
+    where E is well conditioned (cond₂ E ≤ ``e_cond``: then |s| ‖E‖/‖A‖ ≤ cond₂ E ≤ 1e8 for
+    every eigenvalue, so none is infinite by the QZ path's chordal rule, inf_tol 1e-12, and
+    none is dropped), right vectors from ``eig``, left vectors as the rows of (E X)⁻¹ (yᴴE is a
+    left vector of E⁻¹A), η and κ by the formulas of :mod:`mbseig.eigen.descriptor`, the
+    eigenvalues sorted as it sorts them.  A pencil is not covered (its reason given; it must
+    take the QZ path, :func:`~mbseig.eigen.descriptor.solve_descriptor`) where E is not finite
+    or not well conditioned, or a pair's right or left vector has a backward error above
+    REFINE_ETA.  Returns {"s", "eta", "kappa" (B, k), "reason" (B,) ("" where covered)}."""
+    B, k = E.shape[0], E.shape[1]
+    reason = [""] * B
+    s = np.zeros((B, k), complex)
+    eta = np.zeros((B, k))
+    kap = np.zeros((B, k))
+    if k == 0:
+        return {"s": s, "eta": eta, "kappa": kap, "reason": reason}
+    finite = np.isfinite(E).all(axis=(1, 2)) & np.isfinite(A).all(axis=(1, 2))
+    cond = np.full(B, np.inf)
+    cond[finite] = np.linalg.cond(E[finite])
+    use = finite & (cond <= e_cond)
+    for b in np.flatnonzero(~use):
+        reason[b] = "E is not well conditioned"
+    u = np.flatnonzero(use)
+    if not u.size:
+        return {"s": s, "eta": eta, "kappa": kap, "reason": reason}
+    Eu, Au = E[u], A[u]
+    w, X = np.linalg.eig(np.linalg.solve(Eu, Au))
+    X = X / np.linalg.norm(X, axis=1, keepdims=True)
+    EX = Eu @ X
+    ok = np.linalg.cond(EX) < 1 / (k * _EPS)
+    Yh = np.zeros_like(EX)
+    Yh[ok] = np.linalg.inv(EX[ok])        # rows: yᴴ
+    Yh = Yh / np.maximum(np.linalg.norm(Yh, axis=2, keepdims=True), 1e-300)
+    nE = np.sqrt(np.einsum("bij,bij->b", Eu, Eu))
+    nA = np.sqrt(np.einsum("bij,bij->b", Au, Au))
+    wgt = np.abs(w) * nE[:, None] + nA[:, None]
+    R = EX * w[:, None, :] - Au @ X
+    e_r = np.linalg.norm(R, axis=1) / wgt
+    Rl = np.einsum("bji,bik->bjk", Yh, Eu) * w[:, :, None] - Yh @ Au
+    e_l = np.linalg.norm(Rl, axis=2) / wgt
+    yEx = np.abs(np.einsum("bji,bij->bj", Yh, EX))
+    with np.errstate(divide="ignore"):
+        kp = np.where(yEx > 0, wgt / yEx, np.inf)
+    good = ok & (e_r <= REFINE_ETA).all(axis=1) & (e_l <= REFINE_ETA).all(axis=1) \
+        & np.isfinite(w).all(axis=1)
+    for j, b in enumerate(u):
+        if not good[j]:
+            reason[b] = "a pair's backward error is above the batch's bound"
+    order = np.lexsort((w.imag, w.real, np.abs(w)), axis=-1)
+    take = lambda x: np.take_along_axis(x, order, axis=1)  # noqa: E731
+    s[u], eta[u], kap[u] = take(w), take(e_r), take(kp)
+    return {"s": s, "eta": eta, "kappa": kap, "reason": reason}

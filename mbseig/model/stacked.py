@@ -283,8 +283,19 @@ def _kernel(elements):
     first = elements[0]
     if all(e is first for e in elements):
         elements = [first]  # shared by every model: one member, broadcast over the batch
-    cls = KERNELS.get(type(first))
-    return (cls or _Each)(elements)
+    return (_kernel_class(type(first)) or _Each)(elements)
+
+
+def _kernel_class(kind):
+    """The batched kernel of an element class: its own, or that of the nearest base class
+    whose evaluations it inherits unchanged (the rows of a rolling wheel are quadratic rows)."""
+    for base in kind.__mro__:
+        cls = KERNELS.get(base)
+        if cls is not None:
+            same = all(getattr(kind, name, None) is getattr(base, name, None)
+                       for name in ("phi", "jac", "hess", "force", "jacobians"))
+            return cls if same else None
+    return None
 
 
 class ModelStack:

@@ -184,8 +184,10 @@ class Runner:
         """[fn(*args, **kwargs) for args, kwargs in calls], in order.  With a checkpoint, the
         tasks it holds are read instead of run, and each result is written to it as soon as
         it arrives (so an interruption loses only the tasks still running).  ``points``: the
-        grid points each task holds (the count an interruption reports)."""
+        grid points each task holds (the count an interruption reports): one number for all,
+        or one per task."""
         total = len(calls)
+        per = list(points) if isinstance(points, (list, tuple)) else [points] * total
         self.stages.append((label, total))
         results = [None] * total
         todo = []
@@ -196,7 +198,8 @@ class Runner:
             else:
                 todo.append(i)
         done = total - len(todo)
-        self.points[0] += points * done
+        waiting = set(todo)
+        self.points[0] += sum(per[i] for i in range(total) if i not in waiting)
         if self.progress:
             self.progress(label, done, total)
 
@@ -205,7 +208,7 @@ class Runner:
             results[i] = value
             self.checkpoint.put(label, i, value)
             done += 1
-            self.points[0] += points
+            self.points[0] += per[i]
             if self.progress:
                 self.progress(label, done, total)
 

@@ -19,6 +19,15 @@ usually) and finds the boundaries between grid points:
 ``stability`` is ``loss`` when the motion becomes less stable (or a wheel pulls) as the
 parameter grows, else ``recovery``.
 
+Where the swept parameter enters the ``[motion]`` table alone (the speed, a yaw rate), the case
+is built once and the grid's points are analysed together, in tasks of ``CHUNK`` points
+(:mod:`mbseig.studies.steady_batch`; a point the batch does not cover is analysed on its own,
+with the same result or the same error); elsewhere every value is built and analysed on its own.
+The boundaries are refined by :func:`_root`, which evaluates ``ROOT_POINTS`` parameter values
+together in each round where the points are batched, one where they are not: Brent's method's
+guarantee (the root returned within xtol + rtol·|x| of a sign change of the continuous function)
+with the batch's cost per round.
+
 :func:`lift_off` is the lift-off value of one contact of a static case (the contacts held
 active, :func:`mbseig.statics.contacts.held_active`): N(p) of the bilateral model is smooth
 through it, so Brent's method on N is exact to ``xtol``; :func:`contact_boundaries` finds every
@@ -38,22 +47,34 @@ __all__ = ["SteadySweep", "contact_boundaries", "growth_rates", "lift_off", "ste
 
 IMAG_TOL = 1e-9  # |Im s| above IMAG_TOL·max(1, |s|): an oscillatory eigenvalue
 ROOT_TOL = 1e-7  # |f(root)| relative to the scale of the spectrum: a crossing, not a jump
+#: grid points of one task of the sweep's runner where the points are analysed together (a
+#: task's share of the grid: what a progress bar counts and an interruption keeps)
+CHUNK = 64
+#: parameter values evaluated together in each round of a boundary's refinement (batched)
+ROOT_POINTS = 8
+RTOL = 4 * np.finfo(float).eps  # the relative part of a root's tolerance (brentq's smallest)
+#: analyse a line's points together where the batch applies; False analyses every point on its
+#: own (the one-point path: its tests and comparisons)
+BATCH_STEADY = True
 
 
 @dataclass(frozen=True, eq=False)
 class SteadySweep:
     """The grid (``parameter``, ``values``), per point its verdict, eigenvalues and contact
-    forces, and the boundaries found."""
+    forces, and the boundaries found; ``batch``: None where the points were analysed together
+    (the case built once), else why they were analysed one at a time."""
 
     parameter: str
     values: np.ndarray
     points: tuple
     boundaries: tuple
+    batch: str | None = None
 
     def as_dict(self) -> dict:
         return {"parameter": self.parameter, "values": [float(v) for v in self.values],
                 "points": [dict(p) for p in self.points],
-                "boundaries": [dict(b) for b in self.boundaries]}
+                "boundaries": [dict(b) for b in self.boundaries],
+                "batch": "together" if self.batch is None else f"declined: {self.batch}"}
 
 
 def zeros_left(a) -> int:
@@ -103,14 +124,87 @@ class SteadyPoint(Record):
     modes: tuple
 
 
-def _steady_point(spec, config, params):
-    """The steady motion and its modes at one grid point (a pure task for the runners)."""
+def _steady_point(spec, config, params, model=None):
+    """The steady motion and its modes at one grid point (a pure task for the runners); the
+    mode rows without their dominant coordinates, as the batch gives them (a sweep lists
+    eigenvalues and verdicts, not shapes)."""
     from .steady_modes import analyze_steady
 
-    a = analyze_steady(spec, config=config, params=params)
+    a = analyze_steady(spec, config=config, params=params, model=model)
     return SteadyPoint(a.verdict, np.asarray(a.solution.eigenvalues),
                        len(a.cyclic.names) if a.cyclic is not None else 0,
-                       tuple(dict(c) for c in a.state.contacts), a.modes)
+                       tuple(dict(c) for c in a.state.contacts),
+                       tuple({k: v for k, v in r.items() if k != "dominant"} for r in a.modes))
+
+
+class SteadyLine:
+    """The steady motions of a case along one parameter (module docstring): one model and its
+    :class:`~mbseig.studies.steady_batch.SteadyStack` where the parameter enters the
+    ``[motion]`` table alone, else a build at each value.  ``batch`` is None where the points
+    are analysed together, else why not."""
+
+    def __init__(self, spec, config, fixed, name, value):
+        from ..casefile.element_readers import MotionUpdate
+        from ..model.system import Model
+        from .steady_batch import SteadyStack
+
+        self.spec, self.config, self.fixed, self.name = spec, config, dict(fixed), name
+        self.update, self.stack = None, None
+        if not BATCH_STEADY:
+            self.batch = "switched off"
+            return
+        model = spec.build(config, **self.params(value))
+        if not isinstance(model, Model):
+            self.batch = "not a multibody model"
+            return
+        update = MotionUpdate(spec.data, config, self.params(value), name, model)
+        if update.reason is not None:
+            self.batch = update.reason
+            return
+        stack = SteadyStack(model)
+        self.batch = stack.reason
+        if stack.reason is None:
+            self.update, self.stack = update, stack
+
+    def params(self, p):
+        return {**self.fixed, self.name: repr(float(p))}
+
+    def points(self, values):
+        """The :class:`SteadyPoint` of every value (together where the batch applies)."""
+        if self.stack is None:
+            return [_steady_point(self.spec, self.config, self.params(p)) for p in values]
+        file = getattr(self.spec, "source", None)
+        motions = [self.update.motion(repr(float(p)), file=file) for p in values]
+        with np.errstate(all="ignore"):  # (a point whose numbers overflow is not covered)
+            got = self.stack.analyse(motions)
+        out = []
+        for p, r in zip(values, got, strict=True):
+            if isinstance(r, str) or r is None:  # not covered: on its own (its error, if any)
+                out.append(_steady_point(self.spec, self.config, self.params(p),
+                                         model=self.update.make(repr(float(p)))))
+            else:
+                out.append(SteadyPoint(r.verdict, np.asarray(r.eigenvalues), r.n_rigid,
+                                       r.contacts, r.modes))
+        return out
+
+
+_LINES: dict = {}  # the last lines of this process (a task of the runner finds its model here)
+
+
+def _line(spec, config, fixed, name, value):
+    key = (id(spec), config, tuple(sorted(fixed.items())), name, BATCH_STEADY)
+    hit = _LINES.get(key)
+    if hit is None or hit[0] is not spec:
+        while len(_LINES) >= 4:
+            _LINES.pop(next(iter(_LINES)))
+        hit = _LINES[key] = (spec, SteadyLine(spec, config, fixed, name, value))
+    return hit[1]
+
+
+def _steady_chunk(spec, config, fixed, name, values):
+    """The :class:`SteadyPoint` of each of ``values`` (a task of the runner: the points of a
+    chunk analysed together)."""
+    return _line(spec, config, fixed, name, values[0]).points(values)
 
 
 def steady_sweep(spec, name, values, *, config=None, fixed=None, xtol=1e-11, jobs=None,
@@ -123,19 +217,36 @@ def steady_sweep(spec, name, values, *, config=None, fixed=None, xtol=1e-11, job
     from .runners import Runner
 
     fixed = dict(fixed or {})
+    values = np.asarray(values, float)
+    line = _line(spec, config, fixed, name, values[0])
+    memo = {}
 
-    def params(p):
-        return {**fixed, name: repr(float(p))}
+    def at_many(ps):
+        """The points at the parameter values ps (each computed once)."""
+        new = [float(p) for p in dict.fromkeys(float(p) for p in ps) if float(p) not in memo]
+        if new:
+            memo.update(zip(new, line.points(new), strict=True))
+        return [memo[float(p)] for p in ps]
 
     def at(p):
-        return _steady_point(spec, config, params(p))
+        return at_many([p])[0]
 
+    batched = line.stack is not None
+    many = ROOT_POINTS if batched else 1
     checkpoint = _checkpoint(resume, spec, "steady", config=config, parameter=name,
-                             values=np.asarray(values, float), fixed=fixed, xtol=xtol)
+                             values=values, fixed=fixed, xtol=xtol)
+    chunks = [values[i:i + CHUNK] for i in range(0, len(values), CHUNK)]
     with Runner(jobs=jobs, progress=progress, checkpoint=checkpoint,
                 points=len(values)) as runner:
-        runs = runner.map(_steady_point, [((spec, config, params(v)), {}) for v in values],
-                          "points", points=1)
+        if batched:
+            got = runner.map(_steady_chunk, [((spec, config, fixed, name, tuple(c)), {})
+                                             for c in chunks], "chunks",
+                             points=[len(c) for c in chunks])
+            runs = [p for part in got for p in part]
+        else:
+            runs = runner.map(_steady_point, [((spec, config, line.params(v)), {})
+                                              for v in values], "points", points=1)
+    memo.update(zip((float(v) for v in values), runs, strict=True))
     points = []
     for v, a in zip(values, runs, strict=True):
         points.append({"value": float(v), "verdict": a.verdict,
@@ -146,19 +257,22 @@ def steady_sweep(spec, name, values, *, config=None, fixed=None, xtol=1e-11, job
     boundaries = []
     for k in range(len(values) - 1):
         lo, hi = float(values[k]), float(values[k + 1])
-        boundaries += _stability_crossing(at, lo, hi, runs[k], runs[k + 1], name, xtol)
+        around = [(float(values[j]), runs[j]) for j in (k - 1, k + 2) if 0 <= j < len(values)]
+        boundaries += _stability_crossing(at_many, lo, hi, runs[k], runs[k + 1], name, xtol,
+                                          many, around)
         g0, g1 = growth_rates(runs[k]), growth_rates(runs[k + 1])
         for key in (x for x in g0 if x.startswith("lift-off:")):
             f0, f1 = g0[key], g1.get(key)
             if f1 is None or (f0 < 0) == (f1 < 0):
                 continue
-            root = brentq(lambda p, key=key: growth_rates(at(p))[key], lo, hi, xtol=xtol,
-                          rtol=4 * np.finfo(float).eps)
+            root = _root(lambda ps, key=key: [growth_rates(a)[key] for a in at_many(ps)],
+                         lo, hi, f0, f1, xtol, many)
             boundaries.append({"value": float(root), "kind": "lift-off",
                                "stability": "loss" if f1 > 0 else "recovery",
                                "contact": key.split(":", 1)[1], "parameter": name})
     boundaries.sort(key=lambda b: b["value"])
-    return SteadySweep(name, np.asarray(values, float), tuple(points), tuple(boundaries))
+    return SteadySweep(name, np.asarray(values, float), tuple(points), tuple(boundaries),
+                       line.batch)
 
 
 def _checkpoint(resume, spec, kind, **inputs):
@@ -172,10 +286,12 @@ def _checkpoint(resume, spec, kind, **inputs):
             else Checkpoint(resume, identity))
 
 
-def _stability_crossing(at, lo, hi, a0, a1, name, xtol):
-    """The boundary between two grid points whose number of unstable modes differs: Brent's
-    method on the largest real part of the crossing kind when it changes sign continuously,
-    else bisection on the count (a pair through s = 0, as the rolling disk's lean)."""
+def _stability_crossing(at_many, lo, hi, a0, a1, name, xtol, many=1, around=()):
+    """The boundary between two grid points whose number of unstable modes differs: a root of
+    the largest real part of the crossing kind where that changes sign continuously, else of
+    Σ s² near 0 (a pair through s = 0), else the count's change located by sections.
+    ``around``: (value, point) of the grid points beside the interval, whose values of the
+    function start the root's interpolation where they continue it (same signs outside)."""
     n0, n1 = _count(a0), _count(a1)
     if n0 == n1:
         return []
@@ -186,29 +302,35 @@ def _stability_crossing(at, lo, hi, a0, a1, name, xtol):
     f0, f1 = growth_rates(a0, base)[kind], growth_rates(a1, base)[kind]
     root = None
     if f0 is not None and f1 is not None and (f0 < 0) != (f1 < 0):
-        def fun(p):
-            return _value(growth_rates(at(p), base)[kind], f0)
+        def fun(ps):
+            return [_value(growth_rates(a, base)[kind], f0) for a in at_many(ps)]
 
-        root = float(brentq(fun, lo, hi, xtol=xtol, rtol=4 * np.finfo(float).eps))
-        g = growth_rates(at(root), base)[kind]
-        scale = max(1.0, max(abs(s) for s in at(root).eigenvalues))
+        known = []
+        for x, a in around:
+            g = growth_rates(a, base)[kind]
+            if g is not None and (g < 0) == ((f0 < 0) if x < lo else (f1 < 0)):
+                known.append((x, g))
+        root = _root(fun, lo, hi, f0, f1, xtol, many, known=known)
+        near = at_many([root])[0]
+        g = growth_rates(near, base)[kind]
+        scale = max(1.0, max(abs(s) for s in near.eigenvalues))
         if g is None or abs(g) > ROOT_TOL * scale:
             root = None  # the maximum jumped: fall back on the count
     if root is None and kind == "divergence":
-        root = _pair_through_zero(at, lo, hi, base + 2, xtol)
+        root = _pair_through_zero(at_many, lo, hi, base + 2, xtol, many)
     if root is None:
         a, b = lo, hi
+        k = max(many, 1)
         while b - a > xtol * max(1.0, abs(b)):
-            mid = 0.5 * (a + b)
-            if _count(at(mid)) == n0:
-                a = mid
-            else:
-                b = mid
+            xs = a + (b - a) * np.arange(1, k + 1) / (k + 1)
+            changed = [_count(p) != n0 for p in at_many(xs)] + [True]
+            j = changed.index(True)
+            a, b = ([a, *xs])[j], ([*xs, b])[j]
         root = 0.5 * (a + b)
-    row = {"value": root, "kind": kind, "stability": "loss" if n1 > n0 else "recovery",
+    row = {"value": float(root), "kind": kind, "stability": "loss" if n1 > n0 else "recovery",
            "parameter": name}
     if kind == "flutter":
-        near = at(root)
+        near = at_many([root])[0]
         osc = [r for r in near.modes if r["omega_d"] > 0 and r["kind"] != "rigid-body"]
         if osc:
             row["frequency"] = float(max(osc, key=lambda r: r["eigenvalue"][0])["omega_d"])
@@ -226,18 +348,107 @@ def _cluster_square(a, count):
     return float(np.sum(near * near).real), max(1.0, float(np.abs(s).max()))
 
 
-def _pair_through_zero(at, lo, hi, count, xtol):
+def _pair_through_zero(at_many, lo, hi, count, xtol, many=1):
     """The parameter where a real pair ±σ turns into ±iω through s = 0 (module docstring), or
     None when Σ s² of the ``count`` eigenvalues nearest 0 does not change sign on [lo, hi] or is
     not small at the root."""
-    f0, _ = _cluster_square(at(lo), count)
-    f1, _ = _cluster_square(at(hi), count)
+    a_lo, a_hi = at_many([lo, hi])
+    f0, _ = _cluster_square(a_lo, count)
+    f1, _ = _cluster_square(a_hi, count)
     if f0 is None or f1 is None or (f0 < 0) == (f1 < 0):
         return None
-    root = float(brentq(lambda p: _value(_cluster_square(at(p), count)[0], f0), lo, hi,
-                        xtol=xtol, rtol=4 * np.finfo(float).eps))
-    g, scale = _cluster_square(at(root), count)
+    root = _root(lambda ps: [_value(_cluster_square(a, count)[0], f0) for a in at_many(ps)],
+                 lo, hi, f0, f1, xtol, many)
+    g, scale = _cluster_square(at_many([root])[0], count)
     return root if g is not None and abs(g) <= ROOT_TOL * scale ** 2 else None
+
+
+def _root(fun, lo, hi, flo, fhi, xtol, many=1, rtol=RTOL, rounds=200, known=()):
+    """A root of the continuous function f on [lo, hi], f(lo) = flo and f(hi) = fhi of opposite
+    signs, returned within xtol + rtol·|x| of a sign change of f (brentq's guarantee): a value
+    where f was evaluated, at the end of a bracket [a, b] of f values of opposite signs whose
+    width is at most that.  ``fun(ps)`` evaluates f at ``many`` values together each round:
+
+    - the estimate x̂ is the inverse interpolation (x as a polynomial in f, at f = 0) through the
+      four evaluated points nearest the bracket, its error the distance to that through three;
+      with fewer than three points near it, or an estimate outside the bracket, the next points
+      are spread evenly over it (regula falsi with one point a round);
+    - the points of a round straddle x̂ at multiples of its error (never closer than a quarter of
+      the tolerance), so a good estimate ends in a bracket as narrow as its error;
+    - a round that does not halve the bracket makes the next one spread evenly (bisection with
+      one point): the bracket shrinks every round, whatever f does.
+
+    ``known``: (x, f(x)) pairs outside [lo, hi] that join the interpolation (never the
+    bracket)."""
+    a, b, fa, fb = float(lo), float(hi), float(flo), float(fhi)
+    xs = [a, b, *(float(x) for x, _ in known)]
+    fs = [fa, fb, *(float(f) for _, f in known)]
+    slow = False
+    for _ in range(rounds):
+        if fa == 0.0:
+            return a
+        if fb == 0.0:
+            return b
+        tol = xtol + rtol * max(abs(a), abs(b))
+        if b - a <= tol:
+            return a if abs(fa) <= abs(fb) else b
+        est, err = _estimate(xs, fs, a, b)
+        if slow or est is None:
+            if many == 1:
+                est = 0.5 * (a + b) if slow else a - fa * (b - a) / (fb - fa)
+                ps = [est]
+            else:
+                ps = list(a + (b - a) * np.arange(1, many + 1) / (many + 1))
+        else:
+            h = max(err, 0.25 * tol)
+            offs = np.arange(many) - (many - 1) / 2.0 if many > 1 else np.zeros(1)
+            ps = list(est + h * offs * (2.0 if many > 1 else 1.0))
+        ps = sorted({min(max(p, a + 0.25 * tol), b - 0.25 * tol) for p in ps} - {a, b})
+        if not ps:
+            ps = [0.5 * (a + b)]
+        vals = [float(v) for v in fun(ps)]
+        xs += ps
+        fs += vals
+        width = b - a
+        inner = sorted(zip([a, *ps, b], [fa, *vals, fb], strict=True))
+        for (x0, f0), (x1, f1) in zip(inner, inner[1:], strict=False):
+            if f1 == 0.0:
+                a, b, fa, fb = x1, x1, f1, f1
+                break
+            if (f0 < 0) != (f1 < 0):
+                a, b, fa, fb = x0, x1, f0, f1
+                break
+        slow = (b - a) > 0.5 * width
+    raise ArithmeticError(f"no root within {rounds} rounds on [{lo}, {hi}]")
+
+
+def _estimate(xs, fs, a, b):
+    """(x̂, error) of :func:`_root`: inverse interpolation through the four evaluated points
+    nearest [a, b] (error: against three), or (None, None)."""
+    mid = 0.5 * (a + b)
+    pts = sorted(zip(xs, fs, strict=True), key=lambda t: abs(t[0] - mid))
+    near = []
+    for x, f in pts:
+        if all(f != g for _, g in near):
+            near.append((x, f))
+        if len(near) == 4:
+            break
+    if len(near) < 3:
+        return None, None
+
+    def neville(pairs):  # x(f) at f = 0 through the pairs (f_i, x_i)
+        f = [p[1] for p in pairs]
+        x = [p[0] for p in pairs]
+        for k in range(1, len(pairs)):
+            x = [(f[i + k] * x[i] - f[i] * x[i + 1]) / (f[i + k] - f[i])
+                 for i in range(len(x) - 1)]
+        return x[0]
+
+    hi_ = neville(near)
+    lo_ = neville(near[:3])
+    if not (np.isfinite(hi_) and a < hi_ < b):
+        return None, None
+    return hi_, abs(hi_ - lo_) if np.isfinite(lo_) else (b - a)
 
 
 def _value(v, fallback):
