@@ -256,3 +256,30 @@ def test_batched_pencils_against_qz():
         for s, t in zip(got["s"][b], bound_b, strict=True):
             j = np.argmin(np.abs(ref.eigenvalues - s))
             assert abs(ref.eigenvalues[j] - s) <= t + bound_r[j]
+
+
+def test_a_model_with_forces_in_the_batch(tmp_path, monkeypatch):
+    """The bicycle with a steering damper and spring (a torsional element on the steer joint):
+    the batch evaluates the model's own forces at each point's velocities; its sweep equals
+    the one-point path's (the tolerances of the module docstring)."""
+    text = (CASES / "whipple_bicycle.toml").read_text()
+    extra = ('\n[[forces]]\nname = "steer damper"\ntype = "torsional"\njoint = "steer"\n'
+             'stiffness = 2.0\ndamping = 0.4\n')
+    path = tmp_path / "bicycle_damped.toml"
+    path.write_text(text[:text.index("[expected]")] + extra)  # (its expectations are the
+    # undamped bicycle's)
+    spec = read_case(path)
+    assert spec.build(None).forces
+    grid = np.linspace(0.5, 10.0, 24)
+    xtol = 1e-11
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        a = steady_sweep(spec, "v", grid, jobs=1, progress=False, xtol=xtol)
+        monkeypatch.setattr(sweep_module, "BATCH_STEADY", False)
+        b = steady_sweep(spec, "v", grid, jobs=1, progress=False, xtol=xtol)
+    assert a.batch is None
+    assert [p["verdict"] for p in a.points] == [p["verdict"] for p in b.points]
+    assert len(a.boundaries) == len(b.boundaries) >= 1
+    for x, y in zip(a.boundaries, b.boundaries, strict=True):
+        assert (x["kind"], x["stability"]) == (y["kind"], y["stability"])
+        assert abs(x["value"] - y["value"]) <= 2 * (xtol + RTOL * abs(y["value"]))

@@ -378,3 +378,14 @@ class ModelStack:
             ix = np.ix_(idx, idx)
             out[:, ix[0], ix[1]] += ker.hess(self._Z(Q, idx), Q, L[:, a:b])
         return out
+
+    def projected_hessian(self, Q, L, N):
+        """Nᵀ H(λ) N (B, d, d) for bases N (B, n, d), each element's block projected on its
+        own coordinates (the dense H is never formed)."""
+        out = np.zeros((Q.shape[0], N.shape[2], N.shape[2]))
+        for idx, a, b, ker in self.constraints:
+            if isinstance(ker, _Linear):
+                continue  # (linear rows: no curvature)
+            Ni = N[:, idx, :]
+            out += np.swapaxes(Ni, 1, 2) @ ker.hess(self._Z(Q, idx), Q, L[:, a:b]) @ Ni
+        return out

@@ -135,6 +135,30 @@ class _Wheel:
         return np.einsum("br,rij->bij", MU, self.H)
 
 
+def _empty_like(t, B):
+    """Arrays for the terms of B points (filled as they converge)."""
+    out = {}
+    for key, val in t.items():
+        if key == "blocks":
+            out[key] = [tuple(np.empty((B, *x.shape[1:])) for x in blk) for blk in val]
+        elif val is None:
+            out[key] = None
+        else:
+            out[key] = np.empty((B, *val.shape[1:]), val.dtype)
+    return out
+
+
+def _put(kept, t, rows, sel):
+    """kept[rows] = t[sel], key by key."""
+    for key, val in t.items():
+        if key == "blocks":
+            for dst, src in zip(kept[key], val, strict=True):
+                for d_, s_ in zip(dst, src, strict=True):
+                    d_[rows] = s_[sel]
+        elif val is not None:
+            kept[key][rows] = val[sel]
+
+
 def _mv(A, x):
     """Stacked matrix-vector products (B, r, c) · (B, c) → (B, r)."""
     return (A @ x[:, :, None])[:, :, 0]
@@ -205,7 +229,10 @@ class SteadyStack:
             while len(memo) > KEEP:
                 memo.pop(next(iter(memo)))
         rows = [memo[k] for k in keys_u]
-        out = tuple(np.stack([r[i] for r in rows])[inv] for i in range(len(rows[0])))
+        if len(rows) == 1:  # one position: a read-only view of its results for every row
+            out = tuple(np.broadcast_to(x, (Q.shape[0], *np.shape(x))) for x in rows[0])
+        else:
+            out = tuple(np.stack([r[i] for r in rows])[inv] for i in range(len(rows[0])))
         return out if len(out) > 1 else out[0]
 
     # ---- equations -------------------------------------------------------------------------
@@ -239,19 +266,31 @@ class SteadyStack:
             Fp = -np.stack([np.asarray(c, float) for _, c in KC])
         else:
             f = np.broadcast_to(model.g_const, (B, n)).astype(float)
-            Fq, Fp = np.zeros((B, n, n)), np.zeros((B, n, n))
+            Fq = Fp = None  # (the wheels' blocks alone)
         FO = np.zeros((B, n, nw))
         A, At = self.velocity(Q, QD)
+        blocks = []
         for k, w in enumerate(self.wheels):
             Z, _, QDw = w.frame(Q, QD)
             g, dq, dqd, dO = w.gyroscopic(Z, QDw, SPIN[:, k])
-            ix = np.ix_(w.idx, w.idx)
             f[:, w.idx] += g
-            Fq[:, ix[0], ix[1]] += dq
-            Fp[:, ix[0], ix[1]] += dqd
+            blocks.append((dq, dqd))
             FO[:, w.idx, k] += dO
         Pq = self._once("Pq", Q, lambda rows: self.stack.phi_q(Q[rows]))
-        return {"Pq": Pq, "A": A, "At": At, "f": f, "Fq": Fq, "Fp": Fp, "FO": FO}
+        return {"Pq": Pq, "A": A, "At": At, "f": f, "Fq": Fq, "Fp": Fp, "FO": FO,
+                "blocks": blocks}
+
+    def dense(self, t, rows):
+        """(F_q, F_p) (len(rows), n, n) of the terms ``t`` at ``rows``: the model's forces and
+        the wheels' blocks."""
+        B, n = len(rows), self.n
+        Fq = np.zeros((B, n, n)) if t["Fq"] is None else t["Fq"][rows].copy()
+        Fp = np.zeros((B, n, n)) if t["Fp"] is None else t["Fp"][rows].copy()
+        for w, (dq, dqd) in zip(self.wheels, t["blocks"], strict=True):
+            ix = np.ix_(w.idx, w.idx)
+            Fq[:, ix[0], ix[1]] += dq[rows]
+            Fp[:, ix[0], ix[1]] += dqd[rows]
+        return Fq, Fp
 
     def velocity(self, Q, QD):
         """A (B, 2 n_w, n) and Ã = ∂(A q̇)/∂q of the wheels' velocity rows."""
@@ -329,7 +368,7 @@ class SteadyStack:
         lm = _mv(Gp, rhs)
         LAM, MU = lm[:, :mh], lm[:, mh:]
         sizes = np.cumsum([0, n, nw, mh, 2 * nw])
-        kept = {key: np.empty_like(val) for key, val in t.items()}
+        kept = None
         todo = ~bad
         for b in np.flatnonzero(bad):
             why[b] = "the constraints do not let the system move this way"
@@ -353,8 +392,12 @@ class SteadyStack:
                 _mv(A, qd) + SPIN[a] @ self.Bw.T], axis=1)
             res = np.abs(F).max(axis=1, initial=0.0)
             conv = res <= TOL
-            for key, val in t.items():
-                kept[key][a[conv]] = val[conv]
+            if it == 0 and conv.all() and a.size == Bn:
+                kept = t  # every point steady as started: its terms are those at the start
+            else:
+                if kept is None:
+                    kept = _empty_like(t, Bn)
+                _put(kept, t, a[conv], conv)
             todo[a[conv]] = False
             if it == MAX_ITER or conv.all():
                 break
@@ -362,9 +405,10 @@ class SteadyStack:
             a, q = a[k], q[k]
             l_ = L[a] if L is not None else None
             Jm = np.zeros((a.size, sizes[-1], sizes[-1]))
-            J11 = t["Fq"][k] - self.stack.hessian(q, LAM[a]) - self.multiplier_stiffness(MU[a])
+            Fq_k, Fp_k = self.dense(t, np.flatnonzero(k))
+            J11 = Fq_k - self.stack.hessian(q, LAM[a]) - self.multiplier_stiffness(MU[a])
             if l_ is not None:
-                J11 = J11 + t["Fp"][k] @ l_ - self.M @ (l_ @ l_)
+                J11 = J11 + Fp_k @ l_ - self.M @ (l_ @ l_)
             Jm[:, :n, :n] = J11 / self.fscale
             Jm[:, :n, n:n + nw] = t["FO"][k] / self.fscale
             Jm[:, :n, sizes[2]:sizes[3]] = -np.swapaxes(Pq[k], 1, 2) / self.fscale
@@ -380,6 +424,8 @@ class SteadyStack:
             MU[a] += step[:, sizes[3]:]
         for b in np.flatnonzero(todo):
             why[b] = "the steady state did not converge in the batch"
+        if kept is None:
+            kept = _empty_like(t, Bn)
         return Q, SPIN, LAM, MU, kept, why
 
     def _solve(self, L, ell, unit, r, v, fields):
@@ -409,12 +455,22 @@ class SteadyStack:
         Ba, d = a.size, N.shape[2]
         Nt = np.swapaxes(N, 1, 2)
         A, At = t["A"][a], t["At"][a]
-        Fq = t["Fq"][a] - self.stack.hessian(q, lam) - self.multiplier_stiffness(mu)
-        Fp = t["Fp"][a]
-        if l_ is not None:
-            Fq = Fq + Fp @ l_ - self.M @ (l_ @ l_)
-            Fp = Fp - 2.0 * (self.M @ l_)
-            At = At + A @ l_
+        if l_ is None and t["Fq"] is None:  # the wheels' blocks and the rows' curvature alone:
+            NqN = -self.stack.projected_hessian(q, lam, N)  # projected element by element
+            NpN = np.zeros_like(NqN)
+            for k_, (w, (dq, dqd)) in enumerate(zip(self.wheels, t["blocks"], strict=True)):
+                Ni = N[:, w.idx, :]
+                Nit = np.swapaxes(Ni, 1, 2)
+                NqN += Nit @ (dq[a] - w.multiplier_stiffness(mu[:, 2 * k_:2 * k_ + 2])) @ Ni
+                NpN += Nit @ dqd[a] @ Ni
+        else:
+            Fq, Fp = self.dense(t, a)
+            Fq = Fq - self.stack.hessian(q, lam) - self.multiplier_stiffness(mu)
+            if l_ is not None:
+                Fq = Fq + Fp @ l_ - self.M @ (l_ @ l_)
+                Fp = Fp - 2.0 * (self.M @ l_)
+                At = At + A @ l_
+            NqN, NpN = Nt @ Fq @ N, Nt @ Fp @ N
         W = np.concatenate([A @ N, np.broadcast_to(self.Bw, (Ba, 2 * nw, nw))], axis=2)
         T, _ = self._once("T", q, lambda first: _null(W[first], RANK_TOL))
         if T is None:  # (a velocity-row rank that differs along the batch: each on its own)
@@ -428,9 +484,9 @@ class SteadyStack:
         Mbar[:, :d, :d] = Nt @ self.M @ N
         Mbar[:, d:, d:] = self.J
         Fx = np.zeros((Ba, d + nw, d))
-        Fx[:, :d] = Nt @ Fq @ N
+        Fx[:, :d] = NqN
         Fw = np.zeros((Ba, d + nw, d + nw))
-        Fw[:, :d, :d] = Nt @ Fp @ N
+        Fw[:, :d, :d] = NpN
         Fw[:, :d, d:] = Nt @ t["FO"][a]
         Tt = np.swapaxes(T, 1, 2)
         E = np.zeros((Ba, d + k, d + k))
