@@ -277,6 +277,35 @@ class DeclaredRigid:
             self._args = None
         return self._value
 
+    @property
+    def pending(self):
+        """True until the directions are found."""
+        return self._value is None
+
+
+def declare_many(rigids):
+    """Find the directions of many pending :class:`DeclaredRigid` at once where their models
+    have one structure (:func:`mbseig.model.symmetry_batch.rigid_directions_batch`: the same
+    tests on all of them); any other stays pending and is found on its own when asked."""
+    from .model.stacked import stackable
+    from .model.symmetry_batch import rigid_directions_batch
+
+    todo = [r for r in rigids if isinstance(r, DeclaredRigid) and r.pending]
+    if len(todo) < 2:
+        return
+    args = [r._args for r in todo]
+    models = [a[0] for a in args]
+    dense = all(isinstance(a[3], np.ndarray) and isinstance(a[4], np.ndarray) for a in args)
+    if not dense or stackable(models) is not None or \
+            len({(a[3].shape, a[4].shape) for a in args}) != 1:
+        return
+    got = rigid_directions_batch(models, np.stack([np.asarray(a[1], float) for a in args]),
+                                 np.stack([np.asarray(a[2], float) for a in args]),
+                                 np.stack([a[3] for a in args]), np.stack([a[4] for a in args]))
+    for r, value in zip(todo, got, strict=True):
+        if value is not None:
+            r._value, r._args = value, None
+
 
 def continuous_null_basis(Phi_q, n, rank_tol, names=None, reference=None):
     """(N, rank, independent names, cosine) of the module docstring's "Null-space basis".

@@ -33,6 +33,7 @@ from .elements import (
     TorsionalSpringDamper,
 )
 from .batched import spring_forces, spring_tangents
+from .rolling import WheelRows
 from .spatial_joints import QuadraticConstraint
 
 __all__ = ["ModelStack", "stackable", "STACK_MAX"]
@@ -276,26 +277,16 @@ class _Follower:
 
 KERNELS = {DistanceConstraint: _Distance, LinearConstraint: _Linear,
            QuadraticConstraint: _Quadratic, SpringDamper: _Spring,
-           TorsionalSpringDamper: _Torsional, FollowerForce: _Follower}
+           TorsionalSpringDamper: _Torsional, FollowerForce: _Follower,
+           WheelRows: _Quadratic}  # (a wheel's holonomic rows are quadratic rows, unchanged)
 
 
 def _kernel(elements):
     first = elements[0]
     if all(e is first for e in elements):
         elements = [first]  # shared by every model: one member, broadcast over the batch
-    return (_kernel_class(type(first)) or _Each)(elements)
-
-
-def _kernel_class(kind):
-    """The batched kernel of an element class: its own, or that of the nearest base class
-    whose evaluations it inherits unchanged (the rows of a rolling wheel are quadratic rows)."""
-    for base in kind.__mro__:
-        cls = KERNELS.get(base)
-        if cls is not None:
-            same = all(getattr(kind, name, None) is getattr(base, name, None)
-                       for name in ("phi", "jac", "hess", "force", "jacobians"))
-            return cls if same else None
-    return None
+    cls = KERNELS.get(type(first))
+    return (cls or _Each)(elements)
 
 
 class ModelStack:

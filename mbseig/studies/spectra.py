@@ -23,6 +23,7 @@ import scipy.sparse as sp
 from ..eigen import Problem, Request, solve
 from ..eigen.batch import solve_batch
 from ..errors import MbseigError
+from ..linear import declare_many
 from ..modal import classify, tolerances
 from ..modal.batch import WORDS, batch_tolerances
 from ..modal.scope import spectrum_verdict
@@ -104,6 +105,9 @@ def point_spectra(lins, *, safety=10.0, stability_rtol=1e-12) -> list:
         Q = np.stack([np.asarray(_dense(lins[i].Q), float) for i in members])
         sol = solve_batch(M, P, Q)
         bb = batch_tolerances(sol, M, P, Q, safety=safety, stability_rtol=stability_rtol)
+        # the declared directions of every model that will ask (a rigid-body eigenvalue), at once
+        declare_many([lins[i].rigid for j, i in enumerate(members)
+                      if sol.covered[j] and bb.rigid[j].any()])
         for j, i in enumerate(members):
             lin = lins[i]
             if not sol.covered[j]:
