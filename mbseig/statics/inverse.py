@@ -258,7 +258,8 @@ def held_tension(model, prev, *, tol=1e-12, posture_tol=1e-10, cache=None):
     with np.errstate(all="ignore"):
         g = _device_force(device, prev, driver, q, k, cache)
         G = _device_phi_q(device, prev, driver, q, cache)
-        lam, _, rank, _ = np.linalg.lstsq(G.T, g, rcond=None)
+        pinv, rank = _least_squares(G.T, cache)
+        lam = pinv @ g
         r = g - G.T @ lam
         scale = max(float(np.max(np.abs(g))), float(np.max(np.abs(G.T) @ np.abs(lam))))
     effort = abs(float(rec["effort"]))
@@ -292,6 +293,22 @@ def _device_force(device, prev, driver, q, k, cache):
     g = rest.copy()
     np.add.at(g, spring.idx, spring.force(q, np.zeros(q.size)))
     return g
+
+
+def _least_squares(A, cache):
+    """(A⁺, rank) with ``numpy.linalg.lstsq``'s cut-off (singular values above
+    eps·max(m, n)·σ_max): A⁺ g is the minimum-norm least-squares solution lstsq gives.  Kept in
+    ``cache`` for the same array A (the device's Φ_qᵀ, the same at every value of a line)."""
+    hit = None if cache is None else cache.get("device_pinv")
+    if hit is not None and hit[0] is A.base and hit[0] is not None:
+        return hit[1], hit[2]
+    U, sv, Vh = np.linalg.svd(A, full_matrices=False)
+    cut = np.finfo(float).eps * max(A.shape) * (sv[0] if sv.size else 0.0)
+    rank = int(np.sum(sv > cut))
+    pinv = (Vh[:rank].T / sv[:rank]) @ U[:, :rank].T
+    if cache is not None:
+        cache["device_pinv"] = (A.base, pinv, rank)
+    return pinv, rank
 
 
 def _device_phi_q(device, prev, driver, q, cache):
