@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from mbseig.casefile import read_case
-from mbseig.casefile.element_readers import ScalarUpdate
+from mbseig.casefile.element_readers import MassUpdate, ScalarUpdate
 from mbseig.errors import MbseigError
 from mbseig.studies import run_sweep
 from mbseig.statics.inverse import held_tension
@@ -110,6 +110,7 @@ def _sweeps(device, monkeypatch, config, axes):
         lean = run_sweep(device, axes, config=config, progress=False, jobs=1)
         with monkeypatch.context() as mp:
             mp.setattr(ScalarUpdate, "make", lambda self, p: None)
+            mp.setattr(MassUpdate, "make", lambda self, p: None)
             general = run_sweep(device, axes, config=config, progress=False, jobs=1, lean=False)
     return lean, general
 
@@ -150,4 +151,49 @@ def test_device_load_sweep_lean_equals_general(device, monkeypatch):
     lean, general = _sweeps(device, monkeypatch, "C4",
                             [("f", np.linspace(0.0, 2.5, 9)), ("damping_scale", [1.0])])
     assert general.boundaries, "the C4 line crosses its flutter boundary"
+    _compare(lean, general)
+
+
+PENDULUM = CASES / "spatial_double_pendulum.toml"
+
+
+@pytest.mark.parametrize("axis, factors", [("m1", [0.5, 1.0, 2.0]), ("m2", [0.7, 1.3]),
+                                           ("J1", [0.8, 1.25]), ("Ja", [0.5, 1.5])])
+def test_mass_update_equals_build(axis, factors):
+    """A spatial case along a body's mass or inertia: the mass matrix and the gravity load
+    formed again from the bodies' parts equal the full build in every field (pickled bytes)."""
+    spec = read_case(PENDULUM)
+    v0 = float(spec.build().parameters[axis])
+    m0 = spec.build(None, **{axis: v0})
+    upd = MassUpdate(spec.data, None, {}, axis, m0)
+    assert upd.reason is None and upd.updates
+    for f in factors:
+        assert _content(upd.make(f * v0)) == _content(spec.build(None, **{axis: f * v0}))
+
+
+@pytest.mark.parametrize("axis, where", [("l1", "bodies[1].com[2]"), ("g", "gravity[2]")])
+def test_mass_update_declines_geometry(axis, where):
+    spec = read_case(PENDULUM)
+    upd = MassUpdate(spec.data, None, {}, axis, spec.build())
+    assert upd.reason == f"{axis} enters {where}" and upd.make(1.0) is None
+
+
+def test_mass_update_bad_value_gives_the_build_message():
+    """A triangle inequality broken at one value: the lean family raises the build's own
+    one-line error."""
+    spec = read_case(PENDULUM)
+    make, state = family_maker(spec, None, {}, "Ja")
+    make(0.003)
+    assert state["model"] == "built once, body masses and inertias updated at each value"
+    with pytest.raises(MbseigError) as lean:
+        make(1.0)
+    with pytest.raises(MbseigError) as general:
+        spec.build(None, Ja=1.0)
+    assert lean.value.one_line() == general.value.one_line()
+
+
+def test_pendulum_mass_sweep_lean_equals_general(monkeypatch):
+    lean, general = _sweeps(read_case(PENDULUM), monkeypatch, None,
+                            [("m1", np.linspace(0.5, 3.0, 8)), ("l1", [0.5, 0.8])])
+    assert lean.records[0]["model"] == "built once, body masses and inertias updated at each value"
     _compare(lean, general)

@@ -135,7 +135,9 @@ def bench_batch(log, *, repeats=3, quick=False):
         times, res = _timed(run_bike, repeats)
         nb = len(res.boundaries)
         rows.append(_row("bicycle over v", n_b, times, nb, GOALS["bicycle over v"],
-                         grid=f"v 0.5..10, {n_b} points"))
+                         grid=f"v 0.5..10, {n_b} points",
+                         statics=["batch" if res.batch is None else
+                                  f"one at a time ({res.batch})"]))
         log(f"batch bicycle over v: {n_b} points {statistics.median(times):.2f} s "
             f"({rows[-1]['rate']:.0f} points/s; goal 2000), {nb} boundaries")
     load1 = _load()

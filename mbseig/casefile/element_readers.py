@@ -324,6 +324,26 @@ class ScalarUpdate:
                     return hit
         return None
 
+    def _anywhere(self, node, path):
+        """The first place under ``node`` whose expression uses the swept parameter (every
+        field: for the updates that re-read no force scalar)."""
+        if isinstance(node, str):
+            return path if self._uses(node) else None
+        if isinstance(node, dict):
+            for key, value in node.items():
+                sub = f"{path}.{key}" if path else key
+                if (not path and key in _NOT_MODEL) or sub == "report.studies":
+                    continue
+                hit = self._anywhere(value, sub)
+                if hit is not None:
+                    return hit
+        elif isinstance(node, list):
+            for k, value in enumerate(node):
+                hit = self._anywhere(value, f"{path}[{k}]")
+                if hit is not None:
+                    return hit
+        return None
+
     def parameters(self, p, *, every=False):
         """The ``[parameters]`` values at axis = p, as the case reader evaluates them (in the
         table's order); only those computed from the swept one are evaluated again unless
@@ -381,26 +401,6 @@ class MotionUpdate(ScalarUpdate):
         if where is not None:
             self.reason = f"{axis} enters {where}"
 
-    def _anywhere(self, node, path):
-        """The first place whose expression uses the swept parameter (force scalars included:
-        a steady motion's model is never updated in place)."""
-        if isinstance(node, str):
-            return path if self._uses(node) else None
-        if isinstance(node, dict):
-            for key, value in node.items():
-                sub = f"{path}.{key}" if path else key
-                if (not path and key in _NOT_MODEL) or sub == "report.studies":
-                    continue
-                hit = self._anywhere(value, sub)
-                if hit is not None:
-                    return hit
-        elif isinstance(node, list):
-            for k, value in enumerate(node):
-                hit = self._anywhere(value, f"{path}[{k}]")
-                if hit is not None:
-                    return hit
-        return None
-
     def make(self, p):
         """The one model (with the parameters at axis = p), or None where a build is needed."""
         if self.reason is not None:
@@ -436,3 +436,132 @@ class MotionUpdate(ScalarUpdate):
         if not all(isinstance(x, float) and in_range(x) for x in values.values()):
             return read_motion(self.data, params, file=file)
         return dataclasses.replace(m, **{k: float(x) for k, x in values.items()})
+
+
+class MassUpdate(ScalarUpdate):
+    """The model of a spatial case along one parameter that enters only the masses and inertias
+    of (non-repeated) bodies: the elements, coordinates and constraints of one full build, the
+    mass matrix and the gravity load formed again at each value from the bodies' parts, in the
+    build's order (so equal to a build bit for bit: checked on the reference build itself), the
+    fields re-read with the reader's own checks.
+
+    ``reason`` says why not where the parameter, or one computed from it, appears elsewhere (a
+    length, a centre of mass, a point, a joint, a force), where a body is repeated, or where the
+    model holds masses or loads that are not the bodies' own (point masses, rotors, wheels,
+    flexible bodies, constant forces): then every value is built."""
+
+    def __init__(self, data, config, overrides, axis, model0):
+        self.data, self.axis, self.model0, self.reason = data, axis, model0, None
+        self.raw = dict(data.get("parameters", {}))
+        chosen = dict((data.get("configurations") or {}).get(config, {})) if config else {}
+        chosen.pop("description", None)
+        self.raw.update(chosen)
+        self.raw.update({k: v for k, v in overrides.items() if k != axis})
+        deps = {axis}
+        for key, value in self.raw.items():
+            if isinstance(value, str) and deps & set(_NAME.findall(value)):
+                deps.add(key)
+        self.deps, self.updates = deps, []
+        self.order = [key for key in self.raw if key in deps]
+        grav = data.get("gravity")
+        self.gravity = (None if grav is None else
+                        Fields({"gravity": grav}, "gravity", model0.parameters).vec("gravity", 3))
+        self.reason = self._check(data, model0)
+
+    def _check(self, data, model0):
+        from ..model.rolling import WheelRows
+        from ..model.spatial_forces import Rotor
+
+        if data.get("dimension") != 3 or data.get("kind", "multibody") != "multibody" \
+                or self.axis not in self.raw:
+            return "not a spatial multibody case"
+        if "frames" in data or model0.mass_elements or model0.flexible \
+                or model0.velocity_constraints or model0.commands \
+                or any(isinstance(f, Rotor) for f in model0.forces) \
+                or any(isinstance(c, WheelRows) for c in model0.constraints):
+            return "a model with more than rigid bodies' masses"
+        bodies = data.get("bodies") or []
+        where = None
+        for k, item in enumerate(bodies):
+            if not isinstance(item, dict):
+                continue
+            keys = [key for key in ("mass", "inertia") if self._anywhere(item.get(key), key)]
+            name = item.get("name")
+            if keys and ("repeat" in item or not isinstance(name, str)
+                         or name not in model0.bodies):
+                return f"bodies[{k}] is repeated or not one body"
+            if keys:
+                label = f"bodies[{k}] {name!r}"
+                self.updates.append((name, item, label, keys))
+            rest = {key: v for key, v in item.items() if key not in ("mass", "inertia")}
+            where = where or self._anywhere(rest, f"bodies[{k}]")
+        where = where or self._anywhere({k: v for k, v in data.items() if k != "bodies"}, "")
+        if where is not None:
+            return f"{self.axis} enters {where}"
+        if not self.updates:
+            return f"{self.axis} enters no body's mass or inertia"
+        try:
+            mass, g, gz, _ = self._assemble(model0, {})
+        except (KeyError, ValueError, TypeError):
+            return "the bodies' parts do not rebuild the model's mass"
+        same = (mass.shape == model0.mass.shape and np.array_equal(mass.indptr, model0.mass.indptr)
+                and np.array_equal(mass.indices, model0.mass.indices)
+                and np.array_equal(mass.data, model0.mass.data)
+                and np.array_equal(g, model0.g_const)
+                and (model0.gravity_force is None or np.array_equal(gz, model0.gravity_force)))
+        return None if same else "masses or loads besides the bodies' own"
+
+    def _assemble(self, model, new):
+        """(mass, g, gravity load) from the bodies' parts, ``new`` {body: (mass, inertia)}
+        replacing some, in the build's order (SpatialBuilder._finish)."""
+        from ..model.spatial_body import frame_gravity, spatial_mass_matrix
+        from ..numerics import scatter
+
+        n = model.n
+        gravity = self.gravity
+        blocks, g, own = [], np.zeros(n), {}
+        gz_all = np.zeros(n)
+        for name, rec in model.bodies.items():
+            if not rec.get("spatial"):
+                continue
+            frame = rec["frame"]
+            m, inertia = new.get(name, (rec["mass"], rec["inertia"]))
+            com = np.asarray(rec["com"], float) - rec["origin"]
+            blocks.append((frame.idx, frame.idx,
+                           frame.C.T @ spatial_mass_matrix(m, com, inertia) @ frame.C))
+            own[name] = blocks[-1][2]
+            if gravity is not None:
+                gz = frame.C.T @ frame_gravity(m, com, gravity)
+                np.add.at(g, frame.idx, gz)
+                np.add.at(gz_all, frame.idx, gz)
+        mass = scatter(n, n, blocks)
+        mass.eliminate_zeros()
+        return mass.tocsr(), g, gz_all, own
+
+    def make(self, p):
+        """The model at axis = p, or None where a full build is needed."""
+        if self.reason is not None:
+            return None
+        from .spatial import SpatialBuilder
+        from ..model.spatial_body import inertia_problem
+
+        params = self.parameters(p)
+        m0 = self.model0
+        new = {}
+        for name, item, label, keys in self.updates:
+            f = Fields(item, label, params)
+            rec = m0.bodies[name]
+            mass = f.num("mass", positive=True) if "mass" in keys else rec["mass"]
+            inertia = (SpatialBuilder._matrix(None, f, "inertia", 3, REQUIRED)
+                       if "inertia" in keys else rec["inertia"])
+            problem = inertia_problem(inertia)
+            if problem:
+                raise f.error(problem)
+            new[name] = (mass, inertia)
+        mass, g, gz, own = self._assemble(m0, new)
+        bodies = {k: ({**v, "mass": new[k][0], "inertia": new[k][1]} if k in new else v)
+                  for k, v in m0.bodies.items()}
+        parts = tuple((nm, r, c, own[nm] if nm in new else b) for nm, r, c, b in m0.mass_parts)
+        return dataclasses.replace(m0, mass=mass, g_const=g, bodies=bodies, mass_parts=parts,
+                                   gravity_force=None if m0.gravity_force is None else gz,
+                                   parameters=params)

@@ -139,11 +139,11 @@ class CoordinateFrames:
 
 
 def _cross_axis(k, R):
-    """e_k × r for every row r of R (t × 3)."""
+    """e_k × r for every row r of R (…, t, 3)."""
     out = np.zeros_like(R)
     i, j = (k + 1) % 3, (k + 2) % 3
-    out[:, j] = R[:, i]
-    out[:, i] = -R[:, j]
+    out[..., j] = R[..., i]
+    out[..., i] = -R[..., j]
     return out
 
 

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .frames import CoordinateFrames
+from .frames import CoordinateFrames, _cross_axis
 from .symmetry import TOL, RigidDirections, _describe, _parts
 
 __all__ = ["rigid_directions_batch"]
@@ -108,14 +108,6 @@ class _Generators:
             _scatter(col, ix, _cross_axis(k, np.where(ix >= 0, v[:, np.maximum(ix, 0)], 0.0)))
             out.append(col)
         return np.stack(out, axis=2) if out else np.zeros((*v.shape, 0))
-
-
-def _cross_axis(k, R):
-    out = np.zeros_like(R)
-    i, j = (k + 1) % 3, (k + 2) % 3
-    out[..., j] = R[..., i]
-    out[..., i] = -R[..., j]
-    return out
 
 
 def _scatter(out, ix, values):

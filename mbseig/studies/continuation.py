@@ -18,8 +18,11 @@ first axis varying, the others fixed).  It
    coordinates and its stability (static, and modal for small models).
 
 The family p ↦ model(p) builds the case once and, where the swept parameter enters only force
-scalars, updates those at each value (:class:`~mbseig.casefile.element_readers.ScalarUpdate`:
-equal to a build field by field), else builds the case at each value (``record["model"]``).
+scalars of a planar case, updates those at each value
+(:class:`~mbseig.casefile.element_readers.ScalarUpdate`: equal to a build field by field), where
+it enters only bodies' masses and inertias of a spatial case, forms the mass matrix and the
+gravity load again from the bodies' parts (:class:`~mbseig.casefile.element_readers.MassUpdate`:
+equal to a build bit for bit), else builds the case at each value (``record["model"]``).
 Inverse-statics commands are resolved at each value, unless resolving them at two values gave
 bitwise-equal settings (the swept parameter does not enter them, as a follower load does not
 enter a held position command): then the settings are reused; or the swept parameter enters
@@ -35,7 +38,7 @@ import dataclasses
 
 import numpy as np
 
-from ..casefile.element_readers import ScalarUpdate
+from ..casefile.element_readers import MassUpdate, ScalarUpdate
 from ..errors import MbseigError
 from ..linear import linearize
 from ..model import Model
@@ -88,11 +91,13 @@ def family_maker(spec, config, params, axis, *, lean=True):
                 return m
         m = spec.build(config, **{**params, axis: float(p)})
         if state["model"] is None:
-            state["lean"] = lean = (ScalarUpdate(spec.data, config, params, axis, m)
+            kind = MassUpdate if (spec.data.get("dimension") == 3) else ScalarUpdate
+            state["lean"] = lean = (kind(spec.data, config, params, axis, m)
                                     if isinstance(m, Model) else None)
+            what = ("body masses and inertias" if kind is MassUpdate else "force scalars")
             state["model"] = ("built at every value" if lean is None or not lean_models else
                               f"built at every value ({lean.reason})" if lean.reason else
-                              "built once, force scalars updated at each value")
+                              f"built once, {what} updated at each value")
         return m
 
     def make(p):

@@ -175,8 +175,11 @@ class SteadyLine:
             return [_steady_point(self.spec, self.config, self.params(p)) for p in values]
         file = getattr(self.spec, "source", None)
         motions = [self.update.motion(repr(float(p)), file=file) for p in values]
-        with np.errstate(all="ignore"):  # (a point whose numbers overflow is not covered)
-            got = self.stack.analyse(motions)
+        try:
+            with np.errstate(all="ignore"):  # (a point whose numbers overflow is not covered)
+                got = self.stack.analyse(motions)
+        except (np.linalg.LinAlgError, ValueError, ArithmeticError) as exc:
+            got = [f"the batch failed ({exc})"] * len(values)  # each on its own: its own error
         out = []
         for p, r in zip(values, got, strict=True):
             if isinstance(r, str) or r is None:  # not covered: on its own (its error, if any)
