@@ -20,7 +20,7 @@ from ..model.elements import (
     TorsionalSpringDamper,
 )
 from .expr import evaluate
-from .fields import REQUIRED, Fields, template
+from .fields import REQUIRED, Fields, square_matrix, template
 
 
 class ElementReaders:
@@ -542,7 +542,6 @@ class MassUpdate(ScalarUpdate):
         """The model at axis = p, or None where a full build is needed."""
         if self.reason is not None:
             return None
-        from .spatial import SpatialBuilder
         from ..model.spatial_body import inertia_problem
 
         params = self.parameters(p)
@@ -552,7 +551,7 @@ class MassUpdate(ScalarUpdate):
             f = Fields(item, label, params)
             rec = m0.bodies[name]
             mass = f.num("mass", positive=True) if "mass" in keys else rec["mass"]
-            inertia = (SpatialBuilder._matrix(None, f, "inertia", 3, REQUIRED)
+            inertia = (square_matrix(f, "inertia", 3, REQUIRED)
                        if "inertia" in keys else rec["inertia"])
             problem = inertia_problem(inertia)
             if problem:

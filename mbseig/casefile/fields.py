@@ -309,3 +309,19 @@ def slenderness_warnings(theory, slender, eb_slenderness, min_slenderness) -> li
                    "inaccurate for so stubby a body; use a 2-D/3-D FE model (import it as an "
                    "fe_body)")
     return out
+
+
+def square_matrix(f, key, size, default=None):
+    """Field ``key`` of ``f``: ``size`` numbers (a diagonal) or a size × size matrix (a list of
+    rows); zeros when absent with ``default`` None."""
+    value = f.raw(key, default)
+    if value is None:
+        return np.zeros((size, size))
+    if (isinstance(value, list) and len(value) == size
+            and all(isinstance(r, list) for r in value)):
+        rows = [Fields({"row": r}, f"{f.label}.{key}[{i}]", f.names).vec("row", size)
+                for i, r in enumerate(value)]
+        return np.array(rows)
+    if not isinstance(value, list) or len(value) != size:
+        raise f.error(f"{key} must be {size} numbers or a {size}x{size} matrix, got {value!r}")
+    return np.diag(f.vec(key, size))

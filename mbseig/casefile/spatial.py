@@ -53,7 +53,7 @@ from ..model.spatial_joints import (
 from ..numerics import scatter
 from .batch import LazyPoints, repeated_fields
 from .builder import Builder
-from .fields import REQUIRED, Fields, expand, template, two_names
+from .fields import REQUIRED, Fields, expand, square_matrix, template, two_names
 from .spatial_readers import (
     UNIT_TOL,
     SpatialElementReaders,
@@ -373,17 +373,7 @@ class SpatialBuilder(SpatialElementReaders, Builder):
 
     def _matrix(self, f, key, size, default=None):
         """``size`` numbers (a diagonal) or a size × size matrix."""
-        value = f.raw(key, default)
-        if value is None:
-            return np.zeros((size, size))
-        if (isinstance(value, list) and len(value) == size
-                and all(isinstance(r, list) for r in value)):
-            rows = [Fields({"row": r}, f"{f.label}.{key}[{i}]", f.names).vec("row", size)
-                    for i, r in enumerate(value)]
-            return np.array(rows)
-        if not isinstance(value, list) or len(value) != size:
-            raise f.error(f"{key} must be {size} numbers or a {size}x{size} matrix, got {value!r}")
-        return np.diag(f.vec(key, size))
+        return square_matrix(f, key, size, default)
 
     def _inertia(self, f):
         return self._matrix(f, "inertia", 3, REQUIRED)
