@@ -60,10 +60,12 @@ def assert_same_set(got, ref, rtol):
 
 
 def test_projected_agrees_with_dense_and_companion():
-    """20 lowest modes of a linked chain (n = 400, 39 rigid links, non-proportional damping):
+    """20 lowest modes of a linked chain (n = 200, 19 rigid links, non-proportional damping):
     the projected path's 40 eigenvalues equal the dense general path's and partial-companion's
-    (rtol 1e-9), η ≤ 1e-12 (verify_tol 1e-8), and the count certificate holds."""
-    M, C, K, G = linked_chain(400)
+    (rtol 1e-9), η ≤ 1e-12 (verify_tol 1e-8), and the count certificate holds.  (n = 200: the
+    dense reference's QZ on n = 400 cost 10 s a pass of the suite, and the path's claims do
+    not depend on the size.)"""
+    M, C, K, G = linked_chain(200)
     sol = solve_partial(M, C, K, G=G, n_modes=20, solver="partial-projected")
     assert sol.solver == "partial-projected" and sol.eigenvalues.size == 40
     assert np.all(sol.backward_error <= 1e-12)
@@ -82,7 +84,7 @@ def test_projected_agrees_with_dense_and_companion():
     comp = solve_partial(M, C, K, G=G, n_modes=20, solver="partial-companion")
     assert_same_set(sol.eigenvalues, comp.eigenvalues, 1e-9)
     # the multipliers are part of the checked pair: η is on the bordered problem
-    assert sol.details["n_constraint_rows"] == 39
+    assert sol.details["n_constraint_rows"] == 19
 
 
 def test_auto_takes_projected_for_lowest_modes_through_modes():
