@@ -448,7 +448,8 @@ class MassUpdate(ScalarUpdate):
     ``reason`` says why not where the parameter, or one computed from it, appears elsewhere (a
     length, a centre of mass, a point, a joint, a force), where a body is repeated, or where the
     model holds masses or loads that are not the bodies' own (point masses, rotors, wheels,
-    flexible bodies, constant forces): then every value is built."""
+    flexible bodies, constant forces) or named inputs and outputs (an inertial input load
+    would move with a mass): then every value is built."""
 
     def __init__(self, data, config, overrides, axis, model0):
         self.data, self.axis, self.model0, self.reason = data, axis, model0, None
@@ -477,6 +478,7 @@ class MassUpdate(ScalarUpdate):
             return "not a spatial multibody case"
         if "frames" in data or model0.mass_elements or model0.flexible \
                 or model0.velocity_constraints or model0.commands \
+                or model0.inputs or model0.outputs \
                 or any(isinstance(f, Rotor) for f in model0.forces) \
                 or any(isinstance(c, WheelRows) for c in model0.constraints):
             return "a model with more than rigid bodies' masses"

@@ -44,7 +44,7 @@ from ..model.stacked import STACK_MAX
 from .steady import SteadyAssembly, generator, translation
 from .steady_modes import INVARIANT_TOL, PLANE, Cyclic, mode_rows, verdict_of
 
-__all__ = ["SteadyStack", "steady_points"]
+__all__ = ["SteadyStack"]
 
 TOL, MAX_ITER, RANK_TOL = 1e-12, 25, 1e-10  # steady_state's and linearize_steady's defaults
 KEEP = 64  # distinct positions whose position-only quantities are kept
@@ -610,8 +610,3 @@ class SteadyStack:
                                         verdict=verdict_of(rows), n_rigid=len(names),
                                         contacts=contacts)
         return out
-
-
-def steady_points(stack, motions):
-    """The batch's result per motion (:meth:`SteadyStack.analyse`)."""
-    return stack.analyse(motions)

@@ -231,9 +231,6 @@ def steady_sweep(spec, name, values, *, config=None, fixed=None, xtol=1e-11, job
             memo.update(zip(new, line.points(new), strict=True))
         return [memo[float(p)] for p in ps]
 
-    def at(p):
-        return at_many([p])[0]
-
     batched = line.stack is not None
     many = ROOT_POINTS if batched else 1
     checkpoint = _checkpoint(resume, spec, "steady", config=config, parameter=name,
