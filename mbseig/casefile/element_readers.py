@@ -263,18 +263,7 @@ class ScalarUpdate:
     """
 
     def __init__(self, data, config, overrides, axis, model0):
-        self.data, self.axis, self.model0, self.reason = data, axis, model0, None
-        self.raw = dict(data.get("parameters", {}))
-        chosen = dict((data.get("configurations") or {}).get(config, {})) if config else {}
-        chosen.pop("description", None)
-        self.raw.update(chosen)
-        self.raw.update({k: v for k, v in overrides.items() if k != axis})
-        deps = {axis}
-        for key, value in self.raw.items():  # parameters computed from the swept one
-            if isinstance(value, str) and deps & set(_NAME.findall(value)):
-                deps.add(key)
-        self.deps, self.updates = deps, []
-        self.order = [key for key in self.raw if key in deps]  # re-evaluated, in table order
+        self._parameters(data, config, overrides, axis, model0)
         if data.get("dimension") not in (1, 2) or data.get("kind", "multibody") != "multibody" \
                 or axis not in self.raw:
             self.reason = "not a planar multibody case"
@@ -298,6 +287,22 @@ class ScalarUpdate:
             self.reason = f"{axis} enters {where}"
         elif self.parameters(model0.parameters[axis], every=True) != model0.parameters:
             self.reason = "the parameters evaluate differently"  # a safeguard: never seen
+
+    def _parameters(self, data, config, overrides, axis, model0):
+        """The parameter table at the reference (the case's, the configuration's, the fixed
+        overrides) and the parameters computed from the swept one (re-evaluated, in order)."""
+        self.data, self.axis, self.model0, self.reason = data, axis, model0, None
+        self.raw = dict(data.get("parameters", {}))
+        chosen = dict((data.get("configurations") or {}).get(config, {})) if config else {}
+        chosen.pop("description", None)
+        self.raw.update(chosen)
+        self.raw.update({k: v for k, v in overrides.items() if k != axis})
+        deps = {axis}
+        for key, value in self.raw.items():  # parameters computed from the swept one
+            if isinstance(value, str) and deps & set(_NAME.findall(value)):
+                deps.add(key)
+        self.deps, self.updates = deps, []
+        self.order = [key for key in self.raw if key in deps]  # re-evaluated, in table order
 
     def _uses(self, text):
         return bool(self.deps & set(_NAME.findall(text)))
@@ -379,18 +384,7 @@ class MotionUpdate(ScalarUpdate):
     it, appears (then every value is built)."""
 
     def __init__(self, data, config, overrides, axis, model0):
-        self.data, self.axis, self.model0, self.reason = data, axis, model0, None
-        self.raw = dict(data.get("parameters", {}))
-        chosen = dict((data.get("configurations") or {}).get(config, {})) if config else {}
-        chosen.pop("description", None)
-        self.raw.update(chosen)
-        self.raw.update({k: v for k, v in overrides.items() if k != axis})
-        deps = {axis}
-        for key, value in self.raw.items():
-            if isinstance(value, str) and deps & set(_NAME.findall(value)):
-                deps.add(key)
-        self.deps, self.updates = deps, []
-        self.order = [key for key in self.raw if key in deps]
+        self._parameters(data, config, overrides, axis, model0)
         if axis not in self.raw:
             self.reason = f"{axis} is not a parameter of the case"
             return
@@ -452,18 +446,7 @@ class MassUpdate(ScalarUpdate):
     would move with a mass): then every value is built."""
 
     def __init__(self, data, config, overrides, axis, model0):
-        self.data, self.axis, self.model0, self.reason = data, axis, model0, None
-        self.raw = dict(data.get("parameters", {}))
-        chosen = dict((data.get("configurations") or {}).get(config, {})) if config else {}
-        chosen.pop("description", None)
-        self.raw.update(chosen)
-        self.raw.update({k: v for k, v in overrides.items() if k != axis})
-        deps = {axis}
-        for key, value in self.raw.items():
-            if isinstance(value, str) and deps & set(_NAME.findall(value)):
-                deps.add(key)
-        self.deps, self.updates = deps, []
-        self.order = [key for key in self.raw if key in deps]
+        self._parameters(data, config, overrides, axis, model0)
         grav = data.get("gravity")
         self.gravity = (None if grav is None else
                         Fields({"gravity": grav}, "gravity", model0.parameters).vec("gravity", 3))
