@@ -142,7 +142,8 @@ def test_points_the_batch_does_not_cover_take_the_one_point_path(monkeypatch):
     """A point the batch declines is analysed alone: the same record as the one-point task."""
     spec = _spec(CASES / "whipple_bicycle.toml")
     grid = [2.0, 4.0, 6.5]
-    monkeypatch.setattr(SteadyStack, "analyse", lambda self, motions: ["declined"] * len(motions))
+    monkeypatch.setattr(SteadyStack, "analyse",
+                        lambda self, motions, **kw: ["declined"] * len(motions))
     monkeypatch.setattr(sweep_module, "_LINES", {})
     line = sweep_module.SteadyLine(spec, None, {}, "v", grid[0])
     assert line.batch is None
@@ -283,3 +284,27 @@ def test_a_model_with_forces_in_the_batch(tmp_path, monkeypatch):
     for x, y in zip(a.boundaries, b.boundaries, strict=True):
         assert (x["kind"], x["stability"]) == (y["kind"], y["stability"])
         assert abs(x["value"] - y["value"]) <= 2 * (xtol + RTOL * abs(y["value"]))
+
+
+@pytest.mark.parametrize("path,name,grid", LINES, ids=[p.stem for p, _, _ in LINES])
+def test_one_point_is_the_sweeps_path_with_a_batch_of_one(path, name, grid):
+    """analyze_steady (solver "auto") is the sweep's batch with one motion: each sweep point's
+    eigenvalues within the sum of the two stated bounds of the one-point analysis (the same
+    formulas on stacks of other sizes: rounding apart), the same verdict; "descriptor-qz" asks
+    for the QZ path."""
+    spec = _spec(path)
+    sub = grid[::3]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sw = steady_sweep(spec, name, sub, jobs=1, progress=False)
+        for p, pt in zip(sub, sw.points, strict=True):
+            a = analyze_steady(spec, params={name: repr(float(p))})
+            assert a.solution.solver == "descriptor-eig"
+            assert pt["verdict"] == a.verdict
+            tol = {complex(*r["eigenvalue"]): r["tolerance"] for r in a.modes
+                   if not r["rigid_body"]}  # (the sweep lists the pencil's, not the declared)
+            for s in (complex(*x) for x in pt["eigenvalues"]):
+                near = min(tol, key=lambda z, s=s: min(abs(z - s), abs(z.conjugate() - s)))
+                assert min(abs(near - s), abs(near.conjugate() - s)) <= 2 * tol[near]
+        qz = analyze_steady(spec, params={name: repr(float(sub[0]))}, solver="descriptor-qz")
+    assert qz.solution.solver == "descriptor-qz"

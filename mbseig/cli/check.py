@@ -164,7 +164,7 @@ def run_steady(args, spec) -> int:
     if getattr(args, "plot", None):
         raise CaseError("--plot is not available for a steady motion", element="command line")
     if getattr(args, "solver", "auto") != "auto":
-        raise CaseError("a steady motion's linearization is solved by descriptor-qz (--solver "
+        raise CaseError("a steady motion's first-order pencil is solved by its own path (--solver "
                         "does not apply)", element="command line")
     for name in ("amplitude", "periods", "efolds", "delta_rtol", "omega_rtol", "zero_delta_tol",
                  "ode_rtol"):

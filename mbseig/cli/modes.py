@@ -201,9 +201,11 @@ def run_steady(args, spec) -> int:
                             element="command line")
     if getattr(args, "solver", "auto") not in ("auto", "descriptor-qz"):
         raise CaseError(f"solver {args.solver!r} does not apply to a steady motion (its "
-                        f"linearization is a first-order pencil: descriptor-qz)",
-                        element="command line")
-    a = analyzed(args, spec, analyze_steady)
+                        f"linearization is a first-order pencil: auto, the path of a steady "
+                        f"sweep, or descriptor-qz)", element="command line")
+    kw = case_kwargs(args)
+    a = analyze_steady(spec, config=kw["config"], params=kw["params"],
+                       solver=getattr(args, "solver", "auto"))
     out = steady_json(a)
     if args.json:
         return print_json(out)

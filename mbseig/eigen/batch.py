@@ -276,14 +276,16 @@ def solve_descriptor_batch(E, A, *, e_cond=E_COND):
     eigenvalues sorted as it sorts them.  A pencil is not covered (its reason given; it must
     take the QZ path, :func:`~mbseig.eigen.descriptor.solve_descriptor`) where E is not finite
     or not well conditioned, or a pair's right or left vector has a backward error above
-    REFINE_ETA.  Returns {"s", "eta", "kappa" (B, k), "reason" (B,) ("" where covered)}."""
+    REFINE_ETA.  Returns {"s", "eta", "kappa" (B, k), "reason" (B,) ("" where covered),
+    "vectors" and "left" (B, k, k: unit right vectors and conjugated unit left vectors, as
+    columns in the order of s), "norms" (B, 2: ‖E‖_F, ‖A‖_F), "cond" (B,: cond₂ E)}."""
     B, k = E.shape[0], E.shape[1]
     reason = [""] * B
     s = np.zeros((B, k), complex)
     eta = np.zeros((B, k))
     kap = np.zeros((B, k))
     if k == 0:
-        return {"s": s, "eta": eta, "kappa": kap, "reason": reason}
+        return _empty(s, eta, kap, reason)
     finite = np.isfinite(E).all(axis=(1, 2)) & np.isfinite(A).all(axis=(1, 2))
     cond = np.full(B, np.inf)
     cond[finite] = np.linalg.cond(E[finite])
@@ -292,7 +294,7 @@ def solve_descriptor_batch(E, A, *, e_cond=E_COND):
         reason[b] = "E is not well conditioned"
     u = np.flatnonzero(use)
     if not u.size:
-        return {"s": s, "eta": eta, "kappa": kap, "reason": reason}
+        return _empty(s, eta, kap, reason, cond)
     Eu, Au = E[u], A[u]
     w, X = np.linalg.eig(np.linalg.solve(Eu, Au))
     X = X / np.linalg.norm(X, axis=1, keepdims=True)
@@ -319,4 +321,19 @@ def solve_descriptor_batch(E, A, *, e_cond=E_COND):
     order = np.lexsort((w.imag, w.real, np.abs(w)), axis=-1)
     take = lambda x: np.take_along_axis(x, order, axis=1)  # noqa: E731
     s[u], eta[u], kap[u] = take(w), take(e_r), take(kp)
-    return {"s": s, "eta": eta, "kappa": kap, "reason": reason}
+    vectors = np.zeros((B, k, k), complex)
+    left = np.zeros((B, k, k), complex)
+    vectors[u] = np.take_along_axis(X, order[:, None, :], axis=2)
+    left[u] = np.take_along_axis(np.swapaxes(Yh, 1, 2), order[:, None, :], axis=2)
+    norms = np.zeros((B, 2))
+    norms[u] = np.stack([nE, nA], axis=1)
+    return {"s": s, "eta": eta, "kappa": kap, "reason": reason, "vectors": vectors,
+            "left": left, "norms": norms, "cond": cond}
+
+
+def _empty(s, eta, kap, reason, cond=None):
+    """The result of :func:`solve_descriptor_batch` where no pencil is covered (or k = 0)."""
+    B, k = s.shape
+    return {"s": s, "eta": eta, "kappa": kap, "reason": reason,
+            "vectors": np.zeros((B, k, k), complex), "left": np.zeros((B, k, k), complex),
+            "norms": np.zeros((B, 2)), "cond": np.full(B, np.inf) if cond is None else cond}

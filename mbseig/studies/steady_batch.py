@@ -42,7 +42,7 @@ import numpy as np
 from ..eigen.batch import solve_descriptor_batch
 from ..model.stacked import STACK_MAX
 from .steady import SteadyAssembly, generator, translation
-from .steady_modes import INVARIANT_TOL, PLANE, Cyclic, mode_rows, verdict_of
+from .steady_rows import INVARIANT_TOL, PLANE, Cyclic, mode_rows, verdict_of
 
 __all__ = ["SteadyStack"]
 
@@ -311,9 +311,15 @@ class SteadyStack:
         return H
 
     # ---- the pipeline ----------------------------------------------------------------------
-    def analyse(self, motions):
+    def analyse(self, motions, *, naive=False, full=False):
         """Per motion a :class:`SimpleNamespace` (eigenvalues, modes, verdict, n_rigid,
-        contacts) or the reason (a string) the batch does not cover it."""
+        contacts) or the reason (a string) the batch does not cover it.  ``naive``: the
+        linearization without Ã (:func:`~mbseig.studies.steady.linearize_steady`'s flag);
+        ``full``: each namespace also holds the steady state (q, qd, spin, lam, mu, residual,
+        iterations), the linearization (E, A, N, T, S, dof, k), the declared directions
+        (``cyclic``) and the pencil's solution (``solution``: s, vectors, left vectors, η, κ,
+        norms, E₂, A₂) for :func:`~mbseig.studies.steady_modes.analyze_steady`."""
+        self._naive, self._full = bool(naive), bool(full)
         out = [None] * len(motions)
         fields = []
         for b, mo in enumerate(motions):
@@ -369,6 +375,7 @@ class SteadyStack:
         LAM, MU = lm[:, :mh], lm[:, mh:]
         sizes = np.cumsum([0, n, nw, mh, 2 * nw])
         kept = None
+        self._residual, self._iterations = np.zeros(Bn), np.zeros(Bn, int)
         todo = ~bad
         for b in np.flatnonzero(bad):
             why[b] = "the constraints do not let the system move this way"
@@ -392,6 +399,7 @@ class SteadyStack:
                 _mv(A, qd) + SPIN[a] @ self.Bw.T], axis=1)
             res = np.abs(F).max(axis=1, initial=0.0)
             conv = res <= TOL
+            self._residual[a[conv]], self._iterations[a[conv]] = res[conv], it
             if it == 0 and conv.all() and a.size == Bn:
                 kept = t  # every point steady as started: its terms are those at the start
             else:
@@ -455,6 +463,8 @@ class SteadyStack:
         Ba, d = a.size, N.shape[2]
         Nt = np.swapaxes(N, 1, 2)
         A, At = t["A"][a], t["At"][a]
+        if self._naive:  # (the velocity rows' position derivative dropped; A L stays)
+            At = np.zeros_like(At)
         if l_ is None and t["Fq"] is None:  # the wheels' blocks and the rows' curvature alone:
             NqN = -self.stack.projected_hessian(q, lam, N)  # projected element by element
             NpN = np.zeros_like(NqN)
@@ -608,5 +618,14 @@ class SteadyStack:
                              for w, c in zip(self.asm.wheels, forces[j], strict=True))
             out[a[j]] = SimpleNamespace(eigenvalues=sol["s"][jj], modes=tuple(rows),
                                         verdict=verdict_of(rows), n_rigid=len(names),
-                                        contacts=contacts)
+                                        contacts=contacts, cyclic=cyc)
+            if self._full:
+                out[a[j]].__dict__.update(
+                    q=q[j].copy(), qd=qd[j].copy(), spin=spin[j].copy(), lam=lam[j].copy(),
+                    mu=mu[j].copy(), residual=float(self._residual[a[j]]),
+                    iterations=int(self._iterations[a[j]]), E=E[j].copy(), A=Am[j].copy(),
+                    N=np.array(N[j]), T=np.array(T[j]), S=S[j].copy(), dof=d, k=k,
+                    solution={key: sol[key][jj] for key in
+                              ("s", "eta", "kappa", "vectors", "left", "norms", "cond")},
+                    E2=E2[jj].copy(), A2=A2[jj].copy())
         return out

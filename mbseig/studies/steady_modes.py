@@ -40,21 +40,16 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
-import math
 from dataclasses import dataclass
+from types import SimpleNamespace
 
 import numpy as np
 
 from ..errors import CaseError
-from ..modal.rules import kind_of, stability
+from .steady_rows import INVARIANT_TOL, PLANE, SAFETY, Cyclic, mode_rows, verdict_of
 
 __all__ = ["SAFETY", "INVARIANT_TOL", "SteadyAnalysis", "analyze_steady", "cyclic_directions",
            "mode_rows", "steady_json", "mode_shape"]
-
-SAFETY = 10.0  # τ = SAFETY·κ max(η, nε)·max(|s|, 1): mbseig's safety factor on the error bound
-#: a declared direction set is invariant when ‖A S − E S J‖ ≤ INVARIANT_TOL ‖A‖ (rounding level of
-#: forming the pencil, whose entries carry a few ε of their magnitude; 1e-11 leaves 10³ of margin)
-INVARIANT_TOL = 1e-11
 
 
 @dataclass(frozen=True, eq=False)
@@ -85,35 +80,6 @@ class SteadyAnalysis:
         return steady_json(self)
 
 
-def mode_rows(sol, *, safety=SAFETY, declared=None, formed_in=1) -> list:
-    """Mode records as the quadratic paths list them: δ = −Re s, a pair once (Im s > 0), sorted
-    by ω_n then δ, with η, κ and the tolerance τ (module docstring: ``formed_in`` is n, the
-    number of coordinates the pencil was formed from); first the ``declared`` rigid-body modes
-    (:class:`Cyclic`), each named in ``rigid_body``."""
-    rows = [] if declared is None else declared.rows()
-    floor = max(int(formed_in), 1) * np.finfo(float).eps
-    for s, eta, kap in zip(sol.eigenvalues, sol.backward_error, sol.condition, strict=True):
-        tol = safety * kap * max(eta, floor) * max(abs(s), 1.0)
-        if s.imag < -tol:
-            continue  # the conjugate of a listed pair
-        wd = float(s.imag) if s.imag > tol else 0.0
-        delta = -float(s.real)
-        wn = float(abs(s))
-        stab = stability(delta, tol)  # |δ| <= |s| <= τ for a rigid-body mode: critical
-        kind = kind_of(stab, delta, wd, tol, rigid=wn <= tol)
-        rows.append({"rigid_body": None, "eigenvalue": [float(s.real), wd], "delta": delta,
-                     "omega_n": wn,
-                     "omega_d": wd, "freq_hz": wd / (2 * math.pi),
-                     "freq_n_hz": wn / (2 * math.pi),
-                     "zeta": delta / wn if wn > 0 and kind != "rigid-body" else 0.0,
-                     "stability": stab, "kind": kind, "backward_error": float(eta),
-                     "condition": float(kap), "tolerance": float(tol)})
-    rows.sort(key=lambda r: (r["omega_n"], r["delta"]))
-    for k, r in enumerate(rows):
-        r["index"] = k + 1
-    return rows
-
-
 def dominant(display, lin, s, *, count=3) -> list:
     """The mode shape of eigenvalue ``s`` in the full coordinates, q − q₀(t) = N x (x: the
     position part of the right null vector of s E − A), named in the user's terms
@@ -132,52 +98,6 @@ def mode_shape(lin, s):
     value)."""
     _, _, Vh = np.linalg.svd(s * lin.E - lin.A)
     return lin.N @ Vh[-1].conj()[:lin.dof]
-
-
-def verdict_of(rows):
-    """The verdict of the rows (:func:`mbseig.modal.scope.verdict`: the declared rigid-body
-    modes left out)."""
-    from ..modal.scope import verdict
-
-    return verdict([r["stability"] for r in rows], [r.get("rigid_body") for r in rows],
-                   zero=all(r["omega_n"] == 0 for r in rows if r.get("rigid_body")))
-
-
-@dataclass(frozen=True, eq=False)
-class Cyclic:
-    """The declared rigid-body directions of a steady motion (module docstring): their names,
-    the orthonormal basis S of their span in the state X, J (A S = E S J), the invariance
-    residual, and the candidates dropped (name: residual)."""
-
-    names: tuple
-    basis: np.ndarray
-    J: np.ndarray
-    residual: float
-    dropped: tuple = ()
-    yaw_rate: float = 0.0
-
-    def rows(self) -> list:
-        """One row per declared eigenvalue (a pair once): 0 for each direction of straight
-        running and for a turn's heading, ±i r for a turn's two positions in the ground plane
-        (checked on J: J is nilpotent, or J (J² + r² I) = 0, in :func:`cyclic_directions`)."""
-        plane = [n for n in self.names if n.startswith(PLANE)]
-        rows = []
-        for name in self.names:
-            if name in plane and self.yaw_rate:
-                if name != plane[0]:
-                    continue
-                name, wd = " and ".join(plane), abs(self.yaw_rate)
-            else:
-                wd = 0.0
-            rows.append({"rigid_body": name, "eigenvalue": [0.0, wd], "delta": 0.0,
-                         "omega_n": wd, "omega_d": wd, "freq_hz": wd / (2 * math.pi),
-                         "freq_n_hz": wd / (2 * math.pi), "zeta": 0.0, "stability": "critical",
-                         "kind": "rigid-body", "backward_error": 0.0, "condition": 1.0,
-                         "tolerance": float(self.residual)})
-        return sorted(rows, key=lambda r: r["omega_n"])
-
-
-PLANE = "position in the ground plane"
 
 
 def cyclic_directions(model, state, lin) -> Cyclic:
@@ -260,10 +180,17 @@ def cyclic_directions(model, state, lin) -> Cyclic:
     return Cyclic(tuple(names), basis, J, res, tuple(dropped), r)
 
 
-def analyze_steady(spec, *, config=None, params=None, naive=False, model=None):
+def analyze_steady(spec, *, config=None, params=None, naive=False, model=None, solver="auto"):
     """The steady motion of the case ``spec`` (a :class:`~mbseig.casefile.CaseSpec`) at
     ``params``.  ``naive=True`` drops the velocity rows' position derivative (shown wrong in
-    tests and in ``mbseig bench``; never used by the commands)."""
+    tests and in ``mbseig bench``; never used by the commands).
+
+    ``solver="auto"`` takes the path of a steady sweep with a batch of one
+    (:mod:`mbseig.studies.steady_batch`: the same numbers as that sweep's point), and where
+    the batch does not cover the motion (its reason: a steady state it does not reach, a set of
+    declared directions that needs the subset search, E₂ ill-conditioned, a pair whose vectors
+    fail their check) the one-point path below, which ends in QZ; ``"descriptor-qz"`` takes
+    that path at once."""
     from ..casefile.motion_readers import read_motion
     from ..eigen import Request, deflate_subspace, descriptor_problem, solve
     from ..errors import MbseigError
@@ -280,13 +207,17 @@ def analyze_steady(spec, *, config=None, params=None, naive=False, model=None):
     from ..numerics import DOUBLE_RANGE, watched
 
     cause = f"values of the case too large or too small together (beyond {DOUBLE_RANGE})"
+    got = _batch_of_one(model, motion, naive) if solver == "auto" else None
     try:
         with watched("steady motion", cause):
-            state = steady_state(model, motion)
-            lin = linearize_steady(model, state, naive=naive)
-            cyc = cyclic_directions(model, state, lin)
-            E2, A2, _, _ = deflate_subspace(lin.E, lin.A, cyc.basis)
-            sol = solve(descriptor_problem(E2, A2), Request(solver="descriptor-qz"))
+            if got is not None:
+                state, lin, cyc, sol = got
+            else:
+                state = steady_state(model, motion)
+                lin = linearize_steady(model, state, naive=naive)
+                cyc = cyclic_directions(model, state, lin)
+                E2, A2, _, _ = deflate_subspace(lin.E, lin.A, cyc.basis)
+                sol = solve(descriptor_problem(E2, A2), Request(solver="descriptor-qz"))
     except MbseigError as exc:
         raise exc.located(file=file) from None
     except (np.linalg.LinAlgError, ValueError) as exc:  # a solve that did not converge
@@ -303,6 +234,40 @@ def analyze_steady(spec, *, config=None, params=None, naive=False, model=None):
             r["dominant"] = dominant(display, lin, complex(*r["eigenvalue"]))
     return SteadyAnalysis(model, motion, state, lin, sol, tuple(rows), verdict_of(rows), notes,
                           cyc)
+
+
+def _batch_of_one(model, motion, naive):
+    """(state, linearization, declared directions, solution) of the steady sweep's path with a
+    batch of one (:meth:`~mbseig.studies.steady_batch.SteadyStack.analyse`), or None where it
+    does not cover the motion."""
+    from ..eigen.descriptor import GEPSolution
+    from .steady import SteadyLinearization, SteadyState
+    from .steady_batch import RANK_TOL, SteadyStack
+
+    stack = SteadyStack(model)
+    if stack.reason is not None:
+        return None
+    try:
+        with np.errstate(all="ignore"):  # (a motion whose numbers overflow is not covered)
+            r = stack.analyse([motion], naive=naive, full=True)[0]
+    except (np.linalg.LinAlgError, ValueError, ArithmeticError):
+        return None
+    if not isinstance(r, SimpleNamespace):
+        return None
+    state = SteadyState(r.q, r.qd, r.spin, r.lam, r.mu, r.residual, r.iterations, r.contacts,
+                        motion)
+    lin = SteadyLinearization(r.E, r.A, r.N, r.T, r.S, r.dof, r.k, bool(naive), state,
+                              {"rank_tol": RANK_TOL})
+    o = r.solution
+    sol = GEPSolution(o["s"], o["vectors"], o["eta"], o["kappa"], "descriptor-eig",
+                      f"E₂ well conditioned (cond₂ {o['cond']:.3g}): eig of E₂⁻¹A₂, η and κ "
+                      f"checked (a steady sweep's path, with a batch of one)",
+                      n_infinite=0, norms=(float(o["norms"][0]), float(o["norms"][1])),
+                      details={"inf_tol": 1e-12, "zero_tol": None, "n_rigid": 0,
+                               "e_cond": float(o["cond"])},
+                      left_vectors=o["left"], n_dof=r.E2.shape[0], complex_problem=False,
+                      problem=(r.E2, r.A2))
+    return state, lin, r.cyclic, sol
 
 
 def steady_json(a: SteadyAnalysis) -> dict:
