@@ -308,3 +308,21 @@ def test_one_point_is_the_sweeps_path_with_a_batch_of_one(path, name, grid):
                 assert min(abs(near - s), abs(near.conjugate() - s)) <= 2 * tol[near]
         qz = analyze_steady(spec, params={name: repr(float(sub[0]))}, solver="descriptor-qz")
     assert qz.solution.solver == "descriptor-qz"
+
+
+def test_a_batch_that_raises_leaves_each_point_to_the_one_point_path(monkeypatch):
+    """An element's error inside the batch (here raised on purpose) does not end the sweep: each
+    point is analysed alone and gets that path's result (or its own located error)."""
+    from mbseig.errors import EquilibriumError
+
+    def boom(self, motions, **kw):
+        raise EquilibriumError("direction of zero length: angle undefined", element="x")
+
+    spec = _spec(CASES / "rolling_disk.toml")
+    monkeypatch.setattr(SteadyStack, "analyse", boom)
+    monkeypatch.setattr(sweep_module, "_LINES", {})
+    line = sweep_module.SteadyLine(spec, None, {}, "v", 1.0)
+    for p, got in zip([1.0, 2.5], line.points([1.0, 2.5]), strict=True):
+        own = analyze_steady(spec, params={"v": repr(p)}, solver="descriptor-qz")
+        assert got.verdict == own.verdict
+        assert np.array_equal(got.eigenvalues, own.solution.eigenvalues)

@@ -241,6 +241,7 @@ def _batch_of_one(model, motion, naive):
     batch of one (:meth:`~mbseig.studies.steady_batch.SteadyStack.analyse`), or None where it
     does not cover the motion."""
     from ..eigen.descriptor import GEPSolution
+    from ..errors import MbseigError
     from .steady import SteadyLinearization, SteadyState
     from .steady_batch import RANK_TOL, SteadyStack
 
@@ -250,8 +251,8 @@ def _batch_of_one(model, motion, naive):
     try:
         with np.errstate(all="ignore"):  # (a motion whose numbers overflow is not covered)
             r = stack.analyse([motion], naive=naive, full=True)[0]
-    except (np.linalg.LinAlgError, ValueError, ArithmeticError):
-        return None
+    except (np.linalg.LinAlgError, ValueError, ArithmeticError, MbseigError):
+        return None  # (the one-point path then gives its own, located, error if there is one)
     if not isinstance(r, SimpleNamespace):
         return None
     state = SteadyState(r.q, r.qd, r.spin, r.lam, r.mu, r.residual, r.iterations, r.contacts,

@@ -173,12 +173,14 @@ class SteadyLine:
         """The :class:`SteadyPoint` of every value (together where the batch applies)."""
         if self.stack is None:
             return [_steady_point(self.spec, self.config, self.params(p)) for p in values]
+        from ..errors import MbseigError
+
         file = getattr(self.spec, "source", None)
         motions = [self.update.motion(repr(float(p)), file=file) for p in values]
         try:
             with np.errstate(all="ignore"):  # (a point whose numbers overflow is not covered)
                 got = self.stack.analyse(motions)
-        except (np.linalg.LinAlgError, ValueError, ArithmeticError) as exc:
+        except (np.linalg.LinAlgError, ValueError, ArithmeticError, MbseigError) as exc:
             got = [f"the batch failed ({exc})"] * len(values)  # each on its own: its own error
         out = []
         for p, r in zip(values, got, strict=True):
