@@ -485,42 +485,62 @@ class MassUpdate(ScalarUpdate):
             return f"{self.axis} enters {where}"
         if not self.updates:
             return f"{self.axis} enters no body's mass or inertia"
-        try:
-            mass, g, gz, _ = self._assemble(model0, {})
+        m0 = model0
+        try:  # twice: from the parts (scatter), then by the kept parts and plan
+            got = [self._assemble(m0, {}) for _ in range(2)]
         except (KeyError, ValueError, TypeError):
             return "the bodies' parts do not rebuild the model's mass"
-        same = (mass.shape == model0.mass.shape and np.array_equal(mass.indptr, model0.mass.indptr)
-                and np.array_equal(mass.indices, model0.mass.indices)
-                and np.array_equal(mass.data, model0.mass.data)
-                and np.array_equal(g, model0.g_const)
-                and (model0.gravity_force is None or np.array_equal(gz, model0.gravity_force)))
+        same = all(mass.shape == m0.mass.shape and np.array_equal(mass.indptr, m0.mass.indptr)
+                   and np.array_equal(mass.indices, m0.mass.indices)
+                   and np.array_equal(mass.data, m0.mass.data) and np.array_equal(g, m0.g_const)
+                   and (m0.gravity_force is None or np.array_equal(gz, m0.gravity_force))
+                   for mass, g, gz, _ in got)
         return None if same else "masses or loads besides the bodies' own"
 
     def _assemble(self, model, new):
-        """(mass, g, gravity load) from the bodies' parts, ``new`` {body: (mass, inertia)}
-        replacing some, in the build's order (SpatialBuilder._finish)."""
+        """(mass, g, gravity load, {body: block}) from the bodies' parts, ``new`` {body: (mass,
+        inertia)} replacing some, in the build's order (SpatialBuilder._finish): the other
+        bodies' blocks and loads are those of the reference (the same numbers), and the mass
+        matrix is summed by the reference's plan (:func:`mbseig.numerics.csr_from_triplets`'s
+        order and sums, kept: the same bits)."""
         from ..model.spatial_body import frame_gravity, spatial_mass_matrix
         from ..numerics import scatter
 
         n = model.n
         gravity = self.gravity
-        blocks, g, own = [], np.zeros(n), {}
+        kept = getattr(self, "_parts", None)
+        blocks, g, own, loads = [], np.zeros(n), {}, {}
         gz_all = np.zeros(n)
         for name, rec in model.bodies.items():
             if not rec.get("spatial"):
                 continue
             frame = rec["frame"]
-            m, inertia = new.get(name, (rec["mass"], rec["inertia"]))
-            com = np.asarray(rec["com"], float) - rec["origin"]
-            blocks.append((frame.idx, frame.idx,
-                           frame.C.T @ spatial_mass_matrix(m, com, inertia) @ frame.C))
-            own[name] = blocks[-1][2]
-            if gravity is not None:
-                gz = frame.C.T @ frame_gravity(m, com, gravity)
+            if kept is not None and name not in new:
+                block, gz = kept[name]
+            else:
+                m, inertia = new.get(name, (rec["mass"], rec["inertia"]))
+                com = np.asarray(rec["com"], float) - rec["origin"]
+                block = frame.C.T @ spatial_mass_matrix(m, com, inertia) @ frame.C
+                gz = (frame.C.T @ frame_gravity(m, com, gravity)) if gravity is not None else None
+            blocks.append((frame.idx, frame.idx, block))
+            own[name], loads[name] = block, gz
+            if gz is not None:
                 np.add.at(g, frame.idx, gz)
                 np.add.at(gz_all, frame.idx, gz)
-        mass = scatter(n, n, blocks)
+        plan = getattr(self, "_plan", None)
+        if plan is None:
+            mass = scatter(n, n, blocks)
+        else:
+            import scipy.sparse as sp
+
+            order, first, indices, indptr = plan
+            v = np.concatenate([np.asarray(b, float).ravel() for _, _, b in blocks])
+            mass = sp.csr_matrix((np.add.reduceat(v[order], first), indices.copy(),
+                                  indptr.copy()), shape=(n, n))
         mass.eliminate_zeros()
+        if kept is None:  # (the reference: its parts and the plan of its sum, kept)
+            self._parts = {k: (own[k], loads[k]) for k in own}
+            self._plan = _csr_plan(n, blocks)
         return mass.tocsr(), g, gz_all, own
 
     def make(self, p):
@@ -549,3 +569,26 @@ class MassUpdate(ScalarUpdate):
         return dataclasses.replace(m0, mass=mass, g_const=g, bodies=bodies, mass_parts=parts,
                                    gravity_force=None if m0.gravity_force is None else gz,
                                    parameters=params)
+
+
+def _csr_plan(n, blocks):
+    """(order, first, indices, indptr) by which :func:`mbseig.numerics.csr_from_triplets` sums
+    the triplets of ``blocks`` (as :func:`~mbseig.numerics.scatter` forms them), or None where
+    scatter takes another route (more than FAST_CSR triplets)."""
+    from ..numerics import FAST_CSR
+
+    r = np.concatenate([np.repeat(np.asarray(i).ravel(), np.asarray(j).size)
+                        for i, j, _ in blocks]).astype(np.int64)
+    c = np.concatenate([np.tile(np.asarray(j).ravel(), np.asarray(i).size)
+                        for i, j, _ in blocks]).astype(np.int64)
+    if not r.size or r.size > FAST_CSR:
+        return None
+    key = r * n + c
+    order = np.argsort(key, kind="stable")
+    key = key[order]
+    first = np.flatnonzero(np.concatenate(([True], key[1:] != key[:-1])))
+    key = key[first]
+    rows = key // n
+    indptr = np.zeros(n + 1, dtype=np.int32)
+    np.cumsum(np.bincount(rows, minlength=n), out=indptr[1:])
+    return order, first, (key - rows * n).astype(np.int32), indptr
