@@ -309,6 +309,16 @@ class ScalarUpdate:
 
     def _elsewhere(self, node, path):
         """The first place outside LEAN_FIELDS whose expression uses the swept parameter."""
+        return self._first_use(node, path, lean=True)
+
+    def _anywhere(self, node, path):
+        """The first place under ``node`` whose expression uses the swept parameter (every
+        field: for the updates that re-read no force scalar)."""
+        return self._first_use(node, path, lean=False)
+
+    def _first_use(self, node, path, lean):
+        """The first place under ``node`` (at ``path``) whose expression uses the swept
+        parameter; with ``lean`` the force scalars re-read at each value are left out."""
         if isinstance(node, str):
             return path if self._uses(node) else None
         if isinstance(node, dict):
@@ -316,35 +326,15 @@ class ScalarUpdate:
                 sub = f"{path}.{key}" if path else key
                 if (not path and key in _NOT_MODEL) or sub == "report.studies":
                     continue  # not evaluated into the model, or study definitions
-                if path.startswith("forces[") and path.count(".") == 0 and \
+                if lean and path.startswith("forces[") and path.count(".") == 0 and \
                         key in LEAN_FIELDS.get(node.get("type"), ()) and "repeat" not in node:
                     continue  # re-read at each value
-                hit = self._elsewhere(value, sub)
+                hit = self._first_use(value, sub, lean)
                 if hit is not None:
                     return hit
         elif isinstance(node, list):
             for k, value in enumerate(node):
-                hit = self._elsewhere(value, f"{path}[{k}]")
-                if hit is not None:
-                    return hit
-        return None
-
-    def _anywhere(self, node, path):
-        """The first place under ``node`` whose expression uses the swept parameter (every
-        field: for the updates that re-read no force scalar)."""
-        if isinstance(node, str):
-            return path if self._uses(node) else None
-        if isinstance(node, dict):
-            for key, value in node.items():
-                sub = f"{path}.{key}" if path else key
-                if (not path and key in _NOT_MODEL) or sub == "report.studies":
-                    continue
-                hit = self._anywhere(value, sub)
-                if hit is not None:
-                    return hit
-        elif isinstance(node, list):
-            for k, value in enumerate(node):
-                hit = self._anywhere(value, f"{path}[{k}]")
+                hit = self._first_use(value, f"{path}[{k}]", lean)
                 if hit is not None:
                     return hit
         return None
