@@ -22,9 +22,9 @@ INVARIANT_TOL = 1e-11
 
 def mode_rows(sol, *, safety=SAFETY, declared=None, formed_in=1) -> list:
     """Mode records as the quadratic paths list them: δ = −Re s, a pair once (Im s > 0), sorted
-    by ω_n then δ, with η, κ and the tolerance τ (module docstring: ``formed_in`` is n, the
-    number of coordinates the pencil was formed from); first the ``declared`` rigid-body modes
-    (:class:`Cyclic`), each named in ``rigid_body``."""
+    by ω_n then δ, with η, κ and the tolerance τ (:mod:`mbseig.studies.steady_modes`:
+    ``formed_in`` is n, the number of coordinates the pencil was formed from); first the
+    ``declared`` rigid-body modes (:class:`Cyclic`), each named in ``rigid_body``."""
     rows = [] if declared is None else declared.rows()
     floor = max(int(formed_in), 1) * np.finfo(float).eps
     for s, eta, kap in zip(sol.eigenvalues, sol.backward_error, sol.condition, strict=True):
@@ -60,9 +60,10 @@ def verdict_of(rows):
 
 @dataclass(frozen=True, eq=False)
 class Cyclic:
-    """The declared rigid-body directions of a steady motion (module docstring): their names,
-    the orthonormal basis S of their span in the state X, J (A S = E S J), the invariance
-    residual, and the candidates dropped (name: residual)."""
+    """The declared rigid-body directions of a steady motion
+    (:mod:`mbseig.studies.steady_modes`): their names, the orthonormal basis S of their span in
+    the state X, J (A S = E S J), the invariance residual, and the candidates dropped (name:
+    residual)."""
 
     names: tuple
     basis: np.ndarray
