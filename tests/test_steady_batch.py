@@ -289,9 +289,10 @@ def test_a_model_with_forces_in_the_batch(tmp_path, monkeypatch):
 @pytest.mark.parametrize("path,name,grid", LINES, ids=[p.stem for p, _, _ in LINES])
 def test_one_point_is_the_sweeps_path_with_a_batch_of_one(path, name, grid):
     """analyze_steady (solver "auto") is the sweep's batch with one motion: each sweep point's
-    eigenvalues within the sum of the two stated bounds of the one-point analysis (the same
-    formulas on stacks of other sizes: rounding apart), the same verdict; "descriptor-qz" asks
-    for the QZ path."""
+    eigenvalues within twice the one-point analysis's stated bound (each computed eigenvalue
+    lies within its own bound; the sweep point's bound, which its JSON does not carry, is the
+    same formula on inputs equal to rounding), the same verdict; "descriptor-qz" asks for the
+    QZ path."""
     spec = _spec(path)
     sub = grid[::3]
     with warnings.catch_warnings():

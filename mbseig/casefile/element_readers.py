@@ -375,6 +375,7 @@ class MotionUpdate(ScalarUpdate):
 
     def __init__(self, data, config, overrides, axis, model0):
         self._parameters(data, config, overrides, axis, model0)
+        self._motion = None  # (the first value's motion and its fields read again, kept)
         if axis not in self.raw:
             self.reason = f"{axis} is not a parameter of the case"
             return
@@ -400,7 +401,7 @@ class MotionUpdate(ScalarUpdate):
         from .motion_readers import read_motion
 
         params = self.parameters(p)
-        ref = getattr(self, "_motion", None)
+        ref = self._motion
         if ref is None:
             m = read_motion(self.data, params, file=file)
             table = self.data["motion"]
@@ -440,6 +441,7 @@ class MassUpdate(ScalarUpdate):
         grav = data.get("gravity")
         self.gravity = (None if grav is None else
                         Fields({"gravity": grav}, "gravity", model0.parameters).vec("gravity", 3))
+        self._parts = self._plan = None  # (the reference's, kept by its first assembly)
         self.reason = self._check(data, model0)
 
     def _check(self, data, model0):
@@ -498,7 +500,7 @@ class MassUpdate(ScalarUpdate):
 
         n = model.n
         gravity = self.gravity
-        kept = getattr(self, "_parts", None)
+        kept = self._parts
         blocks, g, own, loads = [], np.zeros(n), {}, {}
         gz_all = np.zeros(n)
         for name, rec in model.bodies.items():
@@ -517,7 +519,7 @@ class MassUpdate(ScalarUpdate):
             if gz is not None:
                 np.add.at(g, frame.idx, gz)
                 np.add.at(gz_all, frame.idx, gz)
-        plan = getattr(self, "_plan", None)
+        plan = self._plan
         if plan is None:
             mass = scatter(n, n, blocks)
         else:

@@ -98,16 +98,15 @@ class _Generators:
                 for kind, axis, has_points in self.kinds]
 
     def turn(self, v):
-        """W v for each rotation generator: (B, n, r) (translations give no column)."""
-        out = []
-        for rot in self.rots:
-            if rot is None:
-                continue
-            k, ix = rot
-            col = np.zeros_like(v)
-            _scatter(col, ix, _cross_axis(k, np.where(ix >= 0, v[:, np.maximum(ix, 0)], 0.0)))
-            out.append(col)
-        return np.stack(out, axis=2) if out else np.zeros((*v.shape, 0))
+        """W v of each generator (:func:`mbseig.model.frames.rotate`): (B, n, g), zero for a
+        translation."""
+        out = np.zeros((*v.shape, len(self.rots)))
+        for j, rot in enumerate(self.rots):
+            if rot is not None:
+                k, ix = rot
+                _scatter(out[:, :, j], ix,
+                         _cross_axis(k, np.where(ix >= 0, v[:, np.maximum(ix, 0)], 0.0)))
+        return out
 
 
 def _scatter(out, ix, values):
@@ -141,13 +140,7 @@ def _element_pass(item, gen, Bm):
     blind = K @ Gi
     full = np.zeros(G.shape[:2])
     full[:, idx] = load
-    rot = gen.turn(full)[:, idx, :]                                 # (B, m, r)
-    turn = np.zeros_like(blind)
-    r = 0
-    for k, rr in enumerate(gen.rots):
-        if rr is not None:
-            turn[:, :, k] = rot[:, :, r]
-            r += 1
+    turn = gen.turn(full)[:, idx, :]                                # (B, m, g)
     nK = np.sqrt(np.einsum("bij,bij->b", K, K))
     scale = np.broadcast_to((nK * absG.max(axis=1, initial=0.0)
                              + np.abs(load).max(axis=1, initial=0.0))[:, None],

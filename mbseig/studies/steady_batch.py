@@ -198,22 +198,12 @@ class SteadyStack:
         """fn(rows) over the distinct rows of Q not computed before, spread back to every row:
         identical positions give identical results (null spaces, pseudo-inverses, Φ_q), so
         each is computed once per distinct q and kept (the last KEEP of them)."""
-        if (Q == Q[:1]).all():  # one position for all (a straight run)
-            keys, first, inv = None, np.zeros(1, int), np.zeros(Q.shape[0], int)
-            keys_u = [Q[0].tobytes()]
-        elif Q.shape[0] > 4:
-            _, first, inv = np.unique(Q, axis=0, return_index=True, return_inverse=True)
-            keys_u = [Q[i].tobytes() for i in first]
-            inv = inv.ravel()
+        if (Q == Q[:1]).all():  # one position for all (a straight run, a batch of one)
+            first, inv = np.zeros(1, int), np.zeros(Q.shape[0], int)
         else:
-            keys = [row.tobytes() for row in Q]
-            keys_u, inv = [], []
-            for k in keys:
-                if k not in keys_u:
-                    keys_u.append(k)
-                inv.append(keys_u.index(k))
-            first = np.array([keys.index(k) for k in keys_u])
-            inv = np.asarray(inv)
+            _, first, inv = np.unique(Q, axis=0, return_index=True, return_inverse=True)
+            inv = inv.ravel()
+        keys_u = [Q[i].tobytes() for i in first]
         memo = self._memo.setdefault(name, {})
         missing = [j for j, k in enumerate(keys_u) if k not in memo]
         if missing:
@@ -284,8 +274,8 @@ class SteadyStack:
         """(F_q, F_p) (len(rows), n, n) of the terms ``t`` at ``rows``: the model's forces and
         the wheels' blocks."""
         B, n = len(rows), self.n
-        Fq = np.zeros((B, n, n)) if t["Fq"] is None else t["Fq"][rows].copy()
-        Fp = np.zeros((B, n, n)) if t["Fp"] is None else t["Fp"][rows].copy()
+        Fq = np.zeros((B, n, n)) if t["Fq"] is None else t["Fq"][rows]  # (copies: fancy index)
+        Fp = np.zeros((B, n, n)) if t["Fp"] is None else t["Fp"][rows]
         for w, (dq, dqd) in zip(self.wheels, t["blocks"], strict=True):
             ix = np.ix_(w.idx, w.idx)
             Fq[:, ix[0], ix[1]] += dq[rows]
@@ -319,13 +309,14 @@ class SteadyStack:
         iterations), the linearization (E, A, N, T, S, dof, k), the declared directions
         (``cyclic``) and the pencil's solution (``solution``: s, vectors, left vectors, η, κ,
         norms, E₂, A₂) for :func:`~mbseig.studies.steady_modes.analyze_steady`."""
-        self._naive, self._full = bool(naive), bool(full)
+        from ..errors import MbseigError
+
         out = [None] * len(motions)
         fields = []
         for b, mo in enumerate(motions):
             try:
                 fields.append(self._field(mo))
-            except ValueError as exc:  # (a direction along gravity: the one-point path says)
+            except MbseigError as exc:  # (a direction along gravity: the one-point path says)
                 fields.append(None)
                 out[b] = str(exc)
         idx = [b for b, f in enumerate(fields) if f is not None]
@@ -344,14 +335,15 @@ class SteadyStack:
         unit = np.stack([f[0] for f in fld])
         L = r[:, None, None] * unit if r.any() else None  # straight running: L = 0 exactly
         ell = v[:, None] * np.stack([f[1] for f in fld])
-        res = self._solve(L, ell, unit, r, v, fld)
+        res = self._solve(L, ell, unit, r, v, fld, naive=bool(naive), full=bool(full))
         for b, item in zip(idx, res, strict=True):
             out[b] = item
         return out
 
     def _state(self, L, ell):
         """The steady states (steady_state, batched): (Q, SPIN, LAM, MU, terms at them, the
-        reason per point where the batch gives none)."""
+        reason per point where the batch gives none, the last residual and the iterations of
+        each converged point)."""
         n, nw, mh = self.n, self.nw, self.mh
         Bn = ell.shape[0]
         why = [""] * Bn
@@ -375,7 +367,7 @@ class SteadyStack:
         LAM, MU = lm[:, :mh], lm[:, mh:]
         sizes = np.cumsum([0, n, nw, mh, 2 * nw])
         kept = None
-        self._residual, self._iterations = np.zeros(Bn), np.zeros(Bn, int)
+        resid, its = np.zeros(Bn), np.zeros(Bn, int)
         todo = ~bad
         for b in np.flatnonzero(bad):
             why[b] = "the constraints do not let the system move this way"
@@ -399,7 +391,7 @@ class SteadyStack:
                 _mv(A, qd) + SPIN[a] @ self.Bw.T], axis=1)
             res = np.abs(F).max(axis=1, initial=0.0)
             conv = res <= TOL
-            self._residual[a[conv]], self._iterations[a[conv]] = res[conv], it
+            resid[a[conv]], its[a[conv]] = res[conv], it
             if it == 0 and conv.all() and a.size == Bn:
                 kept = t  # every point steady as started: its terms are those at the start
             else:
@@ -434,13 +426,13 @@ class SteadyStack:
             why[b] = "the steady state did not converge in the batch"
         if kept is None:
             kept = _empty_like(t, Bn)
-        return Q, SPIN, LAM, MU, kept, why
+        return Q, SPIN, LAM, MU, kept, why, resid, its
 
-    def _solve(self, L, ell, unit, r, v, fields):
+    def _solve(self, L, ell, unit, r, v, fields, *, naive, full):
         n, nw = self.n, self.nw
         Bn = ell.shape[0]
         out = [None] * Bn
-        Q, SPIN, LAM, MU, t, why = self._state(L, ell)
+        Q, SPIN, LAM, MU, t, why, resid, its = self._state(L, ell)
         live = np.array([not w for w in why])
         for b in np.flatnonzero(~live):
             out[b] = why[b]
@@ -463,7 +455,7 @@ class SteadyStack:
         Ba, d = a.size, N.shape[2]
         Nt = np.swapaxes(N, 1, 2)
         A, At = t["A"][a], t["At"][a]
-        if self._naive:  # (the velocity rows' position derivative dropped; A L stays)
+        if naive:  # (the velocity rows' position derivative dropped; A L stays)
             At = np.zeros_like(At)
         if l_ is None and t["Fq"] is None:  # the wheels' blocks and the rows' curvature alone:
             NqN = -self.stack.projected_hessian(q, lam, N)  # projected element by element
@@ -571,11 +563,11 @@ class SteadyStack:
         if kc:
             Yk = Y[g][:, :, keep]
             sv = np.linalg.svd(Yk, compute_uv=False)
-            full = (sv > 1e-9 * np.abs(Yk).max(axis=(1, 2))[:, None]).sum(axis=1) == kc
+            independent = (sv > 1e-9 * np.abs(Yk).max(axis=(1, 2))[:, None]).sum(axis=1) == kc
             Qb = np.linalg.qr(Yk)[0]
             EQ, AQ = E[g] @ Qb, Am[g] @ Qb
             Jb = _pinv(EQ) @ AQ
-            fail = ~full | ~(_norm(AQ - EQ @ Jb) / nA[g] <= INVARIANT_TOL)
+            fail = ~independent | ~(_norm(AQ - EQ @ Jb) / nA[g] <= INVARIANT_TOL)
             for j in g[fail]:
                 out[a[j]] = "the usable rigid-body candidates are not invariant together"
             g, basis = g[~fail], Qb[~fail]
@@ -619,11 +611,11 @@ class SteadyStack:
             out[a[j]] = SimpleNamespace(eigenvalues=sol["s"][jj], modes=tuple(rows),
                                         verdict=verdict_of(rows), n_rigid=len(names),
                                         contacts=contacts, cyclic=cyc)
-            if self._full:
+            if full:
                 out[a[j]].__dict__.update(
                     q=q[j].copy(), qd=qd[j].copy(), spin=spin[j].copy(), lam=lam[j].copy(),
-                    mu=mu[j].copy(), residual=float(self._residual[a[j]]),
-                    iterations=int(self._iterations[a[j]]), E=E[j].copy(), A=Am[j].copy(),
+                    mu=mu[j].copy(), residual=float(resid[a[j]]),
+                    iterations=int(its[a[j]]), E=E[j].copy(), A=Am[j].copy(),
                     N=np.array(N[j]), T=np.array(T[j]), S=S[j].copy(), dof=d, k=k,
                     solution={key: sol[key][jj] for key in
                               ("s", "eta", "kappa", "vectors", "left", "norms", "cond")},
