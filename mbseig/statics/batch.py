@@ -74,13 +74,58 @@ def singular(S):
     return bool(np.any(sv[:, -1] <= SINGULAR * sv[:, 0]))
 
 
-def _steps(S, R, weights, min_norm):
+def _null_border(Sw):
+    """(Z, Y): orthonormal right and left null bases of the first matrix of Sw (its singular
+    vectors at singular values ≤ SINGULAR·σ_max), or None where it has none."""
+    U, s, Vt = np.linalg.svd(Sw[0])
+    k = int(np.sum(s <= SINGULAR * s[0])) if s[0] > 0 else 0
+    if not k or k == s.size:
+        return None
+    return Vt[-k:].T, U[:, -k:]
+
+
+def _bordered(Sw, R, border):
+    """The minimum-norm least-squares solutions z = Sw⁺R of the points whose matrices have the
+    null spaces ``border`` = (Z, Y) (the first point's, :func:`_null_border`), NaN rows for the
+    others.  A point qualifies when ‖Sw Z‖_F and ‖Yᵀ Sw‖_F are at most SINGULAR·‖Sw‖_F/√N: then
+    ‖Sw Z‖₂ ≤ SINGULAR·‖Sw‖₂, so Z spans singular directions that the pseudo-inverse's cut-off
+    drops.  The bordered system [[Sw, Y], [Zᵀ, 0]] [z; μ] = [R; 0] then gives μ = YᵀR and
+    Sw z = R − YYᵀR with Zᵀz = 0: the projection of R on the range of Sw, solved orthogonally to
+    the null space, which is Sw⁺R, by one LU solve instead of an SVD."""
+    Z, Y = border
+    B, N, _ = Sw.shape
+    k = Z.shape[1]
+    lim = SINGULAR * np.sqrt((Sw * Sw).sum(axis=(1, 2)) / N)
+    ok = ((np.sqrt(((Sw @ Z) ** 2).sum(axis=(1, 2))) <= lim)
+          & (np.sqrt(((Y.T @ Sw) ** 2).sum(axis=(1, 2))) <= lim))
+    out = np.full((B, N), np.nan)
+    idx = np.flatnonzero(ok)
+    if idx.size:
+        A = np.zeros((idx.size, N + k, N + k))
+        A[:, :N, :N] = Sw[idx]
+        A[:, :N, N:] = Y
+        A[:, N:, :N] = Z.T
+        rhs = np.zeros((idx.size, N + k, 1))
+        rhs[:, :N, 0] = R[idx]
+        try:
+            out[idx] = np.linalg.solve(A, rhs)[:, :N, 0]
+        except np.linalg.LinAlgError:  # one singular bordered matrix: all by the pseudo-inverse
+            pass
+    return out
+
+
+def _steps(S, R, weights, min_norm, border=None):
     """S⁻¹R per point; with ``min_norm`` the minimum-norm solution in the scaled unknowns
     (y = w z: the step is smallest in lengths of the model, as the statics' own Newton takes it
-    on a singular matrix) by the stacked pseudo-inverse."""
+    on a singular matrix): by the bordered solve of :func:`_bordered` where a point's matrix has
+    the null spaces ``border``, else by the stacked pseudo-inverse."""
     if min_norm:
         Sw = S * weights[None, None, :]
-        return np.einsum("bij,bj->bi", np.linalg.pinv(Sw, rcond=SINGULAR), R) * weights
+        z = (np.full(R.shape, np.nan) if border is None else _bordered(Sw, R, border))
+        bad = np.flatnonzero(~np.all(np.isfinite(z), axis=1))
+        if bad.size:
+            z[bad] = np.einsum("bij,bj->bi", np.linalg.pinv(Sw[bad], rcond=SINGULAR), R[bad])
+        return z * weights
     try:
         return np.linalg.solve(S, R[:, :, None])[:, :, 0]
     except np.linalg.LinAlgError:  # one singular S stops the stacked solve: each alone
@@ -107,6 +152,7 @@ def newton_batch(stack, Y0, rows, scales, *, max_iter=CORRECTOR_ITER, tol=CTOL, 
     active = np.ones(B, bool) if active is None else np.array(active, bool)
     done = np.zeros(B, bool)
     weights = np.concatenate([scales.ell, np.ones(Y.shape[1] - stack.n)])  # (λ: unscaled)
+    border = None  # the null spaces of the first Newton matrix (minimum-norm steps)
     with np.errstate(all="ignore"):
         for it in range(1, max_iter + 1):
             idx = np.flatnonzero(active)
@@ -114,7 +160,9 @@ def newton_batch(stack, Y0, rows, scales, *, max_iter=CORRECTOR_ITER, tol=CTOL, 
                 break
             sub = stack if idx.size == B else stack.take(idx)
             R, S = residual(sub, Y[idx], rows)
-            dY = _steps(S, R, weights, min_norm)
+            if min_norm and border is None:
+                border = _null_border(S[:1] * weights[None, None, :]) or False
+            dY = _steps(S, R, weights, min_norm, border or None)
             size = _size(scales, dY[:, :stack.n])
             grow = ~np.isfinite(size) | (size >= last[idx])
             ok = ~grow
