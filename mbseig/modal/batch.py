@@ -16,15 +16,13 @@ clusters alone.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..eigen import EPS
-from ..eigen.batch import problem_solution
 from ..eigen.small_measures import coefficients, ratio
-from .bounds import nullity, numerical_rank
+from .bounds import nullities, numerical_ranks
 
 __all__ = ["BatchBounds", "batch_tolerances", "STABLE", "CRITICAL", "UNSTABLE", "WORDS"]
 
@@ -88,6 +86,49 @@ def _closure(link):
             break
         R = R2
     return np.argmax(R, axis=2)  # the first (smallest) index reachable: the label
+
+
+def _clusters(sol, M, P, Q, cluster, sizes, cov, err, block, eta, holder2, scale, rank_tol):
+    """The cluster rule of :func:`mbseig.modal.bounds.tolerances` for every cluster of two or
+    more members of every covered problem at once, in place on err and block: the rank of the
+    members' vectors (:func:`~mbseig.modal.bounds.numerical_ranks`, clusters of one size
+    together), where it is short the nullity of T at the cluster's mean
+    (:func:`~mbseig.modal.bounds.nullities`), the block count ⌈size / rank⌉, and the bound:
+    the spread plus the first-order one (one block), or plus the Hölder radius of the blocks."""
+    bb, cc = np.nonzero((sizes > 1) & cov[:, None])
+    if not bb.size:
+        return
+    s = sol.eigenvalues
+    label = cluster[bb]  # (G, k): the labels of each cluster's problem
+    member = label == cc[:, None]  # (G, k): the members of each cluster
+    size = sizes[bb, cc]
+    for sz in np.unique(size):
+        g_ = np.flatnonzero(size == sz)
+        b = bb[g_]
+        idx = np.nonzero(member[g_])[1].reshape(g_.size, sz)  # ascending, as flatnonzero
+        sm = np.take_along_axis(s[b], idx, axis=1)
+        mean = sm.sum(axis=1) / sz
+        spread = np.max(np.abs(sm - mean[:, None]), axis=1)
+        X = np.take_along_axis(sol.vectors[b], idx[:, None, :], axis=2)
+        g = numerical_ranks(X, rank_tol)
+        short = np.flatnonzero(g < sz)
+        if short.size:
+            bs = b[short]
+            sc = np.maximum(np.abs(mean[short]), scale[bs])
+            nul = nullities(M[bs], P[bs], Q[bs], mean[short], spread[short], sc)
+            g[short] = np.minimum(np.maximum(g[short], nul), sz)
+        nblock = np.maximum(1, -(-sz // np.maximum(g, 1)))
+        e = np.take_along_axis(err[b], idx, axis=1)
+        h = np.take_along_axis(holder2[b], idx, axis=1)
+        first = np.max(np.where(np.isfinite(e), e, h), axis=1)
+        Sc = np.maximum(np.abs(mean), scale[b])
+        with np.errstate(over="ignore", invalid="ignore"):
+            hol = Sc * np.max(np.take_along_axis(eta[b], idx, axis=1), axis=1) ** (
+                1.0 / nblock)
+        new = spread + np.where(nblock == 1, first, hol)
+        rows = np.repeat(b, sz)
+        err[rows, idx.ravel()] = np.repeat(new, sz)
+        block[rows, idx.ravel()] = np.repeat(nblock, sz)
 
 
 def batch_tolerances(sol, M, P, Q, *, safety=10.0, stability_rtol=1e-12, stability_atol=0.0,
@@ -174,27 +215,8 @@ def batch_tolerances(sol, M, P, Q, *, safety=10.0, stability_rtol=1e-12, stabili
     alone = (member_size == 1) & ~np.isfinite(err)
     err = np.where(alone, holder2, err)
     block = np.where(alone, 2, block)
-    for b in np.flatnonzero((sizes > 1).any(axis=1) & cov):
-        solb = None
-        for c in np.flatnonzero(sizes[b] > 1):
-            members = np.flatnonzero(cluster[b] == c)
-            mean0 = s[b, members].sum() / members.size
-            spread0 = float(np.max(np.abs(s[b, members] - mean0)))
-            g = numerical_rank(sol.vectors[b][:, members], rank_tol)
-            if g < members.size:
-                if solb is None:
-                    solb = problem_solution(sol, b, M[b], P[b], Q[b])
-                sc = max(abs(mean0), float(scale[b, 0]))
-                g = min(max(g, nullity(solb, mean0, spread0, sc)), members.size)
-            nblock = max(1, math.ceil(members.size / max(g, 1)))
-            if nblock == 1:
-                e = err[b, members]
-                first = np.max(np.where(np.isfinite(e), e, holder2[b, members]))
-                err[b, members] = spread0 + first
-            else:
-                Sc = max(abs(mean0), float(scale[b, 0]))
-                err[b, members] = spread0 + Sc * float(np.max(eta[b, members])) ** (1.0 / nblock)
-            block[b, members] = nblock
+    _clusters(sol, M, P, Q, cluster, sizes, cov, err, block, eta, holder2, scale[:, 0],
+              rank_tol)
     tol = np.maximum.reduce([safety * err, stability_rtol * np.abs(sv),
                              np.full((B, k), stability_atol)])
     rigid = np.abs(sv) <= tol

@@ -61,6 +61,60 @@ def _pivoted_r(X):
 _GEQP3 = {}  # (dtype, shape) -> (geqp3, its optimal lwork): one query per cluster shape
 
 
+def numerical_ranks(X, rank_tol):
+    """:func:`numerical_rank` of G blocks of columns at once, X (G, n, k): the same
+    normalization and the same pivoted QR's diagonal, by Gram–Schmidt with column pivoting
+    (each step the remaining column of largest norm; its norm is |R_jj|, the distance of that
+    column from the span of the columns chosen before it, as Householder's ``geqp3`` computes
+    it), with the projection done twice so that the remaining norms keep their absolute
+    accuracy ε; the rank counts |R_jj| > rank_tol·|R_11|."""
+    X = np.asarray(X)
+    G, _, k = X.shape
+    if k == 0 or G == 0:
+        return np.zeros(G, int)
+    A = X / np.maximum(np.linalg.norm(X, axis=1, keepdims=True), np.finfo(float).tiny)
+    rows = np.arange(G)
+    d = np.zeros((G, k))
+    free = np.ones((G, k), bool)
+    for j in range(k):
+        norms = np.where(free, np.linalg.norm(A, axis=1), -1.0)
+        piv = np.argmax(norms, axis=1)
+        r = norms[rows, piv]
+        d[:, j] = r
+        free[rows, piv] = False
+        q = A[rows, :, piv] / np.where(r > 0, r, 1.0)[:, None]
+        A[rows, :, piv] = 0.0
+        for _ in range(2):
+            A = A - q[:, :, None] * np.einsum("gn,gnk->gk", q.conj(), A)[:, None, :]
+    d0 = d[:, 0]
+    return np.where(d0 > 0, np.sum(d > rank_tol * d0[:, None], axis=1), 0)
+
+
+def _nullity_counts(M, P, Q, mu, r, scale):
+    """The nullity rule of :func:`nullity` on G dense problems (G, n, n) at once: means μ (G,)
+    already divided by γ, spreads r (G,) likewise, scale (G,) the √ε term's scale over γ."""
+    a = np.abs(mu)
+    rev = a > 1
+    t = np.where(rev, 1.0 / np.where(rev, mu, 1.0), mu)[:, None, None]
+    T = np.where(rev[:, None, None], M + t * P + (t * t) * Q, (t * t) * M + t * P + Q)
+    Td = np.where(rev[:, None, None], 2 * M + t * P, 2 * t * M + P)
+    rr = np.where(rev, r / np.where(rev, a, 1.0), r)
+    finite = np.all(np.isfinite(T), axis=(1, 2)) & np.all(np.isfinite(Td), axis=(1, 2))
+    T = np.where(finite[:, None, None], T, 0.0)
+    sv = np.linalg.svd(T, compute_uv=False)
+    thr = (10 * (rr + np.sqrt(EPS) * scale / np.maximum(a, 1.0))
+           * np.linalg.norm(np.where(finite[:, None, None], Td, 0.0), axis=(1, 2))
+           + 1e3 * EPS * sv[:, 0])
+    return np.where(finite, np.sum(sv <= thr[:, None], axis=1), 0)
+
+
+def nullities(M, P, Q, mean, spread, scale):
+    """:func:`nullity` of G unscaled (γ = 1) dense real problems M, P, Q (G, n, n) at once, at
+    the clusters' means (G,) with their spreads and scales (G,)."""
+    return _nullity_counts(M, P, Q, np.asarray(mean, complex), np.asarray(spread, float),
+                           np.asarray(scale, float))
+
+
 def nullity(sol, mean, spread, scale, max_order=2000):
     """Independent eigenvectors of a cluster: the nullity of T(s̄) = s̄²M + s̄P + Q at its mean
     (singular values within 10 (spread + √ε·scale)‖T′(s̄)‖ + 10³ε‖T(s̄)‖), for dense problems up
@@ -74,18 +128,8 @@ def nullity(sol, mean, spread, scale, max_order=2000):
         return 0
     M, P, Q = (A.toarray() if sp.issparse(A) else np.asarray(A) for A in (M, P, Q))
     mu = mean.real / gamma + 1j * (mean.imag / gamma)
-    a = abs(mu)
-    if a > 1:  # reversed: T(μ)/μ² and T′(μ)/μ, the same ratios without overflow
-        t = 1.0 / mu
-        T, Td, r = M + t * P + (t * t) * Q, 2 * M + t * P, spread / gamma / a
-    else:
-        T, Td, r = (mu * mu) * M + mu * P + Q, 2 * mu * M + P, spread / gamma
-    if not (np.all(np.isfinite(T)) and np.all(np.isfinite(Td))):
-        return 0
-    sv = np.linalg.svd(T, compute_uv=False)
-    thr = 10 * (r + np.sqrt(EPS) * scale / gamma / max(a, 1.0)) * np.linalg.norm(Td) \
-        + 1e3 * EPS * sv[0]
-    return int(np.sum(sv <= thr))
+    return int(_nullity_counts(M[None], P[None], Q[None], np.array([mu]),
+                               np.array([spread / gamma]), np.array([scale / gamma]))[0])
 
 
 def components(n, pairs):

@@ -26,7 +26,7 @@ import scipy.sparse as sp
 from .result import STABILITY_ORDER, Verdict
 
 __all__ = ["ANGLE_TOL", "verdict", "apply_scope", "scope_text", "reduced_directions",
-           "spectrum_verdict"]
+           "spectrum_verdict", "spectrum_verdicts"]
 
 #: sin of the largest angle between a declared direction and the computed zero eigenspace for
 #: the direction to count as found there: the computed eigenvectors of an exact, isolated s = 0
@@ -163,3 +163,70 @@ def spectrum_verdict(stabilities, rigid, vectors, rigid_directions=None, N=None,
     counted = others + (["critical"] * (Z.shape[1] - len(inside)) if extra else [])
     word = max(counted, key=STABILITY_ORDER.get) if counted else "critical"
     return Verdict(word, "", scope_text(inside, not counted))
+
+
+_WORDS = ("stable", "critical", "unstable")  # STABILITY_ORDER's words by their order
+
+
+def spectrum_verdicts(codes, rigid, vectors, directions, N, rank_tol=1e-6) -> list:
+    """:func:`spectrum_verdict` of B whole spectra at once: ``codes`` (B, k) the stabilities as
+    STABILITY_ORDER's numbers, ``rigid`` (B, k), ``vectors`` (B, n, k), ``directions`` (B,) each
+    a callable giving the declared RigidDirections (asked only where an eigenvalue is
+    rigid-body), N (B,) each the reduced basis (n_full, n).  The spectra with the same number
+    of rigid-body eigenvalues and of declared directions and a dense N of one shape are tested
+    together (stacked SVD and QR: the same rule); any other spectrum takes
+    :func:`spectrum_verdict`."""
+    codes = np.asarray(codes)
+    rigid = np.asarray(rigid, bool)
+    B = codes.shape[0]
+    out = [None] * B
+    worst_other = np.max(np.where(rigid, -1, codes), axis=1, initial=-1)
+    nr = rigid.sum(axis=1)
+    plain = np.flatnonzero(nr == 0)
+    for b in plain.tolist():  # (no eigenvalue at all: "critical", as verdict([]) says)
+        out[b] = Verdict(_WORDS[worst_other[b]] if worst_other[b] >= 0 else "critical", "", "")
+    asks = np.flatnonzero(nr > 0)
+    got = {}
+    for b in asks.tolist():
+        d = directions[b]
+        got[b] = None if d is None else (d() if callable(d) else d)
+    groups = {}
+    for b in asks.tolist():
+        g = got[b]
+        if g is None:
+            out[b] = Verdict(_WORDS[int(np.max(codes[b]))], "", "")
+            continue
+        Nb = N[b]
+        key = (int(nr[b]), len(g.names), g.vectors.shape,
+               Nb.shape if isinstance(Nb, np.ndarray) else None)
+        groups.setdefault(key, []).append(b)
+    for (r, nd, _, nshape), members in groups.items():
+        idx = np.array(members)
+        if len(members) < 2 or nd == 0 or nshape is None:
+            for b in members:
+                out[b] = spectrum_verdict([_WORDS[c] for c in codes[b]], rigid[b], vectors[b],
+                                          got[b], N[b])
+            continue
+        D = np.stack([got[b].vectors for b in members])
+        Nm = np.stack([N[b] for b in members])
+        Dr, _ = np.linalg.qr(np.swapaxes(Nm, 1, 2) @ D)
+        cols = np.nonzero(rigid[idx])[1].reshape(idx.size, r)
+        X = np.take_along_axis(np.stack([vectors[b] for b in members]), cols[:, None, :], axis=2)
+        X = X / np.maximum(np.linalg.norm(X, axis=1, keepdims=True), np.finfo(float).tiny)
+        U, sv, _ = np.linalg.svd(X, full_matrices=False)
+        keep = sv > rank_tol * np.maximum(sv.max(axis=1, initial=0.0),
+                                          np.finfo(float).tiny)[:, None]
+        Z = U * keep[:, None, :]  # the kept columns; the others zero (no part in Z Zᴴ)
+        res = Dr - Z @ (np.swapaxes(Z.conj(), 1, 2) @ Dr)
+        inside = np.linalg.norm(res, axis=1) <= ANGLE_TOL
+        rank = keep.sum(axis=1)
+        for j, b in enumerate(members):
+            names = [nm for nm, ok in zip(got[b].names, inside[j], strict=True) if ok]
+            extra = int(rank[j]) - len(names)
+            worst = int(worst_other[b])
+            if extra > 0:
+                worst = max(worst, STABILITY_ORDER["critical"])
+            counted = worst >= 0
+            out[b] = Verdict(_WORDS[worst] if counted else "critical", "",
+                             scope_text(names, not counted))
+    return out

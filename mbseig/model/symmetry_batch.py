@@ -219,23 +219,35 @@ def rigid_directions_batch(models, Q0, LAM0, Qr, N, stack=None):
         Bm, worst = _part(gen, members, frames, elements, Phi_q, Qr, N, ok)
         if Bm is not None and Bm.shape[2]:
             found.append((part, gen.G @ Bm, Bm, gen, worst))
+    # the found directions of each model, orthonormalized in order (a direction within the span
+    # of those before it left out), for all models at once
+    cols, kept, basis = [], [], np.zeros((B, n, 0))
+    for part, D, coef, gen, r in found:
+        for j in range(D.shape[2]):
+            col = D[:, :, j]
+            v = col - np.einsum("bnk,bk->bn", basis, np.einsum("bnk,bn->bk", basis, col))
+            nv = np.linalg.norm(v, axis=1)
+            keep = nv > 1e-8 * np.linalg.norm(col, axis=1)
+            v = np.where(keep[:, None], v / np.where(keep, nv, 1.0)[:, None], 0.0)
+            basis = np.concatenate([basis, v[:, :, None]], axis=2)
+            cols.append((part, coef[:, :, j], gen, r))
+            kept.append(keep)
+    kept = np.array(kept, bool).reshape(len(cols), B)
+    words = {}  # (part, coefficients, centre) -> the direction in words, once
     out = []
     for b in range(B):
         if not ok[b]:
             out.append(None)
             continue
-        basis = np.zeros((n, 0))
+        use = np.flatnonzero(kept[:, b])
         names, worst = [], 0.0
-        for part, D, coef, gen, r in found:
-            labels = gen.labels(b)
-            for j in range(D.shape[2]):
-                col = D[b, :, j]
-                v = col - basis @ (basis.T @ col)
-                nv = np.linalg.norm(v)
-                if nv <= 1e-8 * np.linalg.norm(col):
-                    continue
-                basis = np.column_stack([basis, v / nv])
-                names.append(f"{part}: {_describe(coef[b, :, j], labels)}")
-                worst = max(worst, float(r[b]))
-        out.append(RigidDirections(tuple(names), basis, worst))
+        for j in use.tolist():
+            part, coef, gen, r = cols[j]
+            key = (part, coef[b].tobytes(), gen.centre[b].tobytes())
+            name = words.get(key)
+            if name is None:
+                name = words[key] = f"{part}: {_describe(coef[b], gen.labels(b))}"
+            names.append(name)
+            worst = max(worst, float(r[b]))
+        out.append(RigidDirections(tuple(names), basis[b][:, use], worst))
     return out

@@ -25,8 +25,8 @@ from ..eigen.batch import solve_batch
 from ..errors import MbseigError
 from ..linear import declare_many
 from ..modal import classify, tolerances
-from ..modal.batch import WORDS, batch_tolerances
-from ..modal.scope import spectrum_verdict
+from ..modal.batch import batch_tolerances
+from ..modal.scope import spectrum_verdict, spectrum_verdicts
 
 __all__ = ["PointSpectrum", "point_spectra", "BATCH_MAX"]
 
@@ -108,15 +108,18 @@ def point_spectra(lins, *, safety=10.0, stability_rtol=1e-12) -> list:
         # the declared directions of every model that will ask (a rigid-body eigenvalue), at once
         declare_many([lins[i].rigid for j, i in enumerate(members)
                       if sol.covered[j] and bb.rigid[j].any()])
+        cov = np.flatnonzero(sol.covered)
+        verdicts = spectrum_verdicts(bb.stability[cov], bb.rigid[cov], sol.vectors[cov],
+                                     [lins[members[j]].rigid for j in cov],
+                                     [lins[members[j]].N for j in cov])
+        verdicts = dict(zip(cov.tolist(), verdicts, strict=True))
         for j, i in enumerate(members):
             lin = lins[i]
             if not sol.covered[j]:
                 out[i] = lin
                 continue
             s, X = sol.eigenvalues[j], sol.vectors[j]
-            words = list(WORDS[bb.stability[j]])
-            v = spectrum_verdict(words, bb.rigid[j], X, lin.rigid, lin.N)
-            out[i] = PointSpectrum(s, _shapes(lin.N, X), bb.tol_re[j], v,
+            out[i] = PointSpectrum(s, _shapes(lin.N, X), bb.tol_re[j], verdicts[j],
                                    f"{sol.solver[j]} (batched)")
     for i, x in enumerate(out):
         if x is lins[i] and not isinstance(x, BaseException):

@@ -1,0 +1,154 @@
+"""The batched forms of one-point rules against those rules, problem by problem.
+
+- :func:`mbseig.modal.bounds.numerical_ranks` (Gram–Schmidt with column pivoting, stacked)
+  against :func:`mbseig.modal.bounds.numerical_rank` (LAPACK ``geqp3``): the same rank on blocks
+  whose pivots |R_jj| lie far from the threshold (a factor 10² and more on either side, where
+  rounding of order ε cannot move a pivot across it).
+- :func:`mbseig.modal.bounds.nullities` against :func:`mbseig.modal.bounds.nullity`: the same
+  singular values of T(s̄) (one LAPACK routine on the same matrix), the same count.
+- :func:`mbseig.statics.batch._bordered` against the pseudo-inverse: both are the minimum-norm
+  least-squares solution S⁺R; for S with the kept singular values in [1, 10³] the two differ by
+  rounding, at most c·cond·ε with cond = 10³ (c = 100 for the two algorithms' constants).
+- :func:`mbseig.modal.scope.spectrum_verdicts` against :func:`mbseig.modal.scope.spectrum_verdict`:
+  equal verdicts, words and scopes.
+"""
+
+import numpy as np
+import pytest
+
+from mbseig.eigen.base import QEPSolution
+from mbseig.modal.bounds import nullities, nullity, numerical_rank, numerical_ranks
+from mbseig.modal.result import STABILITY_ORDER
+from mbseig.modal.scope import spectrum_verdict, spectrum_verdicts
+from mbseig.model.symmetry import RigidDirections
+from mbseig.statics.batch import SINGULAR, _bordered, _null_border
+
+EPS = np.finfo(float).eps
+
+
+def _blocks(rng, G, n, k, deficient):
+    X = rng.standard_normal((G, n, k)) + 1j * rng.standard_normal((G, n, k))
+    if deficient:  # the last column a combination of the others, up to 1e-10 (below 1e-6)
+        c = rng.standard_normal((G, k - 1))
+        X[:, :, -1] = np.einsum("gnk,gk->gn", X[:, :, :-1], c) \
+            + 1e-10 * rng.standard_normal((G, n))
+    return X
+
+
+@pytest.mark.parametrize("k", [2, 3, 4])
+@pytest.mark.parametrize("deficient", [False, True])
+def test_numerical_ranks_equal_the_pivoted_qr_rank(k, deficient):
+    rng = np.random.default_rng(7 + k)
+    X = _blocks(rng, 50, 12, k, deficient)
+    got = numerical_ranks(X, 1e-6)
+    want = np.array([numerical_rank(x, 1e-6) for x in X])
+    assert np.array_equal(got, want)
+    assert np.all(got == (k - 1 if deficient else k))
+
+
+def test_numerical_ranks_of_repeated_vectors():
+    """Eigenvectors of a defective eigenvalue: one vector twice (rank 1), and a zero column."""
+    rng = np.random.default_rng(3)
+    x = rng.standard_normal((20, 8, 1)) + 0j
+    X = np.concatenate([x, x * (1 + 1e-12), np.zeros_like(x)], axis=2)
+    assert np.all(numerical_ranks(X, 1e-6) == 1)
+    assert all(numerical_rank(b, 1e-6) == 1 for b in X)
+
+
+def _solution(M, P, Q):
+    k = 2 * M.shape[0]
+    return QEPSolution(np.zeros(k, complex), np.zeros((M.shape[0], k), complex), np.zeros(k),
+                       np.zeros(k), "test", "test", 0, (1.0, 1.0, 1.0), {}, None,
+                       n_dof=M.shape[0], complex_problem=False, problem=(M, P, Q, 1.0))
+
+
+def test_nullities_equal_nullity():
+    """Problems with a double eigenvalue s₀ of geometric multiplicity 1 (a Jordan block) or 2
+    (two equal diagonal entries), at means near s₀ and far from it."""
+    rng = np.random.default_rng(11)
+    Ms, Ps, Qs, means, spreads, scales, want = [], [], [], [], [], [], []
+    for j in range(24):
+        n = 5
+        s0 = complex(rng.uniform(-1, 1), rng.uniform(0, 3)) * (1 if j % 3 else 40.0)
+        # first-order system x' = A x written as M s² + P s + Q with M = 0 (s I − A)
+        A = np.diag(rng.uniform(-3, 3, n)).astype(complex)
+        A[0, 0] = A[1, 1] = s0.real
+        if j % 2:
+            A[0, 1] = 1.0
+        S = rng.standard_normal((n, n))
+        Ar = (S @ A.real @ np.linalg.inv(S))
+        M, P, Q = np.zeros((n, n)), np.eye(n), -Ar
+        mean = complex(s0.real, 0.0) + (1e-9 if j % 4 == 0 else (0.3 if j % 5 == 0 else 0.0))
+        spread, scale = 1e-9, max(abs(mean), 1.0)
+        Ms.append(M), Ps.append(P), Qs.append(Q), means.append(mean), spreads.append(spread)
+        scales.append(scale)
+        want.append(nullity(_solution(M, P, Q), mean, spread, scale))
+    got = nullities(np.array(Ms), np.array(Ps), np.array(Qs), means, spreads, scales)
+    assert np.array_equal(got, np.array(want))
+    assert set(want) >= {1, 2}
+
+
+def test_bordered_steps_equal_the_pseudo_inverse():
+    rng = np.random.default_rng(5)
+    B, N, k = 30, 9, 2
+    V, _ = np.linalg.qr(rng.standard_normal((N, N)))
+    U, _ = np.linalg.qr(rng.standard_normal((N, N)))
+    S = np.empty((B, N, N))
+    for b in range(B):  # the same null spaces, other kept singular values and vectors
+        W, _ = np.linalg.qr(rng.standard_normal((N - k, N - k)))
+        sv = np.diag(np.logspace(0, 3, N - k) * rng.uniform(1, 2))
+        S[b] = U[:, :N - k] @ W @ sv @ V[:, :N - k].T
+    other = 7  # a point whose null space differs: it must be left to the pseudo-inverse
+    S[other] = S[other] + 1e-3 * np.outer(U[:, -1], V[:, -1])
+    R = rng.standard_normal((B, N))
+    border = _null_border(S)
+    assert border is not None and border[0].shape == (N, k)
+    z = _bordered(S, R, border)
+    want = np.einsum("bij,bj->bi", np.linalg.pinv(S, rcond=SINGULAR), R)
+    mask = np.ones(B, bool)
+    mask[other] = False
+    assert np.all(np.isnan(z[other]))
+    err = np.abs(z[mask] - want[mask]).max(axis=1) / np.abs(want[mask]).max(axis=1)
+    assert err.max() <= 100 * 1e3 * EPS
+
+
+def _rigid(names, vectors):
+    return lambda: RigidDirections(tuple(names), vectors)
+
+
+def test_spectrum_verdicts_equal_spectrum_verdict():
+    """Spectra of 6 reduced coordinates (N: 8 × 6) with 2 declared directions: the rigid-body
+    eigenvectors along both, along one and another direction, or with none rigid; stabilities
+    of every kind."""
+    rng = np.random.default_rng(2)
+    B, nf, n, k = 40, 8, 6, 12
+    N, _ = np.linalg.qr(rng.standard_normal((nf, n)))
+    D, _ = np.linalg.qr(N @ rng.standard_normal((n, 2)))
+    Dr = N.T @ D
+    codes = rng.integers(0, 3, (B, k))
+    rigid = np.zeros((B, k), bool)
+    vectors = rng.standard_normal((B, n, k)) + 1j * rng.standard_normal((B, n, k))
+    for b in range(B):
+        case = b % 4
+        if case == 0:  # both declared directions found at the two rigid eigenvalues
+            rigid[b, [0, 1]] = True
+            vectors[b][:, 0], vectors[b][:, 1] = Dr[:, 0] + Dr[:, 1], Dr[:, 0] - Dr[:, 1]
+        elif case == 1:  # one found, the other rigid vector elsewhere (counted)
+            rigid[b, [2, 5]] = True
+            vectors[b][:, 2] = Dr[:, 1]
+        elif case == 2:  # a defective zero: one vector twice
+            rigid[b, [0, 1, 3]] = True
+            vectors[b][:, 0] = vectors[b][:, 1] = Dr[:, 0]
+            vectors[b][:, 3] = Dr[:, 1]
+            codes[b] = 0
+            codes[b, [0, 1, 3]] = 1
+        codes[b, rigid[b]] = STABILITY_ORDER["critical"]
+    words = ("stable", "critical", "unstable")
+    dirs = [_rigid(["spin a", "spin b"], D) for _ in range(B)]
+    got = spectrum_verdicts(codes, rigid, vectors, dirs, [N] * B)
+    for b in range(B):
+        want = spectrum_verdict([words[c] for c in codes[b]], rigid[b], vectors[b], dirs[b], N)
+        assert (str(got[b]), got[b].scope, got[b].rigid_scope) == \
+            (str(want), want.scope, want.rigid_scope), b
+    scopes = {v.rigid_scope.split(" by")[0] for v in got}
+    assert scopes >= {"", "1 rigid-body mode (s = 0)", "2 rigid-body modes (s = 0)"}
