@@ -111,6 +111,7 @@ def _sweeps(device, monkeypatch, config, axes):
         with monkeypatch.context() as mp:
             mp.setattr(ScalarUpdate, "make", lambda self, p: None)
             mp.setattr(MassUpdate, "make", lambda self, p: None)
+            mp.setattr(MassUpdate, "make_many", lambda self, values: [None] * len(values))
             general = run_sweep(device, axes, config=config, progress=False, jobs=1, lean=False)
     return lean, general
 
@@ -169,6 +170,10 @@ def test_mass_update_equals_build(axis, factors):
     assert upd.reason is None and upd.updates
     for f in factors:
         assert _content(upd.make(f * v0)) == _content(spec.build(None, **{axis: f * v0}))
+    # the models of many values formed together: the same bytes
+    many = upd.make_many([f * v0 for f in factors])
+    for f, m in zip(factors, many, strict=True):
+        assert _content(m) == _content(spec.build(None, **{axis: f * v0}))
 
 
 @pytest.mark.parametrize("axis, where", [("l1", "bodies[1].com[2]"), ("g", "gravity[2]")])
@@ -190,6 +195,9 @@ def test_mass_update_bad_value_gives_the_build_message():
     with pytest.raises(MbseigError) as general:
         spec.build(None, Ja=1.0)
     assert lean.value.one_line() == general.value.one_line()
+    # the models of a line formed together: the batch declines, the value alone raises the same
+    assert make.many([0.003, 0.004, 1.0]) is None
+    assert [m is not None for m in make.many([0.003, 0.004])] == [True, True]
 
 
 def test_pendulum_mass_sweep_lean_equals_general(monkeypatch):

@@ -490,16 +490,14 @@ class MassUpdate(ScalarUpdate):
         return None if same else "masses or loads besides the bodies' own"
 
     def _assemble(self, model, new):
-        """(mass, g, gravity load, {body: block}) from the bodies' parts, ``new`` {body: (mass,
-        inertia)} replacing some, in the build's order (SpatialBuilder._finish): the other
-        bodies' blocks and loads are those of the reference (the same numbers), and the mass
-        matrix is summed by the reference's plan (:func:`mbseig.numerics.csr_from_triplets`'s
+        """(mass, g, gravity load, {body: block}) from the bodies' parts, ``new`` {body: (block,
+        gravity load)} replacing some, in the build's order (SpatialBuilder._finish): the
+        other bodies' blocks and loads are those of the reference (the same numbers), and the
+        mass matrix is summed by the reference's plan (:func:`mbseig.numerics.csr_from_triplets`'s
         order and sums, kept: the same bits)."""
-        from ..model.spatial_body import frame_gravity, spatial_mass_matrix
         from ..numerics import scatter
 
         n = model.n
-        gravity = self.gravity
         kept = self._parts
         blocks, g, own, loads = [], np.zeros(n), {}, {}
         gz_all = np.zeros(n)
@@ -507,13 +505,13 @@ class MassUpdate(ScalarUpdate):
             if not rec.get("spatial"):
                 continue
             frame = rec["frame"]
-            if kept is not None and name not in new:
+            if name in new:
+                block, gz = new[name]
+            elif kept is not None:
                 block, gz = kept[name]
             else:
-                m, inertia = new.get(name, (rec["mass"], rec["inertia"]))
-                com = np.asarray(rec["com"], float) - rec["origin"]
-                block = frame.C.T @ spatial_mass_matrix(m, com, inertia) @ frame.C
-                gz = (frame.C.T @ frame_gravity(m, com, gravity)) if gravity is not None else None
+                block, gz = self._blocks(rec, np.array([rec["mass"]]),
+                                         np.asarray(rec["inertia"], float)[None])[0]
             blocks.append((frame.idx, frame.idx, block))
             own[name], loads[name] = block, gz
             if gz is not None:
@@ -522,45 +520,81 @@ class MassUpdate(ScalarUpdate):
         plan = self._plan
         if plan is None:
             mass = scatter(n, n, blocks)
+            mass.eliminate_zeros()
         else:
             import scipy.sparse as sp
 
             order, first, indices, indptr = plan
             v = np.concatenate([np.asarray(b, float).ravel() for _, _, b in blocks])
-            mass = sp.csr_matrix((np.add.reduceat(v[order], first), indices.copy(),
-                                  indptr.copy()), shape=(n, n))
-        mass.eliminate_zeros()
+            data = np.add.reduceat(v[order], first)
+            mass = sp.csr_matrix((data, indices.copy(), indptr.copy()), shape=(n, n))
+            if not data.all():
+                mass.eliminate_zeros()
         if kept is None:  # (the reference: its parts and the plan of its sum, kept)
             self._parts = {k: (own[k], loads[k]) for k in own}
             self._plan = _csr_plan(n, blocks)
         return mass.tocsr(), g, gz_all, own
 
+    def _blocks(self, rec, masses, inertias):
+        """[(block Cᵀ A C, gravity load Cᵀ C(ξ_G)ᵀ m g)] of one body at B masses (B,) and
+        inertias (B, 3, 3): A by :func:`~mbseig.model.spatial_body.spatial_mass_matrices` (each
+        equal to spatial_mass_matrix's bits), the products one value at a time as the build
+        forms them."""
+        from ..model.spatial_body import point_matrix, spatial_mass_matrices
+
+        frame = rec["frame"]
+        com = np.asarray(rec["com"], float) - rec["origin"]
+        A = spatial_mass_matrices(masses, com, inertias)
+        Ct = frame.C.T
+        Pt = point_matrix(com).T if self.gravity is not None else None
+        grav = None if Pt is None else np.asarray(self.gravity, float)
+        return [(Ct @ A[b] @ frame.C, None if Pt is None else Ct @ (Pt @ (masses[b] * grav)))
+                for b in range(masses.size)]
+
     def make(self, p):
         """The model at axis = p, or None where a full build is needed."""
+        return self.make_many([p])[0]
+
+    def make_many(self, values):
+        """The models at axis = each value (:meth:`make`), or [None, ...] where a full build is
+        needed: the fields read at each value with the reader's checks, the changed bodies'
+        mass blocks for all values at once."""
         if self.reason is not None:
-            return None
+            return [None] * len(values)
         from ..model.spatial_body import inertia_problem
 
-        params = self.parameters(p)
         m0 = self.model0
-        new = {}
+        params = [self.parameters(p) for p in values]
+        read = {}  # body -> ([mass], [inertia]) over the values
         for name, item, label, keys in self.updates:
-            f = Fields(item, label, params)
             rec = m0.bodies[name]
-            mass = f.num("mass", positive=True) if "mass" in keys else rec["mass"]
-            inertia = (square_matrix(f, "inertia", 3, REQUIRED)
-                       if "inertia" in keys else rec["inertia"])
-            problem = inertia_problem(inertia)
-            if problem:
-                raise f.error(problem)
-            new[name] = (mass, inertia)
-        mass, g, gz, own = self._assemble(m0, new)
-        bodies = {k: ({**v, "mass": new[k][0], "inertia": new[k][1]} if k in new else v)
-                  for k, v in m0.bodies.items()}
-        parts = tuple((nm, r, c, own[nm] if nm in new else b) for nm, r, c, b in m0.mass_parts)
-        return dataclasses.replace(m0, mass=mass, g_const=g, bodies=bodies, mass_parts=parts,
-                                   gravity_force=None if m0.gravity_force is None else gz,
-                                   parameters=params)
+            masses, inertias = read.setdefault(name, ([], []))
+            for prm in params:
+                f = Fields(item, label, prm)
+                masses.append(f.num("mass", positive=True) if "mass" in keys else rec["mass"])
+                if "inertia" in keys:  # (an inertia not swept was checked by the build)
+                    inertia = square_matrix(f, "inertia", 3, REQUIRED)
+                    problem = inertia_problem(inertia)
+                    if problem:
+                        raise f.error(problem)
+                else:
+                    inertia = rec["inertia"]
+                inertias.append(inertia)
+        parts = {name: self._blocks(m0.bodies[name], np.array(ms, float),
+                                    np.array(js, float))
+                 for name, (ms, js) in read.items()}
+        out = []
+        for b, prm in enumerate(params):
+            new = {name: parts[name][b] for name in parts}
+            mass, g, gz, own = self._assemble(m0, new)
+            bodies = {k: ({**v, "mass": read[k][0][b], "inertia": read[k][1][b]}
+                          if k in read else v) for k, v in m0.bodies.items()}
+            mparts = tuple((nm, r, c, own[nm] if nm in new else blk)
+                           for nm, r, c, blk in m0.mass_parts)
+            out.append(dataclasses.replace(
+                m0, mass=mass, g_const=g, bodies=bodies, mass_parts=mparts,
+                gravity_force=None if m0.gravity_force is None else gz, parameters=prm))
+        return out
 
 
 def _csr_plan(n, blocks):

@@ -151,7 +151,8 @@ def walk(node, names, text, dialect=SCALAR):
     if isinstance(node, ast.BinOp) and type(node.op) in dialect.binary:
         left = walk(node.left, names, text, dialect)
         right = walk(node.right, names, text, dialect)
-        if isinstance(node.op, ast.Pow) and np.any(np.abs(right) > 1e4):
+        if isinstance(node.op, ast.Pow) and (abs(right) > 1e4 if isinstance(right, float)
+                                             else np.any(np.abs(right) > 1e4)):
             raise fail(f"exponent {np.max(np.abs(right)):g} too large in {text!r}")
         return dialect.binary[type(node.op)](left, right)
     if isinstance(node, ast.UnaryOp) and type(node.op) in _UNARY:

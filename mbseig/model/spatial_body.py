@@ -129,6 +129,23 @@ def spatial_mass_matrix(mass: float, com_local, inertia) -> np.ndarray:
     return (A[:, None, :, None] * _EYE3[None, :, None, :]).reshape(FRAME_SIZE, FRAME_SIZE)
 
 
+def spatial_mass_matrices(masses, com_local, inertias) -> np.ndarray:
+    """:func:`spatial_mass_matrix` at B masses (B,) and inertias (B, 3, 3) of one body (the
+    same centre of mass): (B, 12, 12), each the same operations on the same numbers (the same
+    bits)."""
+    xg = np.asarray(com_local, float)
+    m = np.asarray(masses, float)
+    J = np.asarray(inertias, float)
+    B = m.size
+    A = np.empty((B, 4, 4))
+    A[:, 0, 0] = m
+    A[:, 0, 1:] = A[:, 1:, 0] = m[:, None] * xg
+    second = 0.5 * np.trace(J, axis1=1, axis2=2)[:, None, None] * np.eye(3) - J
+    A[:, 1:, 1:] = second + m[:, None, None] * np.outer(xg, xg)
+    return (A[:, :, None, :, None] * _EYE3[None, None, :, None, :]).reshape(
+        B, FRAME_SIZE, FRAME_SIZE)
+
+
 def frame_gravity(mass: float, com_local, gravity) -> np.ndarray:
     """Generalized weight on the frame coordinates: C(ξ_G)ᵀ m g (12,)."""
     return point_matrix(com_local).T @ (mass * np.asarray(gravity, float))

@@ -60,6 +60,26 @@ class Family:
             self._cache[key] = m
         return m
 
+    def models(self, values):
+        """model(p) of every value; ``make.many(values)``, where the maker has it, forms the
+        models not cached yet together."""
+        keys = [float(p) for p in values]
+        todo = [p for p in dict.fromkeys(keys) if p not in self._cache]
+        many = getattr(self.make, "many", None)
+        got = many(todo) if (many is not None and len(todo) > 1) else None
+        if got is not None:
+            for p, m in zip(todo, got, strict=True):
+                if m is not None:
+                    self._cache[p] = m
+                    self.evaluations += 1
+            fresh = {p: m for p, m in zip(todo, got, strict=True) if m is not None}
+        else:
+            fresh = {}
+        out = [fresh.get(p) or self.model(p) for p in keys]
+        while len(self._cache) > 256:
+            self._cache.pop(next(iter(self._cache)))
+        return out
+
     def lam_full(self, y):
         lam = np.zeros(self.m)
         lam[self.rows] = y[self.n:]

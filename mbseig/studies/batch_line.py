@@ -85,7 +85,7 @@ def batch_line(fam, values, eq0):
     eq0: the first point's equilibrium (solved on its own)."""
     if fam.rows.size != fam.m:
         return None, None, "redundant constraints (self-stress: examined point by point)"
-    models = [fam.model(v) for v in values]
+    models = fam.models(values)
     why = stackable(models)
     if why is not None:
         return None, None, why

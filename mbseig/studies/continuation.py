@@ -141,6 +141,22 @@ def family_maker(spec, config, params, axis, *, lean=True):
                 state["reuse"] = r
         return r
 
+    def make_many(values):
+        """make(p) of every value, the models of a MassUpdate formed together (None where
+        make(p) must form them one at a time)."""
+        lean = state["lean"]
+        if not (lean_models and isinstance(lean, MassUpdate) and lean.reason is None):
+            return None
+        try:
+            got = lean.make_many([float(v) for v in values])
+        except MbseigError:  # a bad value: each alone (the build names the file and element)
+            return None
+        if state["kept"] is not None:
+            for v, m in zip(values, got, strict=True):
+                state["kept"][float(v)] = m
+        return got
+
+    make.many = make_many
     state["build"] = build
     return make, state
 
