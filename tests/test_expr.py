@@ -64,3 +64,29 @@ def test_non_numbers_refused():
     for value in (True, None, [1.0], {"a": 1}):
         with pytest.raises(ExpressionError):
             evaluate(value)
+
+
+@settings(max_examples=60, deadline=None)
+@given(trees(), numbers, numbers)
+def test_compiled_expressions_equal_the_tree_walk(pair, x, y):
+    """An expression evaluated at a second set of values runs compiled (nested closures): the
+    same float as walking its tree (the same operations in the same order), for every name."""
+    from mbseig.casefile.expr import SCALAR, _compiled, parse, walk
+
+    text, _ = pair
+    text = f"{text} + p * q - q ** 2"
+    for names in ({"p": x, "q": y}, {"p": y, "q": x}):
+        want = float(walk(parse(text), names, text, SCALAR))
+        assert float(_compiled(text)(names)) == want
+        assert evaluate(text, names) == want
+
+
+@pytest.mark.parametrize("text, names, message", [
+    ("a + zz", {"a": 1.0}, "unknown name 'zz'"),
+    ("a ** b", {"a": 1.0, "b": 2e4}, "exponent 20000 too large"),
+])
+def test_compiled_expressions_refuse_as_the_walk(text, names, message):
+    """The errors found at evaluation are the walk's, compiled or not (second call)."""
+    for _ in range(2):
+        with pytest.raises(ExpressionError, match=message):
+            evaluate(text, {**names, "a": names["a"] + _})

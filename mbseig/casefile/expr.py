@@ -108,6 +108,7 @@ def _names_in(text: str) -> tuple:
 _VALUES: dict = {}  # (text, values of the names it reads) → its value: a repeated field's
 _MAX_VALUES = 100_000  # members share it (an expression is a pure function of those names)
 _MISSING = object()
+_SEEN: set = set()  # expressions evaluated once: compiled when a second value is asked
 
 
 def _evaluate_string(text: str, names: Mapping[str, float]) -> float:
@@ -122,7 +123,10 @@ def _evaluate_string(text: str, names: Mapping[str, float]) -> float:
     if value is not None:
         return value
     try:
-        value = float(walk(tree, names, text, SCALAR))
+        run = _compiled(text) if text in _SEEN else None  # (compiled at its second value)
+        value = float(run(names) if run is not None else walk(tree, names, text, SCALAR))
+        if run is None and len(_SEEN) < _MAX_VALUES:
+            _SEEN.add(text)
         if key is not None:
             if len(_VALUES) >= _MAX_VALUES:
                 _VALUES.clear()
@@ -132,6 +136,66 @@ def _evaluate_string(text: str, names: Mapping[str, float]) -> float:
         raise
     except (ArithmeticError, ValueError, TypeError) as exc:
         raise ExpressionError(f"cannot evaluate {text!r}: {exc}") from None
+
+
+@functools.lru_cache(maxsize=4096)
+def _compiled(text: str):
+    """The expression as nested closures, names → value: :func:`walk` with the SCALAR dialect
+    without its dispatch per node (the same operations in the same order, the same errors at
+    evaluation: an unknown name, a large exponent), or None where the tree holds a construct
+    :func:`walk` refuses (it then raises its own error)."""
+    try:
+        return _closure(parse(text), text)
+    except _Refused:
+        return None
+
+
+class _Refused(Exception):
+    pass
+
+
+def _closure(node, text):
+    if isinstance(node, ast.Constant):
+        if isinstance(node.value, bool) or not isinstance(node.value, (int, float)):
+            raise _Refused
+        value = float(node.value)
+        return lambda names: value
+    if isinstance(node, ast.Name):
+        key = node.id
+        const = CONSTANTS.get(key)
+
+        def name(names):
+            if key in names:
+                value = names[key]
+                return value if isinstance(value, np.ndarray) else float(value)
+            if const is not None:
+                return const
+            raise ExpressionError(f"unknown name {key!r} in {text!r}")
+        return name
+    if isinstance(node, ast.BinOp) and type(node.op) in _BINARY:
+        left, right, op = _closure(node.left, text), _closure(node.right, text), \
+            _BINARY[type(node.op)]
+        if isinstance(node.op, ast.Pow):
+            def power(names):
+                a, b = left(names), right(names)
+                if abs(b) > 1e4 if isinstance(b, float) else np.any(np.abs(b) > 1e4):
+                    raise ExpressionError(f"exponent {np.max(np.abs(b)):g} too large in {text!r}")
+                return op(a, b)
+            return power
+        return lambda names: op(left(names), right(names))
+    if isinstance(node, ast.UnaryOp) and type(node.op) in _UNARY:
+        operand, op = _closure(node.operand, text), _UNARY[type(node.op)]
+        return lambda names: op(operand(names))
+    if isinstance(node, ast.Call):
+        if not isinstance(node.func, ast.Name) or node.func.id not in FUNCTIONS \
+                or node.keywords:
+            raise _Refused
+        fn, args = FUNCTIONS[node.func.id], [_closure(a, text) for a in node.args]
+        if len(args) == 1:
+            (a0,) = args
+            return lambda names: fn(a0(names))
+        return lambda names: fn(*[a(names) for a in args])
+    raise _Refused
 
 
 def walk(node, names, text, dialect=SCALAR):
