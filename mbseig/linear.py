@@ -266,15 +266,16 @@ class DeclaredRigid:
     (:func:`mbseig.model.symmetry.rigid_directions`), found at the first call and kept: the
     modes stage asks only when a mode is rigid-body."""
 
-    def __init__(self, model, q0, lam0, Q, N):
+    def __init__(self, model, q0, lam0, Q, N, *, stack=None):
         self._args, self._value = (model, q0, lam0, Q, N), None
+        self.stack = stack  # (the ModelStack of a batched line that holds the model, its row)
 
     def __call__(self):
         if self._value is None:
             from .model.symmetry import rigid_directions
 
             self._value = rigid_directions(*self._args)
-            self._args = None
+            self._args = self.stack = None
         return self._value
 
     @property
@@ -296,13 +297,21 @@ def declare_many(rigids):
     args = [r._args for r in todo]
     models = [a[0] for a in args]
     dense = all(isinstance(a[3], np.ndarray) and isinstance(a[4], np.ndarray) for a in args)
-    if not dense or stackable(models) is not None or \
-            len({(a[3].shape, a[4].shape) for a in args}) != 1:
+    if not dense or len({(a[3].shape, a[4].shape) for a in args}) != 1:
+        return
+    stack = None  # the stack of a batched line (its models stacked already), where all hold it
+    if all(r.stack is not None and r.stack[0] is todo[0].stack[0] for r in todo):
+        stack = todo[0].stack[0]
+        rows = [r.stack[1] for r in todo]
+        stack = stack if rows == list(range(stack.B)) else stack.take(rows)
+    elif stackable(models) is not None:
         return
     got = rigid_directions_batch(models, np.stack([np.asarray(a[1], float) for a in args]),
                                  np.stack([np.asarray(a[2], float) for a in args]),
-                                 np.stack([a[3] for a in args]), np.stack([a[4] for a in args]))
+                                 np.stack([a[3] for a in args]), np.stack([a[4] for a in args]),
+                                 stack=stack)
     for r, value in zip(todo, got, strict=True):
+        r.stack = None
         if value is not None:
             r._value, r._args = value, None
 

@@ -147,6 +147,8 @@ def _element_pass(item, G, rots, B):
         rows_b.append(first), rows_m.append(first), sc.append(np.abs(J) @ absG)
     scale = np.concatenate(sc)
     nb, rb = _null(np.vstack(rows_b), scale, B)
+    if nb.shape[1] == B.shape[1]:  # every direction kept: the moving test cannot keep more
+        return nb, rb
     nm, rm = _null(np.vstack(rows_m), scale, B)
     return (nb, rb) if nb.shape[1] >= nm.shape[1] else (nm, rm)
 

@@ -152,6 +152,8 @@ def _element_pass(item, gen, Bm):
         sc.append(np.einsum("bkm,bm->bk", np.abs(J), absG))
     scale = np.concatenate(sc, axis=1)
     nb, rb, kb = _null(np.concatenate(rows_b, axis=1), scale, Bm)
+    if nb.shape[2] == Bm.shape[2]:  # every direction kept: the moving test cannot keep more
+        return nb, rb, kb
     nm, rm, km = _null(np.concatenate(rows_m, axis=1), scale, Bm)
     if nb.shape[2] >= nm.shape[2]:
         return nb, rb, kb

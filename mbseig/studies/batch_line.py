@@ -173,6 +173,6 @@ def batch_line(fam, values, eq0):
             coordinate_names=model.coordinate_names, name=model.name,
             parameters=model.parameters, rank=int(rank), n_constraints=stack.m,
             constraint_stiffness=True, tolerances={"rank_tol": RANK_TOL},
-            rigid=DeclaredRigid(model, eq.q, eq.lam, Kr[b], N[b]),
+            rigid=DeclaredRigid(model, eq.q, eq.lam, Kr[b], N[b], stack=(stack, b)),
             display=Displayed(model, eq.q)))
     return eqs, lins, {"statics": "batch", "newton_iterations": int(its.sum())}
