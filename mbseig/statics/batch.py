@@ -221,20 +221,23 @@ def static_verdicts(Kr, N, *, stiffness_tol=STIFFNESS_TOL, symmetry_tol=SYMMETRY
     if (~sym).any():
         i = np.flatnonzero(~sym)
         mu, V = np.linalg.eig(Kr[i])
-        for j, b in enumerate(i):
-            t = stiffness_tol * norm[b]
-            m_, v_ = mu[j], V[j]
-            real = np.abs(m_.imag) <= t
-            neg = real & (m_.real < -t)
-            index = int(np.sum(neg))
-            zero = int(np.sum(np.abs(m_) <= t))
-            k = int(np.argmin(np.where(real, m_.real, np.inf))) if real.any() else None
-            verdict = ("unstable" if index % 2 == 1 and not zero else
-                       ("undetermined" if index or zero else "stable?"))
-            if verdict == "stable?":
-                verdict = "stable" if np.all(m_.real > t) else "undetermined"
+        t = stiffness_tol * norm[i][:, None]
+        real = np.abs(mu.imag) <= t
+        index = np.sum(real & (mu.real < -t), axis=1)
+        zero = np.sum(np.abs(mu) <= t, axis=1)
+        any_real = real.any(axis=1)
+        k = np.argmin(np.where(real, mu.real, np.inf), axis=1)
+        positive = np.all(mu.real > t, axis=1)
+        vk = np.take_along_axis(V, k[:, None, None], axis=2)[:, :, 0].real
+        direction = np.einsum("bnd,bd->bn", N[i], vk)
+        for j, b in enumerate(i.tolist()):
+            ix, zr = int(index[j]), int(zero[j])
+            verdict = ("unstable" if ix % 2 == 1 and not zr else
+                       "undetermined" if ix or zr else
+                       "stable" if positive[j] else "undetermined")
+            found = bool(any_real[j])
             out[b] = StaticStability(
                 **base, symmetric=False, asymmetry=float(asym[b]),
-                min_eigenvalue=None if k is None else float(m_[k].real), index=index, zero=zero,
-                direction=None if k is None else N[b] @ v_[:, k].real, verdict=verdict)
+                min_eigenvalue=float(mu[j, k[j]].real) if found else None, index=ix, zero=zr,
+                direction=direction[j] if found else None, verdict=verdict)
     return out
