@@ -37,7 +37,9 @@ from mbseig.model.stacked import ModelStack
 from mbseig.studies import steady_sweep as sweep_module
 from mbseig.studies.steady_batch import SteadyStack, _Wheel
 from mbseig.studies.steady_modes import analyze_steady
-from mbseig.studies.steady_sweep import RTOL, _root, steady_sweep
+from mbseig.studies.roots import RTOL
+from mbseig.studies.roots import root_in_rounds as _root
+from mbseig.studies.steady_sweep import steady_sweep
 
 ROOT = Path(__file__).resolve().parents[1]
 CASES = ROOT / "cases"

@@ -3,9 +3,11 @@ reported beside them, and followed as a second parameter changes (docs/design.md
 "Equilibrium": boundaries).
 
 Locating.  Between two grid points where a tracked eigenvalue changes stability, the boundary is
-the root of a smooth test function of the crossing mode, found by Brent's method to ``xtol``
-(each evaluation re-solves the equilibrium from the bracket's own equilibria, so it stays on the
-branch, and picks the eigenvalue matching the track by MAC):
+the root of a smooth test function of the crossing mode, found to ``xtol`` with Brent's
+guarantee in rounds of values solved together (:func:`~mbseig.studies.roots.root_in_rounds`;
+each round's equilibria re-solved from the bracket's own equilibria as a sweep line's grid points
+are, so they stay on the branch, a value the batch declines solved on its own; the eigenvalue
+matching the track picked by MAC):
 
 - a transversal crossing (Hopf: a complex pair; or a damped real root): Re s = 0;
 - a collision on the imaginary axis (undamped flutter onset, where two eigenvalues iω₁, iω₂
@@ -40,6 +42,7 @@ import numpy as np
 from ..errors import MbseigError
 from ..statics import equilibrium
 from .continuation import family_maker, modal_point
+from .roots import ROOT_POINTS, root_in_rounds
 
 __all__ = ["Evaluator", "locate", "follow_boundary", "match"]
 
@@ -116,6 +119,44 @@ class Evaluator:
                 return (1 - w) * q0 + w * q1
         return a[0][1] if p < a[0][0] else a[-1][1]
 
+    def many(self, ps):
+        """The points at the values ``ps`` (as :meth:`__call__` gives them); those not known yet
+        solved together where the batch takes them, as a sweep line's grid points are
+        (:func:`~mbseig.studies.batch_line.batch_line` from the start at the first value, with its
+        checks: every point reached again from its neighbour, no fold or branch point between
+        them, none statically unstable; then the batched modes); any value the batch declines
+        by :meth:`__call__`."""
+        ps = [float(p) for p in ps]
+        todo = sorted({p for p in ps if p not in self.cache})
+        if len(todo) > 1:
+            try:
+                self._together(todo)
+            except (MbseigError, np.linalg.LinAlgError, ValueError, FloatingPointError):
+                pass  # (each value alone, below: its own result or error)
+        return [self(p) for p in ps]
+
+    def _together(self, values):
+        from ..statics.family import Family
+        from .batch_line import batch_line
+        from .continuation import _kept_postures, batched_points
+
+        from ..model import Model
+
+        model0 = self.make(values[0])
+        if not isinstance(model0, Model):  # (a linear case: matrices, no equilibrium branch)
+            return
+        q0 = self.q_start(values[0])
+        fam = Family(self.make, abs(values[-1] - values[0]) or 1.0, model0, q0)
+        eqs, lins, _ = batch_line(fam, values, _Start(q0))
+        if eqs is None:
+            return
+        pts = batched_points(eqs, lins, values, lambda v: {**self.params, self.axis: float(v)},
+                             self.opts, _kept_postures(), ["grid"] * len(values))
+        for p, pt in zip(values, pts, strict=True):
+            if not pt.get("error"):
+                self.cache[p] = pt
+                self.calls += 1
+
     def __call__(self, p):
         p = float(p)
         if p in self.cache:
@@ -133,6 +174,14 @@ class Evaluator:
         return pt
 
 
+class _Start:
+    """The start of a batch of values (:func:`~mbseig.studies.batch_line.batch_line` reads its
+    ``q``): the branch's equilibrium interpolated at the first value."""
+
+    def __init__(self, q):
+        self.q = q
+
+
 def _kind_at(pt, c):
     s, tol = pt["eigenvalues"][c], pt["tol"][c]
     return "collision" if abs(s.real) <= tol else "transversal"
@@ -144,46 +193,55 @@ def locate(ev, lo, hi, ref_lo, ref_hi, xtol, stable_end):
     ev : an :class:`Evaluator`; ref_lo, ref_hi : (s, shape) of the tracked eigenvalue at the
     bracket ends; stable_end : "lo" or "hi".  Returns the boundary fields: value, eigenvalue,
     method, band, tolerance, converged, function_calls."""
-    from scipy.optimize import brentq
-
     p_st, p_un = (lo, hi) if stable_end == "lo" else (hi, lo)
     ref_st, ref_un = (ref_lo, ref_hi) if stable_end == "lo" else (ref_hi, ref_lo)
     pt_st = ev(p_st)
     kind = _kind_at(pt_st, match(pt_st, *ref_st))
     ref = {"s": ref_un[0], "shape": ref_un[1]}
 
-    def f(p):
-        pt = ev(p)
+    def crossing(p, pt):
+        r = (ref_st if abs(p - p_st) < abs(p - p_un) else ref_un)
+        return test_value(kind, pt, match(pt, r[0], r[1]))
+
+    def margin(p, pt):  # (the old δ + tol root, where the test function does not change sign)
         r = (ref_st if abs(p - p_st) < abs(p - p_un) else ref_un)
         c = match(pt, r[0], r[1])
-        return test_value(kind, pt, c)
+        return float(-pt["eigenvalues"][c].real + pt["tol"][c])
 
-    f_st, f_un = f(p_st), f(p_un)
+    value = crossing
+    f_st, f_un = crossing(p_st, pt_st), crossing(p_un, ev(p_un))
     method = ("Re (s₁ − s₂)² = 0 (collision on the imaginary axis)" if kind == "collision"
               else "Re s = 0 (transversal crossing)")
     if f_st * f_un > 0:  # no sign change of the test function: the old δ + tol root
         kind, method = "tolerance", "δ + tol = 0 (the test function did not change sign)"
-
-        def f(p):  # noqa: F811
-            pt = ev(p)
-            r = (ref_st if abs(p - p_st) < abs(p - p_un) else ref_un)
-            c = match(pt, r[0], r[1])
-            return float(-pt["eigenvalues"][c].real + pt["tol"][c])
-
-        f_st, f_un = f(p_st), f(p_un)
+        value = margin
+        f_st, f_un = margin(p_st, pt_st), margin(p_un, ev(p_un))
         if f_st * f_un > 0:
             return None
+
+    def f(p):
+        return value(p, ev(p))
+
+    def fs(ps):  # a round's values together (the batch), each by its own test
+        return [value(p, pt) for p, pt in zip(ps, ev.many(ps), strict=True)]
+
     calls0 = ev.calls
-    root, info = brentq(f, lo, hi, xtol=xtol, rtol=4 * EPS, full_output=True, disp=False)
+    f_lo, f_hi = (f_st, f_un) if stable_end == "lo" else (f_un, f_st)
+    a, b, fa, fb = (lo, hi, f_lo, f_hi) if lo <= hi else (hi, lo, f_hi, f_lo)
+    try:
+        root = root_in_rounds(fs, a, b, fa, fb, xtol, ROOT_POINTS)
+    except ArithmeticError as exc:  # (every round at least halves the bracket: not expected)
+        raise MbseigError(f"boundary search along {ev.axis}: {exc}", element="sweep") from None
     pt = ev(root)
     c = match(pt, ref["s"], ref["shape"])
     s = complex(pt["eigenvalues"][c])
     tol = float(pt["tol"][c])
     # slope of the test function at the root, for the band (a central difference)
     h = max(1e3 * xtol, 1e-7 * abs(hi - lo))
+    right, left = min(root + h, max(lo, hi)), max(root - h, min(lo, hi))
     try:
-        slope = (f(min(root + h, max(lo, hi))) - f(max(root - h, min(lo, hi)))) / (
-            min(root + h, max(lo, hi)) - max(root - h, min(lo, hi)))
+        ev.many([left, right])
+        slope = (f(right) - f(left)) / (right - left)
     except MbseigError:
         slope = math.nan
     if kind == "collision":
@@ -196,7 +254,7 @@ def locate(ev, lo, hi, ref_lo, ref_hi, xtol, stable_end):
         band = [root, root]
     return {"value": float(root), "eigenvalue": [s.real, s.imag], "method": method,
             "test": kind, "band": [float(band[0]), float(band[1])], "tolerance": tol,
-            "converged": bool(info.converged), "function_calls": int(ev.calls - calls0),
+            "converged": True, "function_calls": int(ev.calls - calls0),
             "shape": pt["shapes"][:, c], "q": pt["q"]}
 
 

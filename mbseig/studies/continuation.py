@@ -329,16 +329,8 @@ def _batched_line(batched, values, point_params, opts, postures, state):
     record from the batched equilibria and linear models, the modes of all at once; the branch
     is the grid itself (no fold or branch point lies on it: the batch checked that)."""
     eqs, lins, record = batched
-    spectra = point_spectra(lins, **opts)
-    points = []
     kinds = ["start"] + ["grid"] * (len(values) - 1)  # as the continuation names its points
-    for v, eq, spectrum, kind in zip(values, eqs, spectra, kinds, strict=True):
-        if isinstance(spectrum, MbseigError):
-            points.append(SweepPoint.failed(point_params(v), spectrum.one_line()))
-            continue
-        points.append(point_record(eq.model, eq, point_params(v), spectrum, postures=postures,
-                                   statics="batch", segment=0, branch_kind=kind,
-                                   corrector_iterations=int(eq.iterations)))
+    points = batched_points(eqs, lins, values, point_params, opts, postures, kinds)
     diagram = [{"p": float(v), "kind": kind, "segment": 0,
                 "q": [float(x) for x in eq.q] if eq.q.size <= 500 else None,
                 "angles": _angles(eq.model, eq.q, postures),
@@ -350,6 +342,22 @@ def _batched_line(batched, values, point_params, opts, postures, state):
                      f"{state['held']}" if state["held"] else "resolved at every value")
     return {"points": points, "branch": diagram, "events": [],
             "record": {**record, "model": state["model"], "commands": commands}}
+
+
+def batched_points(eqs, lins, values, point_params, opts, postures, kinds):
+    """The point records of equilibria and linear models solved together
+    (:func:`~mbseig.studies.batch_line.batch_line`), their modes at once
+    (:func:`~mbseig.studies.spectra.point_spectra`); a point whose modes fail gets its error."""
+    spectra = point_spectra(lins, **opts)
+    points = []
+    for v, eq, spectrum, kind in zip(values, eqs, spectra, kinds, strict=True):
+        if isinstance(spectrum, MbseigError):
+            points.append(SweepPoint.failed(point_params(v), spectrum.one_line()))
+            continue
+        points.append(point_record(eq.model, eq, point_params(v), spectrum, postures=postures,
+                                   statics="batch", segment=0, branch_kind=kind,
+                                   corrector_iterations=int(eq.iterations)))
+    return points
 
 
 def _static_verdict(model, q, lam):
