@@ -25,7 +25,7 @@ import numpy as np
 from ..errors import CaseError
 from .affine import Affine
 from .base import Constraint
-from .elements import DistanceConstraint, SpringDamper, relative_angle
+from .elements import DistanceConstraint, SpringDamper, relative_angle, relative_angle_only
 
 __all__ = ["AngleDriver", "check_command"]
 
@@ -60,7 +60,7 @@ class AngleDriver(Constraint):
     affine_field = "dirs"  # idx = dirs.idx
 
     def angle(self, q) -> float:
-        return relative_angle(self.dirs, q, self.sense, self.name)[0]
+        return relative_angle_only(self.dirs, q, self.sense, self.name)
 
     def _derivatives(self, q):
         _, g, H = relative_angle(self.dirs, q, self.sense, self.name)

@@ -216,6 +216,14 @@ def relative_angle(dirs: Affine, q, sense: float, name: str):
     return theta, g, H
 
 
+def relative_angle_only(dirs: Affine, q, sense: float, name: str) -> float:
+    """θ of :func:`relative_angle` alone (the same arithmetic, without g and H)."""
+    ax, ay, bx, by = dirs(q).tolist()
+    if ax * ax + ay * ay == 0.0 or bx * bx + by * by == 0.0:
+        raise EquilibriumError("direction of zero length: angle undefined", element=name)
+    return sense * math.atan2(ax * by - ay * bx, ax * bx + ay * by)
+
+
 @dataclass(frozen=True, eq=False)
 class TorsionalSpringDamper(Force):
     """Torsional spring-damper on the relative angle between two planar directions.
