@@ -97,13 +97,36 @@ def test_value(kind, pt, c):
     return float(s[c].real)
 
 
+_MAKERS: dict = {}  # the last few lines' model makers in this process (key → (case, make))
+_MAKERS_KEPT = 4
+
+
+def _maker(case, config, params, axis):
+    """family_maker(case, config, params, axis)'s make, one per line in a process: the boundary
+    searches of one line (and the curves' evaluators at one value of the second parameter)
+    build the case and resolve its commands once, not once each (make(p) gives the models a
+    build gives, whichever maker forms them)."""
+    try:
+        key = (id(case), config, axis, tuple(sorted((k, float(v)) for k, v in params.items())))
+    except (TypeError, ValueError):  # (a parameter that is not a number: not kept)
+        return family_maker(case, config, params, axis)[0]
+    hit = _MAKERS.get(key)
+    if hit is not None and hit[0] is case:
+        return hit[1]
+    make = family_maker(case, config, params, axis)[0]
+    _MAKERS[key] = (case, make)
+    while len(_MAKERS) > _MAKERS_KEPT:
+        _MAKERS.pop(next(iter(_MAKERS)))
+    return make
+
+
 class Evaluator:
     """Points of one line at any value of the axis, each equilibrium started from the nearest
     known equilibrium of the same branch (linear interpolation between two)."""
 
     def __init__(self, case, config, params, axis, anchors, *, safety=10.0, stability_rtol=1e-12):
         self.case, self.config, self.params, self.axis = case, config, dict(params), axis
-        self.make, _ = family_maker(case, config, self.params, axis)
+        self.make = _maker(case, config, self.params, axis)
         self.anchors = sorted(anchors, key=lambda a: a[0])  # [(p, q), ...] on one branch
         self.opts = {"safety": safety, "stability_rtol": stability_rtol}
         self.calls = 0
@@ -195,6 +218,7 @@ def locate(ev, lo, hi, ref_lo, ref_hi, xtol, stable_end):
     method, band, tolerance, converged, function_calls."""
     p_st, p_un = (lo, hi) if stable_end == "lo" else (hi, lo)
     ref_st, ref_un = (ref_lo, ref_hi) if stable_end == "lo" else (ref_hi, ref_lo)
+    ev.many([p_st, p_un])  # (the bracket's ends together)
     pt_st = ev(p_st)
     kind = _kind_at(pt_st, match(pt_st, *ref_st))
     ref = {"s": ref_un[0], "shape": ref_un[1]}
