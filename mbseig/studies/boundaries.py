@@ -36,6 +36,7 @@ intermediate values of p₂ are inserted where the curve bends (its p₁ moves b
 from __future__ import annotations
 
 import math
+import threading
 
 import numpy as np
 
@@ -97,7 +98,7 @@ def test_value(kind, pt, c):
     return float(s[c].real)
 
 
-_MAKERS: dict = {}  # the last few lines' model makers in this process (key → (case, make))
+_MAKERS: dict = {}  # the last few lines' model makers of each thread (key → (case, make))
 _MAKERS_KEPT = 4
 
 
@@ -107,7 +108,8 @@ def _maker(case, config, params, axis):
     build the case and resolve its commands once, not once each (make(p) gives the models a
     build gives, whichever maker forms them)."""
     try:
-        key = (id(case), config, axis, tuple(sorted((k, float(v)) for k, v in params.items())))
+        key = (threading.get_ident(), id(case), config, axis,  # (a maker is not thread-safe)
+               tuple(sorted((k, float(v)) for k, v in params.items())))
     except (TypeError, ValueError):  # (a parameter that is not a number: not kept)
         return family_maker(case, config, params, axis)[0]
     hit = _MAKERS.get(key)
