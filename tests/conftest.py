@@ -29,11 +29,36 @@ NOT_NUMERIC_MODULES = {
 }
 # single tests in modules that are otherwise numeric (the test's name, parameters left off)
 NOT_NUMERIC_TESTS = {
-    "test_report.py": {"test_report_is_deterministic": "the same report twice, byte for byte"},
+    "test_report.py": {"test_report_is_deterministic": "the same report twice, byte for byte",
+                       "test_report_summary_names_units_provenance": "headings, names, units "
+                       "and provenance of the page (its numbers: tests/test_cases.py)"},
+    # the output's schema and the verdict rule over whatever modes a case lists: no value against
+    # a reference (every case's values: tests/test_cases.py and test_small_modes.py, numeric)
+    "test_cli.py": {"test_modes_json_schema": "the JSON's keys, order and verdict rule",
+                    "test_modes_table_and_linearize": "the table's labels, files written"},
+    "test_report_reading.py": {
+        "test_one_page_style_for_every_motion": "the page's style sheet and layout",
+        "test_bicycle_report_has_figures_and_units": "figures embedded, units named",
+        "test_no_report_names_an_internal_coordinate": "names in the text",
+        "test_no_text_is_clipped": "a figure's text inside its canvas",
+        "test_periodic_multiplier_figure_is_not_clipped": "a figure's text inside its canvas",
+        "test_gif_text_is_legible_and_a_rotor_shows_both_lateral_directions": "legibility and "
+        "what a frame shows"},
+    "test_unbalance.py": {
+        "test_report_rotor_section_from_the_command_line": "the section's headings and names",
+        "test_report_study_names_its_unbalance": "names in the text",
+        "test_unbalance_table_names_stations_as_the_case_does": "names in the table"},
+    "test_flexible3d_commands.py": {"test_beams_are_drawn_as_curves": "the drawing's lines"},
+    "test_animate.py": {"test_report_embeds_one_animation_per_mode": "one animation a mode",
+                        "test_cli_writes_a_looping_gif_of_one_period": "the file's frames, loop"},
     "test_library.py": {"test_unreachable_scheduler_one_line_exit_2": "a refusal"},
-    "test_plots.py": {"test_plots_do_not_switch_the_backend": "matplotlib's backend"},
+    "test_plots.py": {"test_plots_do_not_switch_the_backend": "matplotlib's backend",
+                      "test_pole_map_grid_and_legend_outside": "layout",
+                      "test_decade_scale": "the axis' ticks"},
     "test_bench.py": {"test_bench_startup_rows_follow_the_method": "how the start-up rows are "
-                      "measured (pairs, the floor, the environment), no time"},
+                      "measured (pairs, the floor, the environment), no time",
+                      "test_bench_quick_writes_report": "the report's rows and files, no time",
+                      "test_bench_quick_large_section": "the section's rows, no time"},
 }
 
 
