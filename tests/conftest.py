@@ -49,6 +49,10 @@ NOT_NUMERIC_TESTS = {
         "test_report_study_names_its_unbalance": "names in the text",
         "test_unbalance_table_names_stations_as_the_case_does": "names in the table"},
     "test_flexible3d_commands.py": {"test_beams_are_drawn_as_curves": "the drawing's lines"},
+    "test_spatial_cli.py": {"test_report_on_every_spatial_case": "the report is written (the "
+                            "verdict it prints: test_modes_and_check_on_every_spatial_case)"},
+    "test_guide.py": {"test_every_block_of_the_guide_runs": "the guide's commands exit 0 and "
+                      "write their files"},
     "test_animate.py": {"test_report_embeds_one_animation_per_mode": "one animation a mode",
                         "test_cli_writes_a_looping_gif_of_one_period": "the file's frames, loop"},
     "test_library.py": {"test_unreachable_scheduler_one_line_exit_2": "a refusal"},
