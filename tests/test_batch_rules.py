@@ -11,6 +11,7 @@
   rounding, at most c·cond·ε with cond = 10³ (c = 100 for the two algorithms' constants).
 - :func:`mbseig.modal.scope.spectrum_verdicts` against :func:`mbseig.modal.scope.spectrum_verdict`:
   equal verdicts, words and scopes.
+- the zero-pair floor, one-point and batched, where it overflows: it decides nothing.
 """
 
 import numpy as np
@@ -152,3 +153,35 @@ def test_spectrum_verdicts_equal_spectrum_verdict():
             (str(want), want.scope, want.rigid_scope), b
     scopes = {v.rigid_scope.split(" by")[0] for v in got}
     assert scopes >= {"", "1 rigid-body mode (s = 0)", "2 rigid-body modes (s = 0)"}
+
+
+def test_zero_pair_floor_beyond_the_range_of_doubles_decides_nothing():
+    """A mode near s = 0 whose floor h = √(η‖Q‖‖x‖²/|xᴴMx|) overflows (a modal mass of 1e-300
+    against ‖Q‖ = 1e300: a fuzzed matrix file) is left as it was: no overflow warning, no
+    infinite tolerance, not made rigid-body (the one-point rule and the batched one)."""
+    import warnings
+
+    from mbseig.eigen.batch import BatchSolution
+    from mbseig.modal.batch import batch_tolerances
+    from mbseig.modal.bounds import Bounds, zero_pair_floor
+
+    s = np.array([1e-9 + 0j, 2.0j])
+    X = np.eye(2, dtype=complex)
+    M, P, Q = np.diag([1e-300, 1.0]), np.zeros((2, 2)), np.diag([1e300, 1.0])
+    sol = QEPSolution(s, X, np.full(2, 1e-16), np.ones(2), "test", "test", 0,
+                      (1.0, 0.0, 1e300), {}, None, n_dof=2, complex_problem=False,
+                      problem=(M, P, Q, 1.0))
+    b = Bounds(np.full(2, 1e-12), np.full(2, 1e-11), np.full(2, 1e-11), np.zeros(2, bool),
+               np.arange(2), np.ones(2, int), np.ones(2, int))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        got = zero_pair_floor(b, sol, M, P, 10.0)
+    assert not got.rigid[0] and np.isfinite(got.tol).all()
+    batch = BatchSolution(eigenvalues=s[None], vectors=X[None], left=X[None],
+                          backward_error=np.full((1, 2), 1e-16), condition=np.ones((1, 2)),
+                          norms=np.array([[1.0, 0.0, 1e300]]), covered=np.array([True]),
+                          solver=np.array(["test"]), reason=np.array([""]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        bb = batch_tolerances(batch, M[None], P[None], Q[None])
+    assert not bb.rigid[0, 0] and np.isfinite(bb.tol[0]).all()

@@ -232,7 +232,9 @@ def _listing_problems(out, partial):
         probs.append(f"listing accounts for {count}..{count + rigid} of {target} finite "
                      f"eigenvalues ({dof} DOF, {out.get('n_infinite')} infinite)")
     order = {"stable": 0, "critical": 1, "unstable": 2}
-    worst = max((m["stability"] for m in modes_), key=order.get, default="stable")
+    # DESIGN §6: the modes that are rigid-body by construction are not counted
+    worst = max((m["stability"] for m in modes_ if not m.get("rigid_body")), key=order.get,
+                default="critical")
     if out["verdict"] != worst:
         probs.append(f"verdict {out['verdict']} but the worst mode is {worst}")
     return probs

@@ -350,7 +350,9 @@ def zero_pair_floor(b, sol, M, P, safety, nQ=None, gamma=1.0):
         mx, px, xx = forms[j]
         if mx == 0 or px > abs(s[k]) * mx:
             continue
-        h = math.sqrt(eta[k] * nQ * xx / mx)
+        h = math.sqrt(float(eta[k]) * float(nQ) * float(xx) / float(mx))
+        if not math.isfinite(h):  # (a floor beyond the range of doubles decides nothing)
+            continue
         s_k, h = s[k] * gamma, h * gamma
         if abs(s_k) <= safety * h:
             err[k] = max(err[k], h)

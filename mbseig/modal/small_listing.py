@@ -60,7 +60,9 @@ def floor_zero_pairs(b, sol, M, P, safety):
         px = 0.0 if P is None else abs(np.vdot(x, P @ x))
         if mx == 0 or px > abs(s[k]) * mx:
             continue
-        h = math.sqrt(eta[k] * nQ * float(np.vdot(x, x).real) / mx)
+        h = math.sqrt(float(eta[k]) * float(nQ) * float(np.vdot(x, x).real) / float(mx))
+        if not math.isfinite(h):  # (a floor beyond the range of doubles decides nothing)
+            continue
         if abs(s[k]) <= safety * h:
             err[k] = max(err[k], h)
             tol[k] = max(tol[k], safety * h)
