@@ -13,6 +13,8 @@ from mbseig.cli import main
 pytestmark = pytest.mark.filterwarnings("error")
 
 CASE_FILES = sorted(CASES.glob("*.toml"))
+FORMAT_CASES = {"four_bar", "hand_device", "spatial_double_pendulum", "cantilever_3d_oblique",
+                "whipple_bicycle", "pendulum_shaken_pivot", "box_on_contacts_liftoff"}
 INTERNAL = re.compile(r"\.[uvw]\.[xyz]\b|\.n\d+\b")  # an internal unit vector or node index
 MODE_KEYS = {"index", "eigenvalue", "delta", "omega_n", "omega_d", "freq_hz", "zeta", "stability",
              "kind", "backward_error"}
@@ -56,7 +58,10 @@ def test_modes_table_and_linearize(path, capsys, tmp_path):
     text = capsys.readouterr().out
     assert "verdict:" in text
     assert not INTERNAL.search(text), INTERNAL.search(text)
-    for suffix in (".npz", ".mat", ".json"):
+    # the three file formats on one case of each kind of model (the writers see only the
+    # matrices: dense or sparse, planar or spatial, at rest, steady or periodic)
+    suffixes = (".npz", ".mat", ".json") if path.stem in FORMAT_CASES else ()
+    for suffix in suffixes:
         out = tmp_path / f"lin{suffix}"
         assert main(["linearize", str(path), "--out", str(out)]) == 0
         assert out.stat().st_size > 0
