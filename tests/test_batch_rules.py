@@ -101,14 +101,18 @@ def test_bordered_steps_equal_the_pseudo_inverse():
         S[b] = U[:, :N - k] @ W @ sv @ V[:, :N - k].T
     other = 7  # a point whose null space differs: it must be left to the pseudo-inverse
     S[other] = S[other] + 1e-3 * np.outer(U[:, -1], V[:, -1])
+    cut = 11  # a point with one more singular value below the cut: the pseudo-inverse too
+    w, sv_, vt = np.linalg.svd(S[cut])
+    sv_[N - k - 1] = 1e-3 * SINGULAR * sv_[0]
+    S[cut] = (w * sv_) @ vt
     R = rng.standard_normal((B, N))
     border = _null_border(S)
     assert border is not None and border[0].shape == (N, k)
     z = _bordered(S, R, border)
     want = np.einsum("bij,bj->bi", np.linalg.pinv(S, rcond=SINGULAR), R)
     mask = np.ones(B, bool)
-    mask[other] = False
-    assert np.all(np.isnan(z[other]))
+    mask[[other, cut]] = False
+    assert np.all(np.isnan(z[other])) and np.all(np.isnan(z[cut]))
     err = np.abs(z[mask] - want[mask]).max(axis=1) / np.abs(want[mask]).max(axis=1)
     assert err.max() <= 100 * 1e3 * EPS
 

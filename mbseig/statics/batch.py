@@ -91,7 +91,10 @@ def _bordered(Sw, R, border):
     ‖Sw Z‖₂ ≤ SINGULAR·‖Sw‖₂, so Z spans singular directions that the pseudo-inverse's cut-off
     drops.  The bordered system [[Sw, Y], [Zᵀ, 0]] [z; μ] = [R; 0] then gives μ = YᵀR and
     Sw z = R − YYᵀR with Zᵀz = 0: the projection of R on the range of Sw, solved orthogonally to
-    the null space, which is Sw⁺R, by one LU solve instead of an SVD."""
+    the null space, which is Sw⁺R (one LU solve instead of an SVD) where the other singular
+    values lie above the cut-off.  A solution with ‖z‖·SINGULAR·‖Sw‖_F/√N ≥ ‖R‖ may hold a
+    singular value of its own at the cut (‖z‖ ≤ ‖R‖/σ of the kept ones): that point gets NaN
+    too, and so the pseudo-inverse."""
     Z, Y = border
     B, N, _ = Sw.shape
     k = Z.shape[1]
@@ -108,9 +111,12 @@ def _bordered(Sw, R, border):
         rhs = np.zeros((idx.size, N + k, 1))
         rhs[:, :N, 0] = R[idx]
         try:
-            out[idx] = np.linalg.solve(A, rhs)[:, :N, 0]
+            z = np.linalg.solve(A, rhs)[:, :N, 0]
         except np.linalg.LinAlgError:  # one singular bordered matrix: all by the pseudo-inverse
-            pass
+            return out
+        small = (np.linalg.norm(z, axis=1) * lim[idx] < np.linalg.norm(R[idx], axis=1)) \
+            | ~np.any(R[idx], axis=1)
+        out[idx[small]] = z[small]
     return out
 
 
