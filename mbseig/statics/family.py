@@ -75,7 +75,7 @@ class Family:
             fresh = {p: m for p, m in zip(todo, got, strict=True) if m is not None}
         else:
             fresh = {}
-        out = [fresh.get(p) or self.model(p) for p in keys]
+        out = [fresh[p] if p in fresh else self.model(p) for p in keys]
         while len(self._cache) > 256:
             self._cache.pop(next(iter(self._cache)))
         return out

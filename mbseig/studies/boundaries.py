@@ -161,11 +161,10 @@ class Evaluator:
         return [self(p) for p in ps]
 
     def _together(self, values):
+        from ..model import Model
         from ..statics.family import Family
         from .batch_line import batch_line
         from .continuation import _kept_postures, batched_points
-
-        from ..model import Model
 
         model0 = self.make(values[0])
         if not isinstance(model0, Model):  # (a linear case: matrices, no equilibrium branch)
