@@ -189,3 +189,16 @@ def test_zero_pair_floor_beyond_the_range_of_doubles_decides_nothing():
         warnings.simplefilter("error")
         bb = batch_tolerances(batch, M[None], P[None], Q[None])
     assert not bb.rigid[0, 0] and np.isfinite(bb.tol[0]).all()
+
+
+def test_nullities_at_a_huge_mean_form_only_the_reversed_problem():
+    """A cluster's mean of 1e200: T is formed reversed, T(μ)/μ² = M + P/μ + Q/μ² (finite); the
+    unreversed μ²M would overflow. No warning, and the count equals nullity's (the same rule)."""
+    import warnings
+
+    M, P, Q = np.eye(2)[None], np.zeros((1, 2, 2)), np.diag([1.0, 2.0])[None]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        got = nullities(M, P, Q, [1e200 + 0j], [0.0], [1e200])
+        want = nullity(_solution(M[0], P[0], Q[0]), 1e200 + 0j, 0.0, 1e200)
+    assert got[0] == want

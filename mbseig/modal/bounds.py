@@ -92,20 +92,34 @@ def numerical_ranks(X, rank_tol):
 
 def _nullity_counts(M, P, Q, mu, r, scale):
     """The nullity rule of :func:`nullity` on G dense problems (G, n, n) at once: means μ (G,)
-    already divided by γ, spreads r (G,) likewise, scale (G,) the √ε term's scale over γ."""
+    already divided by γ, spreads r (G,) likewise, scale (G,) the √ε term's scale over γ.  Where
+    |μ| > 1 the reversed T(μ)/μ² and T′(μ)/μ (the same ratios without overflow), each problem
+    formed by its own branch only."""
     a = np.abs(mu)
     rev = a > 1
-    t = np.where(rev, 1.0 / np.where(rev, mu, 1.0), mu)[:, None, None]
-    T = np.where(rev[:, None, None], M + t * P + (t * t) * Q, (t * t) * M + t * P + Q)
-    Td = np.where(rev[:, None, None], 2 * M + t * P, 2 * t * M + P)
-    rr = np.where(rev, r / np.where(rev, a, 1.0), r)
+    G = mu.shape[0]
+    T = np.empty(M.shape, complex)
+    Td = np.empty(M.shape, complex)
+    rr = np.array(r, float)
+    i, j = np.flatnonzero(rev), np.flatnonzero(~rev)
+    if i.size:  # reversed
+        t = (1.0 / mu[i])[:, None, None]
+        T[i] = M[i] + t * P[i] + (t * t) * Q[i]
+        Td[i] = 2 * M[i] + t * P[i]
+        rr[i] = rr[i] / a[i]
+    if j.size:
+        t = mu[j][:, None, None]
+        T[j] = (t * t) * M[j] + t * P[j] + Q[j]
+        Td[j] = 2 * t * M[j] + P[j]
     finite = np.all(np.isfinite(T), axis=(1, 2)) & np.all(np.isfinite(Td), axis=(1, 2))
-    T = np.where(finite[:, None, None], T, 0.0)
-    sv = np.linalg.svd(T, compute_uv=False)
-    thr = (10 * (rr + np.sqrt(EPS) * scale / np.maximum(a, 1.0))
-           * np.linalg.norm(np.where(finite[:, None, None], Td, 0.0), axis=(1, 2))
-           + 1e3 * EPS * sv[:, 0])
-    return np.where(finite, np.sum(sv <= thr[:, None], axis=1), 0)
+    out = np.zeros(G, int)
+    k = np.flatnonzero(finite)
+    if k.size:
+        sv = np.linalg.svd(T[k], compute_uv=False)
+        thr = (10 * (rr[k] + np.sqrt(EPS) * scale[k] / np.maximum(a[k], 1.0))
+               * np.linalg.norm(Td[k], axis=(1, 2)) + 1e3 * EPS * sv[:, 0])
+        out[k] = np.sum(sv <= thr[:, None], axis=1)
+    return out
 
 
 def nullities(M, P, Q, mean, spread, scale):
