@@ -9,8 +9,8 @@
 - :func:`mbseig.statics.batch._bordered` against the pseudo-inverse: both are the minimum-norm
   least-squares solution S⁺R; for S with the kept singular values in [1, 10³] the two differ by
   rounding, at most c·cond·ε with cond = 10³ (c = 100 for the two algorithms' constants).
-- :func:`mbseig.modal.scope.spectrum_verdicts` against :func:`mbseig.modal.scope.spectrum_verdict`:
-  equal verdicts, words and scopes.
+- :func:`mbseig.modal.scope.spectrum_verdicts` on spectra built so that the verdict and the
+  directions left out are known (DESIGN §6's rule), together, one at a time and with sparse N.
 - the zero-pair floor, one-point and batched, where it overflows: it decides nothing.
 """
 
@@ -121,10 +121,15 @@ def _rigid(names, vectors):
     return lambda: RigidDirections(tuple(names), vectors)
 
 
-def test_spectrum_verdicts_equal_spectrum_verdict():
-    """Spectra of 6 reduced coordinates (N: 8 × 6) with 2 declared directions: the rigid-body
-    eigenvectors along both, along one and another direction, or with none rigid; stabilities
-    of every kind."""
+def test_spectrum_verdicts_by_construction():
+    """Spectra of 6 reduced coordinates (N: 8 × 6) with 2 declared directions, built so that the
+    answer is known (DESIGN §6): both directions found at the two rigid eigenvalues (left out);
+    one found and the other rigid vector elsewhere (one left out, the other counted critical);
+    a defective zero, one vector twice (both found); none rigid (every mode counts). Checked
+    against that, together and one spectrum at a time (spectrum_verdict: a batch of one), and
+    with N sparse (each spectrum's directions reduced on their own)."""
+    import scipy.sparse as sps
+
     rng = np.random.default_rng(2)
     B, nf, n, k = 40, 8, 6, 12
     N, _ = np.linalg.qr(rng.standard_normal((nf, n)))
@@ -133,15 +138,16 @@ def test_spectrum_verdicts_equal_spectrum_verdict():
     codes = rng.integers(0, 3, (B, k))
     rigid = np.zeros((B, k), bool)
     vectors = rng.standard_normal((B, n, k)) + 1j * rng.standard_normal((B, n, k))
+    found = {0: ["spin a", "spin b"], 1: ["spin b"], 2: ["spin a", "spin b"], 3: []}
     for b in range(B):
         case = b % 4
-        if case == 0:  # both declared directions found at the two rigid eigenvalues
+        if case == 0:
             rigid[b, [0, 1]] = True
             vectors[b][:, 0], vectors[b][:, 1] = Dr[:, 0] + Dr[:, 1], Dr[:, 0] - Dr[:, 1]
-        elif case == 1:  # one found, the other rigid vector elsewhere (counted)
+        elif case == 1:
             rigid[b, [2, 5]] = True
             vectors[b][:, 2] = Dr[:, 1]
-        elif case == 2:  # a defective zero: one vector twice
+        elif case == 2:
             rigid[b, [0, 1, 3]] = True
             vectors[b][:, 0] = vectors[b][:, 1] = Dr[:, 0]
             vectors[b][:, 3] = Dr[:, 1]
@@ -150,13 +156,25 @@ def test_spectrum_verdicts_equal_spectrum_verdict():
         codes[b, rigid[b]] = STABILITY_ORDER["critical"]
     words = ("stable", "critical", "unstable")
     dirs = [_rigid(["spin a", "spin b"], D) for _ in range(B)]
-    got = spectrum_verdicts(codes, rigid, vectors, dirs, [N] * B)
+    together = spectrum_verdicts(codes, rigid, vectors, dirs, [N] * B)
+    sparse = spectrum_verdicts(codes, rigid, vectors, dirs, [sps.csr_matrix(N)] * B)
     for b in range(B):
-        want = spectrum_verdict([words[c] for c in codes[b]], rigid[b], vectors[b], dirs[b], N)
-        assert (str(got[b]), got[b].scope, got[b].rigid_scope) == \
-            (str(want), want.scope, want.rigid_scope), b
-    scopes = {v.rigid_scope.split(" by")[0] for v in got}
-    assert scopes >= {"", "1 rigid-body mode (s = 0)", "2 rigid-body modes (s = 0)"}
+        case = b % 4
+        counted = [words[c] for c, r in zip(codes[b], rigid[b], strict=True) if not r]
+        if case == 1:
+            counted.append("critical")  # the rigid vector along no declared direction
+        want = max(counted, key=STABILITY_ORDER.get) if counted else "critical"
+        names = found[case]
+        one = spectrum_verdict([words[c] for c in codes[b]], rigid[b], vectors[b], dirs[b], N)
+        for v in (together[b], sparse[b], one):
+            assert str(v) == want and v.scope == "", b
+            if names:
+                k_ = len(names)
+                assert v.rigid_scope.startswith(
+                    f"{k_} rigid-body mode{'s' if k_ > 1 else ''} (s = 0) by construction not "
+                    f"counted: {'; '.join(names)}"), (b, v.rigid_scope)
+            else:
+                assert v.rigid_scope == "", b
 
 
 def test_zero_pair_floor_beyond_the_range_of_doubles_decides_nothing():

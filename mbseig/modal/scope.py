@@ -146,23 +146,11 @@ def spectrum_verdict(stabilities, rigid, vectors, rigid_directions=None, N=None,
     point), with the rule of :func:`verdict`: the eigenvalues classified rigid-body
     (``rigid`` mask, critical) are left out when their eigenvectors span no more than the
     declared directions found among them (``rigid_directions()``: a RigidDirections in full
-    coordinates, called only when an eigenvalue is rigid-body); any other zero counts."""
-    rigid = np.asarray(rigid, bool)
-    others = [st for st, r in zip(stabilities, rigid, strict=True) if not r]
-    if not rigid.any() or rigid_directions is None:
-        return verdict(list(stabilities))
-    got = rigid_directions() if callable(rigid_directions) else rigid_directions
-    D = reduced_directions(got.vectors, N)
-    X = np.asarray(vectors)[:, rigid]
-    X = X / np.maximum(np.linalg.norm(X, axis=0), np.finfo(float).tiny)
-    U, sv, _ = np.linalg.svd(X, full_matrices=False)
-    Z = U[:, sv > rank_tol * max(sv.max(initial=0.0), np.finfo(float).tiny)]
-    inside = [nm for nm, d in zip(got.names, D.T, strict=True)
-              if np.linalg.norm(d - Z @ (Z.conj().T @ d)) <= ANGLE_TOL]
-    extra = Z.shape[1] > len(inside)
-    counted = others + (["critical"] * (Z.shape[1] - len(inside)) if extra else [])
-    word = max(counted, key=STABILITY_ORDER.get) if counted else "critical"
-    return Verdict(word, "", scope_text(inside, not counted))
+    coordinates, called only when an eigenvalue is rigid-body); any other zero counts.
+    :func:`spectrum_verdicts` of this one spectrum."""
+    codes = np.array([STABILITY_ORDER[w] for w in stabilities], int)
+    return spectrum_verdicts(codes[None], np.asarray(rigid, bool)[None],
+                             np.asarray(vectors)[None], [rigid_directions], [N], rank_tol)[0]
 
 
 _WORDS = ("stable", "critical", "unstable")  # STABILITY_ORDER's words by their order
@@ -170,48 +158,45 @@ _WORDS = ("stable", "critical", "unstable")  # STABILITY_ORDER's words by their 
 
 def spectrum_verdicts(codes, rigid, vectors, directions, N, rank_tol=1e-6) -> list:
     """:func:`spectrum_verdict` of B whole spectra at once: ``codes`` (B, k) the stabilities as
-    STABILITY_ORDER's numbers, ``rigid`` (B, k), ``vectors`` (B, n, k), ``directions`` (B,) each
-    a callable giving the declared RigidDirections (asked only where an eigenvalue is
-    rigid-body), N (B,) each the reduced basis (n_full, n).  The spectra with the same number
-    of rigid-body eigenvalues and of declared directions and a dense N of one shape are tested
-    together (stacked SVD and QR: the same rule); any other spectrum takes
-    :func:`spectrum_verdict`."""
+    STABILITY_ORDER's numbers, ``rigid`` (B, k), ``vectors`` (B, n, k) (or B arrays (n, k)),
+    ``directions`` (B,) each the declared RigidDirections or a callable giving them (asked only
+    where an eigenvalue is rigid-body; None: none declared), N (B,) each the reduced basis
+    (n_full, n; None or sparse too).  The spectra with as many rigid-body eigenvalues and
+    declared directions are tested together: the span Z of their rigid-body vectors (stacked
+    SVD, singular values above rank_tol of the largest), each declared direction found in it
+    when within ANGLE_TOL of it, the dimensions of Z beyond the directions found counted as
+    critical."""
     codes = np.asarray(codes)
     rigid = np.asarray(rigid, bool)
     B = codes.shape[0]
     out = [None] * B
     worst_other = np.max(np.where(rigid, -1, codes), axis=1, initial=-1)
     nr = rigid.sum(axis=1)
-    plain = np.flatnonzero(nr == 0)
-    for b in plain.tolist():  # (no eigenvalue at all: "critical", as verdict([]) says)
-        out[b] = Verdict(_WORDS[worst_other[b]] if worst_other[b] >= 0 else "critical", "", "")
-    asks = np.flatnonzero(nr > 0)
-    got = {}
-    for b in asks.tolist():
-        d = directions[b]
-        got[b] = None if d is None else (d() if callable(d) else d)
     groups = {}
-    for b in asks.tolist():
-        g = got[b]
-        if g is None:
-            out[b] = Verdict(_WORDS[int(np.max(codes[b]))], "", "")
+    got = {}
+    for b in range(B):
+        d = directions[b] if nr[b] else None
+        g = d() if callable(d) else d
+        if g is None:  # (no rigid-body eigenvalue, or none declared: every mode counts;
+            word = int(np.max(codes[b], initial=-1))  # none at all: "critical", as verdict)
+            out[b] = Verdict(_WORDS[word] if word >= 0 else "critical", "", "")
             continue
+        got[b] = g
         Nb = N[b]
-        key = (int(nr[b]), len(g.names), g.vectors.shape,
-               Nb.shape if isinstance(Nb, np.ndarray) else None)
+        dense = isinstance(Nb, np.ndarray)
+        key = (int(nr[b]), len(g.names), np.shape(vectors[b]), g.vectors.shape,
+               Nb.shape if dense else ("each", b))
         groups.setdefault(key, []).append(b)
-    for (r, nd, _, nshape), members in groups.items():
+    for (r, _, _, _, nkey), members in groups.items():
         idx = np.array(members)
-        if len(members) < 2 or nd == 0 or nshape is None:
-            for b in members:
-                out[b] = spectrum_verdict([_WORDS[c] for c in codes[b]], rigid[b], vectors[b],
-                                          got[b], N[b])
-            continue
-        D = np.stack([got[b].vectors for b in members])
-        Nm = np.stack([N[b] for b in members])
-        Dr, _ = np.linalg.qr(np.swapaxes(Nm, 1, 2) @ D)
+        if isinstance(nkey, tuple) and nkey[:1] == ("each",):
+            Dr = reduced_directions(got[members[0]].vectors, N[members[0]])[None]
+        else:
+            D = np.stack([got[b].vectors for b in members])
+            Dr, _ = np.linalg.qr(np.swapaxes(np.stack([N[b] for b in members]), 1, 2) @ D)
         cols = np.nonzero(rigid[idx])[1].reshape(idx.size, r)
-        X = np.take_along_axis(np.stack([vectors[b] for b in members]), cols[:, None, :], axis=2)
+        X = np.take_along_axis(np.stack([np.asarray(vectors[b]) for b in members]),
+                               cols[:, None, :], axis=2)
         X = X / np.maximum(np.linalg.norm(X, axis=1, keepdims=True), np.finfo(float).tiny)
         U, sv, _ = np.linalg.svd(X, full_matrices=False)
         keep = sv > rank_tol * np.maximum(sv.max(axis=1, initial=0.0),
@@ -222,9 +207,8 @@ def spectrum_verdicts(codes, rigid, vectors, directions, N, rank_tol=1e-6) -> li
         rank = keep.sum(axis=1)
         for j, b in enumerate(members):
             names = [nm for nm, ok in zip(got[b].names, inside[j], strict=True) if ok]
-            extra = int(rank[j]) - len(names)
             worst = int(worst_other[b])
-            if extra > 0:
+            if int(rank[j]) > len(names):
                 worst = max(worst, STABILITY_ORDER["critical"])
             counted = worst >= 0
             out[b] = Verdict(_WORDS[worst] if counted else "critical", "",

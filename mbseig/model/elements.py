@@ -212,16 +212,19 @@ def relative_angle(dirs: Affine, q, sense: float, name: str):
     pa, ma, pb, mb = (2 * ax * ay * sa, (ay * ay - ax * ax) * sa,
                       2 * bx * by * sb, (by * by - bx * bx) * sb)
     H = np.array([[pa, ma, 0.0, 0.0], [ma, -pa, 0.0, 0.0], [0.0, 0.0, pb, mb], [0.0, 0.0, mb, -pb]])
-    theta = sense * math.atan2(ax * by - ay * bx, ax * bx + ay * by)
-    return theta, g, H
+    return _theta(ax, ay, bx, by, sense), g, H
+
+
+def _theta(ax, ay, bx, by, sense):
+    return sense * math.atan2(ax * by - ay * bx, ax * bx + ay * by)
 
 
 def relative_angle_only(dirs: Affine, q, sense: float, name: str) -> float:
-    """θ of :func:`relative_angle` alone (the same arithmetic, without g and H)."""
+    """θ of :func:`relative_angle` alone (the same check and θ, without g and H)."""
     ax, ay, bx, by = dirs(q).tolist()
     if ax * ax + ay * ay == 0.0 or bx * bx + by * by == 0.0:
         raise EquilibriumError("direction of zero length: angle undefined", element=name)
-    return sense * math.atan2(ax * by - ay * bx, ax * bx + ay * by)
+    return _theta(ax, ay, bx, by, sense)
 
 
 @dataclass(frozen=True, eq=False)

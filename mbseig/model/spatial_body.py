@@ -121,18 +121,14 @@ def second_moment(inertia) -> np.ndarray:
 
 def spatial_mass_matrix(mass: float, com_local, inertia) -> np.ndarray:
     """Constant 12×12 mass matrix A ⊗ I₃ of a body on [r₀; u; v; w] (module docstring)."""
-    xg = np.asarray(com_local, float)
-    A = np.empty((4, 4))
-    A[0, 0] = mass
-    A[0, 1:] = A[1:, 0] = mass * xg
-    A[1:, 1:] = second_moment(inertia) + mass * np.outer(xg, xg)
-    return (A[:, None, :, None] * _EYE3[None, :, None, :]).reshape(FRAME_SIZE, FRAME_SIZE)
+    return spatial_mass_matrices(np.array([mass], float), com_local,
+                                 np.asarray(inertia, float)[None])[0]
 
 
 def spatial_mass_matrices(masses, com_local, inertias) -> np.ndarray:
     """:func:`spatial_mass_matrix` at B masses (B,) and inertias (B, 3, 3) of one body (the
-    same centre of mass): (B, 12, 12), each the same operations on the same numbers (the same
-    bits)."""
+    same centre of mass): (B, 12, 12), A = [[m, m ξ_Gᵀ], [m ξ_G, J + m ξ_G ξ_Gᵀ]] with J the
+    second moment (:func:`second_moment`) of each inertia."""
     xg = np.asarray(com_local, float)
     m = np.asarray(masses, float)
     J = np.asarray(inertias, float)
