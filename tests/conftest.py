@@ -48,7 +48,12 @@ NOT_NUMERIC_TESTS = {
         "test_report_rotor_section_from_the_command_line": "the section's headings and names",
         "test_report_study_names_its_unbalance": "names in the text",
         "test_unbalance_table_names_stations_as_the_case_does": "names in the table"},
-    "test_flexible3d_commands.py": {"test_beams_are_drawn_as_curves": "the drawing's lines"},
+    "test_flexible3d_commands.py": {"test_beams_are_drawn_as_curves": "the drawing's lines",
+                                    "test_report_on_a_3d_flexible_rotor": "sections, figures, "
+                                    "and ω = Ω read from the printed 6 digits to 1e-5"},
+    # an integration's error against a prediction at 1 %: another kernel's rounding (1e-15
+    # relative) cannot move it (the rounding-level tests of that module stay numeric)
+    "test_timedomain.py": {"test_damped_chain_every_mode_within_1_percent": "1 % tolerance"},
     "test_spatial_cli.py": {"test_report_on_every_spatial_case": "the report is written (the "
                             "verdict it prints: test_modes_and_check_on_every_spatial_case)"},
     "test_guide.py": {"test_every_block_of_the_guide_runs": "the guide's commands exit 0 and "
