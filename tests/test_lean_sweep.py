@@ -99,9 +99,24 @@ def test_held_tension_only_for_the_same_elements(device):
     t_prev = prev.drivers[0]["sets"][0]["tension"]
     assert r.drivers[0]["sets"][0]["tension"] == pytest.approx(t_prev, rel=1e-12)
     assert r.forces[k].stiffness == 1050.0
+    # another stiffness: refused
     other = dataclasses.replace(m, forces=tuple(
-        dataclasses.replace(f, magnitude=2.0) if hasattr(f, "magnitude") else f for f in m.forces))
+        dataclasses.replace(f, stiffness=2 * f.stiffness) if f.name == "forces[0] 'MCP'" else f
+        for f in m.forces))
     assert held_tension(other, prev) is None
+    # another follower load or damping value: taken, since neither enters the device at rest
+    # (the command is resolved without follower loads: hand_device.toml), and it sets the free
+    # length the resolve finds on its own (to its tolerance, 1e-12 of the effort)
+    from mbseig.statics import resolve
+
+    loads = dataclasses.replace(m, forces=tuple(
+        dataclasses.replace(f, magnitude=2.0) if hasattr(f, "magnitude") else
+        dataclasses.replace(f, damping=3 * f.damping) if f.name == "forces[1] 'PIP'" else f
+        for f in m.forces))
+    got = held_tension(loads, prev)
+    assert got is not None
+    own = resolve(loads)
+    assert got.forces[k].free_length == pytest.approx(own.forces[k].free_length, rel=1e-10)
 
 
 def _sweeps(device, monkeypatch, config, axes):

@@ -260,12 +260,15 @@ class ScalarUpdate:
     :meth:`make` returns None (build the case instead) where the parameter, or a parameter
     computed from it, appears anywhere else in the case (geometry, masses, gravity, joints,
     repeated elements, the ``[report]`` table): ``reason`` then says where.
+
+    ``axis`` may also be a tuple of parameter names, moved together (the samples of
+    ``mbseig uncertainty``): ``p`` is then a tuple of their values, in that order.
     """
 
     def __init__(self, data, config, overrides, axis, model0):
         self._parameters(data, config, overrides, axis, model0)
         if data.get("dimension") not in (1, 2) or data.get("kind", "multibody") != "multibody" \
-                or axis not in self.raw:
+                or not self._known():
             self.reason = "not a planar multibody case"
             return
         names = {f.name for f in model0.forces}
@@ -284,25 +287,43 @@ class ScalarUpdate:
             self.updates.append((index[label], item, label, kind, keys))
         where = self._elsewhere(data, "")
         if where is not None:
-            self.reason = f"{axis} enters {where}"
-        elif self.parameters(model0.parameters[axis], every=True) != model0.parameters:
+            self.reason = f"{self.label} enters {where}"
+        elif self.parameters(self._at(model0.parameters), every=True) != model0.parameters:
             self.reason = "the parameters evaluate differently"  # a safeguard: never seen
 
     def _parameters(self, data, config, overrides, axis, model0):
         """The parameter table at the reference (the case's, the configuration's, the fixed
         overrides) and the parameters computed from the swept one (re-evaluated, in order)."""
         self.data, self.axis, self.model0, self.reason = data, axis, model0, None
+        self.axes = tuple(axis) if isinstance(axis, tuple) else (axis,)
+        self.label = ", ".join(self.axes)
         self.raw = dict(data.get("parameters", {}))
         chosen = dict((data.get("configurations") or {}).get(config, {})) if config else {}
         chosen.pop("description", None)
         self.raw.update(chosen)
-        self.raw.update({k: v for k, v in overrides.items() if k != axis})
-        deps = {axis}
+        self.raw.update({k: v for k, v in overrides.items() if k not in self.axes})
+        deps = set(self.axes)
         for key, value in self.raw.items():  # parameters computed from the swept one
             if isinstance(value, str) and deps & set(_NAME.findall(value)):
                 deps.add(key)
         self.deps, self.updates = deps, []
         self.order = [key for key in self.raw if key in deps]  # re-evaluated, in table order
+
+    def _known(self) -> bool:
+        """Every swept parameter is one of the table's."""
+        return all(a in self.raw for a in self.axes)
+
+    def _at(self, values):
+        """The swept parameters' value(s) in ``values`` (a dict), as :meth:`parameters` takes
+        them."""
+        got = tuple(values[a] for a in self.axes)
+        return got if isinstance(self.axis, tuple) else got[0]
+
+    def _point(self, p) -> dict:
+        """{name: value} of the swept parameter(s) at ``p``."""
+        if isinstance(self.axis, tuple):
+            return {a: float(v) for a, v in zip(self.axes, p, strict=True)}
+        return {self.axis: float(p)}
 
     def _uses(self, text):
         return bool(self.deps & set(_NAME.findall(text)))
@@ -343,14 +364,15 @@ class ScalarUpdate:
         """The ``[parameters]`` values at axis = p, as the case reader evaluates them (in the
         table's order); only those computed from the swept one are evaluated again unless
         ``every`` (the others keep the reference build's values, which they equal)."""
+        point = self._point(p)
         if every:
             values = {}
-            for key, value in {**self.raw, self.axis: float(p)}.items():
+            for key, value in {**self.raw, **point}.items():
                 values[key] = evaluate(value, values)
             return values
         values = dict(self.model0.parameters)
         for key in self.order:
-            values[key] = evaluate(float(p) if key == self.axis else self.raw[key], values)
+            values[key] = evaluate(point[key] if key in point else self.raw[key], values)
         return values
 
     def make(self, p):
@@ -376,15 +398,15 @@ class MotionUpdate(ScalarUpdate):
     def __init__(self, data, config, overrides, axis, model0):
         self._parameters(data, config, overrides, axis, model0)
         self._motion = None  # (the first value's motion and its fields read again, kept)
-        if axis not in self.raw:
-            self.reason = f"{axis} is not a parameter of the case"
+        if not self._known():
+            self.reason = f"{self.label} is not a parameter of the case"
             return
         if not isinstance(data.get("motion"), dict):
             self.reason = "no [motion] table"
             return
         where = self._anywhere({k: v for k, v in data.items() if k != "motion"}, "")
         if where is not None:
-            self.reason = f"{axis} enters {where}"
+            self.reason = f"{self.label} enters {where}"
 
     def make(self, p):
         """The one model (with the parameters at axis = p), or None where a build is needed."""
@@ -449,7 +471,7 @@ class MassUpdate(ScalarUpdate):
         from ..model.spatial_forces import Rotor
 
         if data.get("dimension") != 3 or data.get("kind", "multibody") != "multibody" \
-                or self.axis not in self.raw:
+                or not self._known():
             return "not a spatial multibody case"
         if "frames" in data or model0.mass_elements or model0.flexible \
                 or model0.velocity_constraints or model0.commands \
@@ -474,9 +496,9 @@ class MassUpdate(ScalarUpdate):
             where = where or self._anywhere(rest, f"bodies[{k}]")
         where = where or self._anywhere({k: v for k, v in data.items() if k != "bodies"}, "")
         if where is not None:
-            return f"{self.axis} enters {where}"
+            return f"{self.label} enters {where}"
         if not self.updates:
-            return f"{self.axis} enters no body's mass or inertia"
+            return f"{self.label} enters no body's mass or inertia"
         m0 = model0
         try:  # twice: from the parts (scatter), then by the kept parts and plan
             got = [self._assemble(m0, {}) for _ in range(2)]

@@ -219,19 +219,21 @@ def command_settings(model) -> tuple:
 
 def held_tension(model, prev, *, tol=1e-12, posture_tol=1e-10, cache=None):
     """``model`` (its one command pending) set from ``prev`` (resolved at another value of a
-    parameter that enters the commanded spring's stiffness alone), or None.
+    parameter that enters the commanded spring's stiffness alone, and perhaps damping values and
+    follower loads, which do not enter the device at rest), or None.
 
     The same tension T at the same posture q* gives the same forces, so ``prev``'s posture and
     tension solve the command for any stiffness k of the spring: its free length is
     l₀ = l* − T/k (the root the resolve's secant finds where the root is unique, as on the
     crank-slider of the finger device, whose driver holds the spring's ends).  Taken only when
-    every other element is the one ``prev`` has, and checked as :func:`resolve_commands` checks
-    its own result: at q*, on the device with the driver and without follower loads, the
-    driver's effort (unique: no redundant constraint) is at most ``tol`` × the released effort
-    and the posture is in equilibrium (residual ≤ ``posture_tol`` × the forces).  Else the
-    command is resolved (by the caller).  ``cache``: a dict kept by the caller across the values
-    of one sweep line, which holds the device's Φ_q at q* (the constraints, the driver and q*
-    are ``prev``'s at every value, so it is the same matrix)."""
+    every other element gives ``prev``'s forces at rest (:func:`_same_at_rest`), and checked
+    as :func:`resolve_commands` checks its own result: at q*, on the device with the driver
+    and without follower loads, the driver's effort (unique: no redundant constraint) is at
+    most ``tol`` × the released effort and the posture is in equilibrium (residual ≤
+    ``posture_tol`` × the forces).  Else the command is resolved (by the caller).
+    ``cache``: a dict kept by the caller across the values of one sweep line, which holds the
+    device's Φ_q at q* (the constraints, the driver and q* are ``prev``'s at every value, so it
+    is the same matrix)."""
     if prev is None or len(model.commands) != 1 or len(prev.drivers) != 1:
         return None
     driver, targets = model.commands[0]
@@ -242,7 +244,7 @@ def held_tension(model, prev, *, tol=1e-12, posture_tol=1e-10, cache=None):
     k = springs[0][1]
     spring, old = model.forces[k], prev.forces[k]
     if (len(model.forces) != len(prev.forces) or model.constraints != prev.constraints
-            or any(a is not b
+            or any(not _same_at_rest(a, b)
                    for j, (a, b) in enumerate(zip(model.forces, prev.forces, strict=True))
                    if j != k)
             or spring.diff is not old.diff or not spring.stiffness > 0
@@ -273,6 +275,21 @@ def held_tension(model, prev, *, tol=1e-12, posture_tol=1e-10, cache=None):
                         "tension": spring.stiffness * (length_now - l0)}]}
     return dataclasses.replace(model, forces=tuple(forces), q_init=q, commands=(),
                                drivers=(record,))
+
+
+def _same_at_rest(a, b) -> bool:
+    """Force elements a and b give the same forces on the device at rest: the same element; two
+    follower loads (the device leaves them out); or one element whose damping value alone
+    differs (it multiplies a zero rate at rest: every other field is the same object, as the
+    lean updates of a sweep or of the samples form them)."""
+    if a is b:
+        return True
+    if type(a) is not type(b) or not dataclasses.is_dataclass(a):
+        return False
+    if a.scalable_load and b.scalable_load:
+        return True
+    return all(getattr(a, f.name) is getattr(b, f.name)
+               for f in dataclasses.fields(a) if f.name != "damping")
 
 
 def _device_force(device, prev, driver, q, k, cache):

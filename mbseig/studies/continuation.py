@@ -68,13 +68,29 @@ _SHARED: dict = {}  # the last lines whose statics later lines of their sweep ma
 BATCH_LINES = True
 
 
+def _assigned(axis, p) -> dict:
+    """{name: value} of the swept parameter(s) ``axis`` at ``p`` (a tuple of names takes a
+    tuple of values)."""
+    if isinstance(axis, tuple):
+        return {a: float(v) for a, v in zip(axis, p, strict=True)}
+    return {axis: float(p)}
+
+
+def _value_key(p):
+    """A value of the swept parameter(s) as a key: a float, or a tuple of floats."""
+    return tuple(float(v) for v in p) if isinstance(p, tuple) else float(p)
+
+
 def family_maker(spec, config, params, axis, *, lean=True):
     """(make, state): make(p) is the model at axis = p with its commands resolved.
 
     The case is built once; where the swept parameter enters only force scalars (a spring
     constant, a damping value, a load's magnitude) the next values update those
     (:class:`~mbseig.casefile.element_readers.ScalarUpdate`, equal to a build element by
-    element), elsewhere every value is built (``state["model"]`` says which and why)."""
+    element), elsewhere every value is built (``state["model"]`` says which and why).
+
+    ``axis`` may be a tuple of parameter names moved together (``p`` a tuple of their values,
+    in that order: the samples of :mod:`mbseig.studies.uncertainty`)."""
     state = {"first": None, "reuse": None, "checked": False, "last": None, "presolve": {},
              "lean": None, "model": None, "held": 0, "resolved": 0, "made": {},
              "held_cache": {}, "kept": None, "donor": None}
@@ -89,7 +105,7 @@ def family_maker(spec, config, params, axis, *, lean=True):
                 m = None
             if m is not None:
                 return m
-        m = spec.build(config, **{**params, axis: float(p)})
+        m = spec.build(config, **{**params, **_assigned(axis, p)})
         if state["model"] is None:
             kind = MassUpdate if (spec.data.get("dimension") == 3) else ScalarUpdate
             state["lean"] = lean = (kind(spec.data, config, params, axis, m)
@@ -101,7 +117,7 @@ def family_maker(spec, config, params, axis, *, lean=True):
         return m
 
     def make(p):
-        key = float(p)
+        key = _value_key(p)
         if key in state["made"]:  # the same value again (the first point, asked by the family)
             return state["made"][key]
         m = made(p)
@@ -116,7 +132,7 @@ def family_maker(spec, config, params, axis, *, lean=True):
         m = build(p)
         if not getattr(m, "commands", ()):
             return m
-        donor = (state["donor"] or {}).get(float(p))
+        donor = (state["donor"] or {}).get(_value_key(p))
         if donor is not None:  # the line whose statics this one shares (_shared_statics)
             r = reuse_commands(m, donor)
             if r is not None:
@@ -134,8 +150,8 @@ def family_maker(spec, config, params, axis, *, lean=True):
         state["last"] = r
         state["resolved"] += 1
         if state["first"] is None:
-            state["first"] = (float(p), r)
-        elif not state["checked"] and float(p) != state["first"][0]:
+            state["first"] = (_value_key(p), r)
+        elif not state["checked"] and _value_key(p) != state["first"][0]:
             state["checked"] = True
             if command_settings(r) == command_settings(state["first"][1]):
                 state["reuse"] = r
@@ -148,12 +164,12 @@ def family_maker(spec, config, params, axis, *, lean=True):
         if not (lean_models and isinstance(lean, MassUpdate) and lean.reason is None):
             return None
         try:
-            got = lean.make_many([float(v) for v in values])
+            got = lean.make_many([_value_key(v) for v in values])
         except MbseigError:  # a bad value: each alone (the build names the file and element)
             return None
         if state["kept"] is not None:
             for v, m in zip(values, got, strict=True):
-                state["kept"][float(v)] = m
+                state["kept"][_value_key(v)] = m
         return got
 
     make.many = make_many
