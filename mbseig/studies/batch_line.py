@@ -17,6 +17,12 @@ continuation checks it, for every point at once:
 - the static verdict (:func:`mbseig.statics.batch.static_verdicts`) does not become "unstable"
   (where the followed branch loses static stability the continuation may switch branches).
 
+The samples of ``mbseig uncertainty`` (:mod:`mbseig.studies.uncertainty`) are not a line: their
+points have no order between them, so no fold or branch point can lie "between" two of them, and a
+statically unstable sample is a result (its verdict), not a place where a followed branch may
+switch.  With ``samples=True`` the last two checks are left out; the first (every point reached
+again from its neighbour's equilibrium, within ``SAME``) is kept.
+
 Where all hold, the line's equilibrium records, static verdicts and linear models (null-space
 basis by stacked SVD, reduced M, P, Q by stacked products) are formed for all points at once.
 Otherwise :func:`batch_line` returns None with the reason, and the line is followed by the
@@ -79,10 +85,11 @@ def _restarts(done, values, Y):
     return todo, starts
 
 
-def batch_line(fam, values, eq0):
+def batch_line(fam, values, eq0, *, samples=False):
     """(equilibria, linear models, record) of every grid point of the line, or (None, None,
     reason) (module docstring).  ``fam``: the line's :class:`~mbseig.statics.family.Family`;
-    eq0: the first point's equilibrium (solved on its own)."""
+    eq0: the first point's equilibrium (solved on its own), or the start of every point;
+    samples: points without an order between them (module docstring)."""
     if fam.rows.size != fam.m:
         return None, None, "redundant constraints (self-stress: examined point by point)"
     models = fam.models(values)
@@ -136,12 +143,12 @@ def batch_line(fam, values, eq0):
     Nt = np.swapaxes(N, 1, 2)
     Kr = Nt @ Kt @ N
     statics = static_verdicts(Kr, N)
-    if any(s["verdict"] == "unstable" for s in statics):
+    if not samples and any(s["verdict"] == "unstable" for s in statics):
         return None, None, "the branch is statically unstable at a grid point"
     # no eigenvalue of K_r crosses zero between grid points (a fold or branch point: there det S,
     # which is det K_r times a factor of one sign on a line of constant rank, changes sign)
     counts = {(s["index"], s["zero"]) for s in statics}
-    if len(counts) > 1:
+    if not samples and len(counts) > 1:
         return None, None, "the reduced stiffness changes its inertia (a fold or branch point)"
     Mr = Nt @ np.broadcast_to(stack.M, (B, n, n)) @ N
     Pr = Nt @ C @ N

@@ -40,13 +40,14 @@ BATCH_MAX = 64
 class PointSpectrum:
     """One point's modes: eigenvalues, unit shapes in full coordinates, tolerances, verdict
     (a :class:`~mbseig.modal.result.Verdict`), solver (the path; ``batched`` where the batch
-    solved it)."""
+    solved it), rigid (per eigenvalue: classified rigid-body, s = 0 within its error)."""
 
     eigenvalues: np.ndarray
     shapes: np.ndarray
     tol: np.ndarray
     verdict: object
     solver: str
+    rigid: np.ndarray | None = None
 
 
 def _dense(A):
@@ -74,13 +75,14 @@ def _one(lin, safety, stability_rtol):
     s = sol.eigenvalues
     _, _, tol, rigid = tolerances(sol, safety=safety, stability_rtol=stability_rtol)
     v = spectrum_verdict(classify(-s.real, tol, rigid), rigid, sol.vectors, lin.rigid, lin.N)
-    return PointSpectrum(s, _shapes(lin.N, sol.vectors), tol, v, sol.solver)
+    return PointSpectrum(s, _shapes(lin.N, sol.vectors), tol, v, sol.solver,
+                         np.asarray(rigid, bool))
 
 
 def _none(lin):
     n = lin.N.shape[0]
     return PointSpectrum(np.zeros(0, complex), np.zeros((n, 0), complex), np.zeros(0),
-                         "stable", "none (no degree of freedom)")
+                         "stable", "none (no degree of freedom)", np.zeros(0, bool))
 
 
 def point_spectra(lins, *, safety=10.0, stability_rtol=1e-12) -> list:
@@ -120,7 +122,7 @@ def point_spectra(lins, *, safety=10.0, stability_rtol=1e-12) -> list:
                 continue
             s, X = sol.eigenvalues[j], sol.vectors[j]
             out[i] = PointSpectrum(s, _shapes(lin.N, X), bb.tol_re[j], verdicts[j],
-                                   f"{sol.solver[j]} (batched)")
+                                   f"{sol.solver[j]} (batched)", bb.rigid[j].copy())
     for i, x in enumerate(out):
         if x is lins[i] and not isinstance(x, BaseException):
             try:
