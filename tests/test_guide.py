@@ -33,7 +33,8 @@ def test_guide_has_every_topic():
     text = GUIDE.read_text()
     for heading in ("## Installation", "## A planar mechanism", "## A spatial mechanism",
                     "## A rotor", "## A sweep with a stability boundary", "## A report",
-                    "## Linear models for control design", "## Mode shapes you can watch"):
+                    "## Linear models for control design", "## Mode shapes you can watch",
+                    "## Stability under uncertainty"):
         assert heading in text
     langs = {lang for lang, _, _ in blocks()}
     assert langs <= {"sh", "sh-install", "toml", "python"}  # every block is of a kind run below
@@ -77,7 +78,8 @@ def test_every_block_of_the_guide_runs(tmp_path, monkeypatch, capsys):
     assert ran["sh"] >= 8 and ran["python"] >= 5 and ran["toml"] == 1
     # what the commands wrote
     for path in ("four_bar_mode1.gif", "swing.gif", "rotor_sweep/campbell.png",
-                 "ziegler/sweep.json", "pendulum_report/report.html", "hand_C1.npz"):
+                 "ziegler/sweep.json", "pendulum_report/report.html", "hand_C1.npz",
+                 "pendulum_mc/samples.csv", "pendulum_mc/scatter.png"):
         assert (tmp_path / path).stat().st_size > 0, path
     assert os.path.samefile(tmp_path / "cases", ROOT / "cases")
 

@@ -29,7 +29,7 @@ from ..errors import CaseError, MbseigError, ReportedWarning
 __all__ = ["main", "console", "SUBCOMMANDS"]
 
 SUBCOMMANDS = ["linearize", "modes", "frf", "check", "sweep", "report", "bench", "import-urdf",
-               "animate", "unbalance"]
+               "animate", "unbalance", "uncertainty"]
 # one line each for ``mbseig --help`` without importing every command's module
 SUBCOMMAND_HELP = {
     "linearize": "equilibrium and reduced linear model M, P, Q (and B, C, D of named signals)",
@@ -42,6 +42,7 @@ SUBCOMMAND_HELP = {
     "import-urdf": "write the plain 3-D case of a URDF robot",
     "animate": "write one period of a mode shape as a looping GIF",
     "unbalance": "synchronous response of a spinning rotor to an unbalance m·e",
+    "uncertainty": "probability of instability under random parameters, with its interval",
 }
 # commands whose output carries the text of every ReportedWarning (beam-theory guidance, notes on
 # the equilibrium: mbseig.cli.common.output_notes), so the warning would only repeat it on stderr
