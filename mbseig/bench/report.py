@@ -318,6 +318,10 @@ def write_report(res, out_dir):
                      f"{r['rate']:.0f} | {r['per_point'] * 1e3:.3f} ms | {goal} | {met} | "
                      f"{r['boundaries']} | {', '.join(str(x) for x in r.get('statics', []))} | "
                      "{:.2f}–{:.2f}".format(*r["spread"]) + f" | {r['repeats']} |")
+    if _rows(res, "uncertainty"):
+        from .uncertainty_rows import report_lines
+
+        L += report_lines(_rows(res, "uncertainty"))
     small = _rows(res, "small")
     if small:
         _table(L, "Small models, stage by stage",

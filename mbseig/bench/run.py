@@ -81,7 +81,7 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
     repeats = repeats or (1 if quick else 3)
     all_sections = ("dense", "structured", "partial", "large", "startup", "peer", "sweeps",
                     "jacobians", "constraint", "timedomain", "failures", "nlevp", "rotor", "beams",
-                    "slepc", "spatial", "batch")
+                    "slepc", "spatial", "batch", "uncertainty")
     sections = sections or all_sections
     cfg = {
         "quick": quick, "repeats": repeats, "threads": threads,
@@ -146,6 +146,10 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
             from .batch_rows import bench_batch
 
             res["rows"] += bench_batch(log, repeats=repeats, quick=quick)
+        if "uncertainty" in sections:
+            from .uncertainty_rows import bench_uncertainty
+
+            res["rows"] += bench_uncertainty(log, repeats=repeats, quick=quick)
         if "failures" in sections:
             res["failures"] = [{k: getattr(c, k)
                                 for k in ("name", "naive_method", "naive", "mbseig", "reference",
