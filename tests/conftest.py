@@ -26,6 +26,9 @@ NOT_NUMERIC_MODULES = {
     "test_resume.py": "a resumed sweep equals the uninterrupted one: one kernel, twice",
     "test_interrupt.py": "signals, exit codes, the one line, and an interrupted sweep resumed "
                          "equal to the uninterrupted one: one kernel, twice",
+    "test_uncertainty_methods.py": "the statistics of analytic functions of the inputs (no model, "
+                                   "no eigenvalue) at tolerances of standard errors and 1e-3 to "
+                                   "1e-5, far above any kernel's rounding",
 }
 # single tests in modules that are otherwise numeric (the test's name, parameters left off)
 NOT_NUMERIC_TESTS = {
@@ -56,6 +59,9 @@ NOT_NUMERIC_TESTS = {
     "test_timedomain.py": {"test_damped_chain_every_mode_within_1_percent": "1 % tolerance"},
     "test_spatial_cli.py": {"test_report_on_every_spatial_case": "the report is written (the "
                             "verdict it prints: test_modes_and_check_on_every_spatial_case)"},
+    "test_uncertainty.py": {"test_resume_gives_the_same_output": "a resumed study equals the "
+                            "uninterrupted one: one kernel, twice",
+                            "test_bad_inputs_are_refused_in_one_line": "one-line refusals"},
     "test_guide.py": {"test_every_block_of_the_guide_runs": "the guide's commands exit 0 and "
                       "write their files"},
     "test_animate.py": {"test_report_embeds_one_animation_per_mode": "one animation a mode",

@@ -206,3 +206,29 @@ def test_bad_inputs_are_refused_in_one_line(capsys, param, message):
     code = main(["uncertainty", str(PENDULUM), "--param", param, "--no-progress"])
     err = capsys.readouterr().err
     assert code == 2 and len(err.strip().splitlines()) == 1 and message in err
+
+
+def test_readme_worked_example(capsys, tmp_path):
+    """The README's worked example prints the numbers the README quotes, and they agree with
+    the closed form (within 4 standard errors; the interval holds it)."""
+    import re
+
+    text = (ROOT / "README.md").read_text()
+    command = re.search(r"\n(mbseig uncertainty cases/inverted_pendulum_springs\.toml [^\n]*)\n",
+                        text).group(1)
+    import shlex
+
+    argv = shlex.split(command)[1:]
+    argv[1] = str(CASES / "inverted_pendulum_springs.toml")
+    assert main([*argv, "--no-progress", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    got = re.search(r"P\(unstable\) = ([0-9.]+), 95 % interval \[([0-9.]+), ([0-9.]+)\]", out)
+    quoted = re.search(r"gives P\(unstable\) = ([0-9.]+) with 95 % interval \[([0-9.]+), "
+                       r"([0-9.]+)\]", text)
+    assert got and quoted
+    for a, b in zip(got.groups(), quoted.groups(), strict=True):
+        assert float(a) == pytest.approx(float(b), rel=2e-3)  # (the README rounds to 3 digits)
+    beta, p, _ = closed_form(6.0, 1.0, 6.0, 0.8)
+    assert abs(float(got.group(1)) - p) <= 4 * math.sqrt(p * (1 - p) / 10_000)
+    assert float(got.group(2)) <= p <= float(got.group(3))
+    assert f"β = {beta:.4f}" in text
