@@ -15,7 +15,8 @@ def register(sub):
     p.add_argument("--sections", nargs="+", default=None,
                    choices=["dense", "structured", "partial", "large", "startup", "peer",
                             "sweeps", "jacobians", "constraint", "timedomain", "failures", "nlevp",
-                            "rotor", "beams", "slepc", "spatial", "batch"],
+                            "rotor", "beams", "slepc", "spatial", "batch",
+                            "uncertainty"],
                    help="run only these sections")
     p.set_defaults(run=run)
 

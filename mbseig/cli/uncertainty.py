@@ -230,6 +230,7 @@ def write_outputs(study, inputs, folder, *, units=None) -> list:
                         file=str(folder)) from None
     ev = study.result.evaluated
     names = [i.name for i in inputs]
+    label = study.case + (f" ({study.config})" if study.config else "")
     path = folder / "samples.csv"
     shown = shown_damping(ev.delta, ev.bound)
     errors = list(study.errors) + [None] * (len(ev.delta) - len(study.errors))
@@ -244,7 +245,7 @@ def write_outputs(study, inputs, folder, *, units=None) -> list:
                         "" if not np.isfinite(ev.bound[k]) else repr(float(ev.bound[k])),
                         CODES[int(ev.code[k])], errors[k] or ""])
     paths = [folder / "uncertainty.json", path]
-    fig = damping_histogram(ev.delta, ev.bound, ev.code, case=study.case,
+    fig = damping_histogram(ev.delta, ev.bound, ev.code, case=label,
                             method=study.result.method)
     paths.append(save(fig, folder / "histogram.png", element="--out"))
     if len(inputs) == 2:
@@ -252,7 +253,7 @@ def write_outputs(study, inputs, folder, *, units=None) -> list:
         if study.grid is not None:
             g1, g2, D, B = study.grid
             grid = (g1, g2, shown_damping(D, B))
-        fig = verdict_scatter(ev.x, ev.code, names, grid=grid, case=study.case,
+        fig = verdict_scatter(ev.x, ev.code, names, grid=grid, case=label,
                               units=tuple(units.get(n, "") for n in names))
         paths.append(save(fig, folder / "scatter.png", element="--out"))
     return paths
