@@ -12,7 +12,9 @@ from ..casefile import parse_param_overrides
 from ..errors import CaseError
 from ..numerics import jsonable
 from .common import (
+    JOBS_HELP,
     KeptStudy,
+    _jobs,
     add_progress_options,
     case_command,
     parameter_units_of,
@@ -35,7 +37,7 @@ def register(sub):
     p.add_argument("--param", action="append", default=[], metavar="NAME=DIST",
                    help="a random input NAME=normal(MU,SIGMA), lognormal(MEDIAN,SIGMA_LOG) or "
                         "uniform(A,B), or a fixed value NAME=VALUE (repeatable)")
-    p.add_argument("--samples", type=_count, default=10_000, metavar="N",
+    p.add_argument("--samples", type=_jobs, default=10_000, metavar="N",
                    help="Monte Carlo samples (default 10000); for subset simulation the "
                         "samples per level")
     p.add_argument("--seed", type=_seed, default=0, metavar="S",
@@ -53,8 +55,6 @@ def register(sub):
     p.add_argument("--out", default=None, metavar="DIR",
                    help="write samples.csv, uncertainty.json, histogram.png and, for two "
                         "inputs, scatter.png to DIR (default: uncertainty-CASE[-CONFIG])")
-    from .common import JOBS_HELP, _jobs
-
     p.add_argument("--jobs", type=_jobs, default=None, metavar="N", help=JOBS_HELP)
     p.add_argument("--resume", default=None, metavar="DIR",
                    help="keep every batch of samples in DIR as it completes; rerun with the "
@@ -65,18 +65,6 @@ def register(sub):
                         "(pip install 'mbseig[dask]')")
     add_progress_options(p)
     p.set_defaults(run=run)
-
-
-def _count(text):
-    import argparse
-
-    try:
-        n = int(text)
-    except ValueError:
-        n = 0
-    if n < 1:
-        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text!r}")
-    return n
 
 
 def _seed(text):

@@ -138,11 +138,12 @@ def _together(spec, config, fixed, names, X, q_start, opts, out):
         return make.many([rows[int(t)] for t in ts])
 
     make_t.many = many
-    pending = [np.arange(B)]
+    # (without a nominal equilibrium there is no start for a batch: each sample on its own)
+    pending = [np.arange(B)] if q_start is not None else [np.arange(i, i + 1) for i in range(B)]
     while pending:
         idx = pending.pop()
         got = None
-        if idx.size > ALONE and q_start is not None:
+        if idx.size > ALONE:
             try:
                 got = _batch(make_t, idx, q_start, Family, batch_line, _Start, Model)
             except (MbseigError, np.linalg.LinAlgError, ValueError, FloatingPointError):
