@@ -232,3 +232,24 @@ def test_readme_worked_example(capsys, tmp_path):
     assert abs(float(got.group(1)) - p) <= 4 * math.sqrt(p * (1 - p) / 10_000)
     assert float(got.group(2)) <= p <= float(got.group(3))
     assert f"β = {beta:.4f}" in text
+
+
+def test_samples_without_a_model_are_counted_failed(capsys, tmp_path):
+    """A normal mass draws negative values (m ~ N(1, 0.6²): P(m ≤ 0) = Φ(−1/0.6) = 0.048):
+    those samples are refused by the case's own check, counted ``failed`` with that message,
+    never stable, and they widen the interval's upper end (Clopper–Pearson of unstable +
+    failed)."""
+    from scipy.stats import binomtest
+
+    n = 500
+    out = run_json(capsys, PENDULUM, "--param", "m=normal(1, 0.6)", "--param", "k1=normal(6, 1)",
+                   "--samples", n, "--method", "monte-carlo", "--out", tmp_path)
+    rows = list(csv.DictReader(open(tmp_path / "samples.csv")))
+    failed = [r for r in rows if r["verdict"] == "failed"]
+    assert len(failed) == out["verdicts"]["failed"] > 0
+    assert all(float(r["m"]) <= 0 and "mass must be positive" in r["error"] for r in failed)
+    assert all(float(r["m"]) > 0 for r in rows if r["verdict"] != "failed")
+    k, f = out["verdicts"]["unstable"], out["verdicts"]["failed"]
+    assert out["ci95"][0] == pytest.approx(binomtest(k, n).proportion_ci(0.95, "exact").low)
+    assert out["ci95"][1] == pytest.approx(binomtest(k + f, n).proportion_ci(0.95, "exact").high)
+    assert out["p_not_stable"] == pytest.approx((n - out["verdicts"]["stable"]) / n)
