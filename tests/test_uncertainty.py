@@ -253,3 +253,21 @@ def test_samples_without_a_model_are_counted_failed(capsys, tmp_path):
     assert out["ci95"][0] == pytest.approx(binomtest(k, n).proportion_ci(0.95, "exact").low)
     assert out["ci95"][1] == pytest.approx(binomtest(k + f, n).proportion_ci(0.95, "exact").high)
     assert out["p_not_stable"] == pytest.approx((n - out["verdicts"]["stable"]) / n)
+
+
+def test_flutter_of_the_damped_ziegler_pendulum(capsys, tmp_path):
+    """A flutter reference: Ziegler's pendulum with joint damping c = 0.1 loses stability by
+    flutter at p = 41/28 + c²/2 (its Hurwitz determinant; the case file's source), so with
+    p ~ N(1.3, 0.1²) P(unstable) = Φ(−β), β = (41/28 + 0.005 − 1.3)/0.1 = 1.69286, exactly;
+    FORM finds that point of the one-dimensional boundary to its tolerance (1e-3 asked), and
+    Monte Carlo lies within 4 standard errors."""
+    beta = (41 / 28 + 0.1 ** 2 / 2 - 1.3) / 0.1
+    p = float(ndtr(-beta))
+    args = [CASES / "ziegler_pendulum.toml", "--param", "c=0.1", "--param", "p=normal(1.3, 0.1)"]
+    form = run_json(capsys, *args, "--method", "form", "--out", tmp_path / "form")
+    assert form["reliability_index"] == pytest.approx(beta, rel=1e-3)
+    assert form["design_point"]["p"] == pytest.approx(41 / 28 + 0.005, rel=1e-3)
+    n = 1000
+    mc = run_json(capsys, *args, "--method", "monte-carlo", "--samples", n,
+                  "--out", tmp_path / "mc")
+    assert abs(mc["p_unstable"] - p) <= 4 * math.sqrt(p * (1 - p) / n)
