@@ -44,7 +44,8 @@ import numpy as np
 from .spatial_forces import Rotor
 from .spatial_joints import normal_pair
 
-__all__ = ["NONE_FRACTION", "WHIRLS", "lateral_fraction", "rotors", "station_orbits", "whirl"]
+__all__ = ["NONE_FRACTION", "WHIRLS", "lateral_fraction", "rotors", "station_orbits", "whirl",
+           "whirls", "rotor_geometry"]
 
 WHIRLS = ("forward", "backward", "mixed", "none")
 NONE_FRACTION = 0.1  # whirl "none" at or below this lateral fraction (module docstring)
@@ -57,20 +58,34 @@ def rotors(model) -> list:
     return [f for f in getattr(model, "forces", ()) if isinstance(f, Rotor)] + list(shafts)
 
 
-def station_orbits(model, q0, shape, s=1j) -> list[dict]:
-    """Per rotor station: ``rotor``, ``station``, ``kappa``, ``lateral`` (orbit size |X₁|+|X₂|
-    in the plane normal to the axis) and ``amplitude`` (|X|, axial motion included), for the
-    mode shape ``shape`` (full coordinates) of eigenvalue ``s`` (a shape of Im s < 0 is taken
-    as its conjugate, so that the orbit's sense is that of e^{st} with ω > 0)."""
-    x = np.asarray(shape, complex)
-    if complex(s).imag < 0:
-        x = x.conj()
+def rotor_geometry(model, q0) -> list:
+    """Per rotor at the equilibrium q0, what every mode's whirl reads: (rotor, unit axis a, the
+    normal pair e₁, e₂, σ = sign Ω, the frames' unit vectors E (node, vector, xyz) and the
+    offsets of their triads in the frame's values).  Formed once for all the modes of a point
+    (:func:`whirls`)."""
     out = []
     for r in rotors(model):
         a = r.axis_map()(q0)
         a = a / np.linalg.norm(a)
         e1, e2 = normal_pair(a)
-        sigma = -1.0 if r.speed < 0 else 1.0
+        F0 = np.asarray(r.frame(q0))  # [r; u; v; w] then the triads [u; v; w] of further nodes
+        starts = [3, *range(12, len(F0), 9)]
+        E = np.stack([F0[k:k + 9] for k in starts]).reshape(-1, 3, 3)
+        out.append((r, a, e1, e2, -1.0 if r.speed < 0 else 1.0, E, starts))
+    return out
+
+
+def station_orbits(model, q0, shape, s=1j, *, geometry=None) -> list[dict]:
+    """Per rotor station: ``rotor``, ``station``, ``kappa``, ``lateral`` (orbit size |X₁|+|X₂|
+    in the plane normal to the axis) and ``amplitude`` (|X|, axial motion included), for the
+    mode shape ``shape`` (full coordinates) of eigenvalue ``s`` (a shape of Im s < 0 is taken
+    as its conjugate, so that the orbit's sense is that of e^{st} with ω > 0).  ``geometry``:
+    :func:`rotor_geometry` at q0, where the caller has it."""
+    x = np.asarray(shape, complex)
+    if complex(s).imag < 0:
+        x = x.conj()
+    out = []
+    for r, _, e1, e2, sigma, _, _ in (geometry or rotor_geometry(model, q0)):
         smap = r.station_map  # a spinning beam: (idx, sparse rows) of all
         if smap is None:                         # its stations, its nodes' coordinates
             frame = r.frame.C @ x[r.frame.idx]
@@ -91,15 +106,14 @@ def station_orbits(model, q0, shape, s=1j) -> list[dict]:
     return out
 
 
-def lateral_fraction(model, q0, shape) -> float:
+def lateral_fraction(model, q0, shape, *, geometry=None) -> float:
     """‖lateral motion‖ / ‖whole motion‖ of the rotors in a mode (module docstring); 0 for a
-    mode that does not move them (and without rotor)."""
+    mode that does not move them (and without rotor).  ``geometry``: as in
+    :func:`station_orbits`."""
     x = np.asarray(shape, complex)
     ell = float(model.length_scale)
     lat2 = tot2 = 0.0
-    for r in rotors(model):
-        a = r.axis_map()(q0)
-        a = a / np.linalg.norm(a)
+    for r, a, _, _, _, E, starts in (geometry or rotor_geometry(model, q0)):
         smap = r.station_map
         if smap is None:
             X = np.array([aff.C @ x[aff.idx] for _, aff in r.stations]).reshape(-1, 3)
@@ -108,28 +122,36 @@ def lateral_fraction(model, q0, shape) -> float:
         ax = X @ a
         lat2 += float(np.sum(np.abs(X - np.outer(ax, a)) ** 2))
         tot2 += float(np.sum(np.abs(X) ** 2))
-        F0 = r.frame(q0)            # [r; u; v; w] then the triads [u; v; w] of further nodes
-        dF = r.frame.C @ x[r.frame.idx]
-        triads = [(F0[3:12], dF[3:12])] + [(F0[k:k + 9], dF[k:k + 9])
-                                           for k in range(12, len(F0), 9)]
-        for E, dE in triads:
-            E, dE = np.asarray(E).reshape(3, 3), np.asarray(dE).reshape(3, 3)
-            th = 0.5 * sum(np.cross(E[i], dE[i]) for i in range(3))
-            tw = th @ a
-            lat2 += ell ** 2 * float(np.sum(np.abs(th - tw * a) ** 2))
-            tot2 += ell ** 2 * float(np.sum(np.abs(th) ** 2))
+        dF = r.frame.C @ x[r.frame.idx]  # the frames' motion, triads as in E
+        dE = np.stack([dF[k:k + 9] for k in starts]).reshape(-1, 3, 3)
+        th = 0.5 * (np.cross(E[:, 0], dE[:, 0]) + np.cross(E[:, 1], dE[:, 1])
+                    + np.cross(E[:, 2], dE[:, 2]))  # every node's rotation at once
+        tw = th @ a
+        lat2 += ell ** 2 * float(np.sum(np.abs(th - tw[:, None] * a) ** 2))
+        tot2 += ell ** 2 * float(np.sum(np.abs(th) ** 2))
     return float(np.sqrt(lat2 / tot2)) if tot2 > 0 else 0.0
 
 
+def whirls(model, q0, shapes, eigenvalues, **options) -> list:
+    """:func:`whirl` of every mode (the columns of ``shapes``, full coordinates, with their
+    eigenvalues), the rotors' geometry at q0 formed once."""
+    geometry = rotor_geometry(model, q0)
+    return [whirl(model, q0, shapes[:, k], eigenvalues[k], geometry=geometry, **options)
+            for k in range(shapes.shape[1])]
+
+
 def whirl(model, q0, shape, s=1j, *, line_tol: float = 1e-6, none_tol: float = 1e-6,
-          none_fraction: float = NONE_FRACTION):
-    """forward / backward / mixed / none for one mode (module docstring); None without rotor."""
-    orbits = station_orbits(model, q0, shape, s)
+          none_fraction: float = NONE_FRACTION, geometry=None):
+    """forward / backward / mixed / none for one mode (module docstring); None without rotor.
+    ``geometry``: :func:`rotor_geometry` at q0, where the caller has it (:func:`whirls`)."""
+    geometry = geometry if geometry is not None else rotor_geometry(model, q0)
+    orbits = station_orbits(model, q0, shape, s, geometry=geometry)
     if not orbits:
         return None
     lateral = max(o["lateral"] for o in orbits)
     ref = max(max(o["amplitude"] for o in orbits), max(o["body_motion"] for o in orbits))
-    if ref == 0 or lateral <= none_tol * ref or lateral_fraction(model, q0, shape) <= none_fraction:
+    if ref == 0 or lateral <= none_tol * ref or lateral_fraction(
+            model, q0, shape, geometry=geometry) <= none_fraction:
         return "none"
     if abs(complex(s).imag) <= line_tol * abs(complex(s)):
         return "mixed"  # a real eigenvalue: the orbit does not turn

@@ -26,7 +26,7 @@ import numpy as np
 from ..errors import CaseError, MbseigError
 from ..linear import linearize
 from ..modal import modes
-from ..model.spatial_whirl import rotors, whirl
+from ..model.spatial_whirl import rotors, whirls
 from ..numerics import jsonable
 from ..statics import equilibrium, solved
 from .point import as_spec
@@ -56,8 +56,7 @@ def campbell_point(case, config, params):
     return CampbellPoint(params=dict(params), error=None, eigenvalues=md.eigenvalues,
                          shapes=md.shapes, tol=md.tolerance, kind=list(md.kind),
                          stability=list(md.stability), speed=float(rs[0].speed) if rs else 0.0,
-                         whirl=[whirl(model, eq.q, md.shapes[:, k], md.eigenvalues[k])
-                                for k in range(len(md))])
+                         whirl=whirls(model, eq.q, md.shapes, md.eigenvalues))
 
 
 def speed_parameter(case, name, values, *, config=None, fixed=None) -> bool:

@@ -129,7 +129,7 @@ def analyze_model(model, *, solver="auto", constraint_stiffness=True, modes_opti
 
 def modes_json(a: Analysis) -> dict:
     """The fixed ``mbseig modes --json`` object (extra keys only extend it)."""
-    from ..model.spatial_whirl import whirl  # spatial models only: off the start-up path
+    from ..model.spatial_whirl import whirls  # spatial models only: off the start-up path
 
     md, lin, eq, model = a.modes, a.linear, a.eq, a.model
     out = {
@@ -165,10 +165,12 @@ def modes_json(a: Analysis) -> dict:
     angle_shapes = None
     if rows is not None and rows.shape[0] and md.shapes.shape[0] == rows.shape[1]:
         angle_shapes = rows @ md.shapes  # the named angles of each mode (same normalization)
+    # extension: the whirl of each mode of a model with a rotor (docs/spatial.md)
+    whirl_of = (whirls(model, eq.q, md.shapes, md.eigenvalues)
+                if md.shapes.shape[0] == model.n else [None] * len(md))
     for k in range(len(md)):
         s = md.eigenvalues[k]
-        # extension: the whirl of each mode of a model with a rotor (docs/spatial.md)
-        w = whirl(model, eq.q, md.shapes[:, k], s) if md.shapes.shape[0] == model.n else None
+        w = whirl_of[k]
         out["modes"].append({
             "index": k + 1,
             "eigenvalue": [float(s.real), float(s.imag)],
