@@ -44,8 +44,8 @@ import numpy as np
 from .spatial_forces import Rotor
 from .spatial_joints import normal_pair
 
-__all__ = ["NONE_FRACTION", "WHIRLS", "lateral_fraction", "rotors", "station_orbits", "whirl",
-           "whirls", "rotor_geometry"]
+__all__ = ["NONE_FRACTION", "WHIRLS", "lateral_fraction", "lateral_fractions", "rotors",
+           "station_orbits", "whirl", "whirls", "rotor_geometry"]
 
 WHIRLS = ("forward", "backward", "mixed", "none")
 NONE_FRACTION = 0.1  # whirl "none" at or below this lateral fraction (module docstring)
@@ -109,49 +109,62 @@ def station_orbits(model, q0, shape, s=1j, *, geometry=None) -> list[dict]:
 def lateral_fraction(model, q0, shape, *, geometry=None) -> float:
     """‖lateral motion‖ / ‖whole motion‖ of the rotors in a mode (module docstring); 0 for a
     mode that does not move them (and without rotor).  ``geometry``: as in
-    :func:`station_orbits`."""
-    x = np.asarray(shape, complex)
+    :func:`station_orbits`.  :func:`lateral_fractions` of one mode."""
+    x = np.asarray(shape, complex).reshape(-1, 1)
+    return float(lateral_fractions(model, q0, x, geometry=geometry)[0])
+
+
+def lateral_fractions(model, q0, shapes, *, geometry=None) -> np.ndarray:
+    """:func:`lateral_fraction` of every column of ``shapes`` (full coordinates), at once."""
+    X_all = np.asarray(shapes, complex)
+    K = X_all.shape[1]
     ell = float(model.length_scale)
-    lat2 = tot2 = 0.0
+    lat2, tot2 = np.zeros(K), np.zeros(K)
     for r, a, _, _, _, E, starts in (geometry or rotor_geometry(model, q0)):
         smap = r.station_map
         if smap is None:
-            X = np.array([aff.C @ x[aff.idx] for _, aff in r.stations]).reshape(-1, 3)
+            X = np.stack([aff.C @ X_all[aff.idx] for _, aff in r.stations])  # (station, xyz, mode)
         else:
-            X = (smap[1] @ x[smap[0]]).reshape(-1, 3)
-        ax = X @ a
-        lat2 += float(np.sum(np.abs(X - np.outer(ax, a)) ** 2))
-        tot2 += float(np.sum(np.abs(X) ** 2))
-        dF = r.frame.C @ x[r.frame.idx]  # the frames' motion, triads as in E
-        dE = np.stack([dF[k:k + 9] for k in starts]).reshape(-1, 3, 3)
-        th = 0.5 * (np.cross(E[:, 0], dE[:, 0]) + np.cross(E[:, 1], dE[:, 1])
-                    + np.cross(E[:, 2], dE[:, 2]))  # every node's rotation at once
-        tw = th @ a
-        lat2 += ell ** 2 * float(np.sum(np.abs(th - tw[:, None] * a) ** 2))
-        tot2 += ell ** 2 * float(np.sum(np.abs(th) ** 2))
-    return float(np.sqrt(lat2 / tot2)) if tot2 > 0 else 0.0
+            X = (smap[1] @ X_all[smap[0]]).reshape(-1, 3, K)
+        ax = np.einsum("sim,i->sm", X, a)
+        lat2 += np.sum(np.abs(X - ax[:, None, :] * a[None, :, None]) ** 2, axis=(0, 1))
+        tot2 += np.sum(np.abs(X) ** 2, axis=(0, 1))
+        dF = r.frame.C @ X_all[r.frame.idx]  # the frames' motion, triads as in E
+        dE = np.stack([dF[k:k + 9] for k in starts]).reshape(-1, 3, 3, K)
+        # every node's rotation θ = ½ Σᵢ eᵢ × δeᵢ in every mode: (node, xyz, mode)
+        th = 0.5 * sum(np.cross(E[:, i, :, None], dE[:, i], axisa=1, axisb=1, axisc=1)
+                       for i in range(3))
+        tw = np.einsum("nim,i->nm", th, a)
+        lat2 += ell ** 2 * np.sum(np.abs(th - tw[:, None, :] * a[None, :, None]) ** 2,
+                                  axis=(0, 1))
+        tot2 += ell ** 2 * np.sum(np.abs(th) ** 2, axis=(0, 1))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(tot2 > 0, np.sqrt(lat2 / np.where(tot2 > 0, tot2, 1.0)), 0.0)
 
 
 def whirls(model, q0, shapes, eigenvalues, **options) -> list:
     """:func:`whirl` of every mode (the columns of ``shapes``, full coordinates, with their
     eigenvalues), the rotors' geometry at q0 formed once."""
     geometry = rotor_geometry(model, q0)
-    return [whirl(model, q0, shapes[:, k], eigenvalues[k], geometry=geometry, **options)
-            for k in range(shapes.shape[1])]
+    fractions = lateral_fractions(model, q0, shapes, geometry=geometry)
+    return [whirl(model, q0, shapes[:, k], eigenvalues[k], geometry=geometry,
+                  fraction=fractions[k], **options) for k in range(shapes.shape[1])]
 
 
 def whirl(model, q0, shape, s=1j, *, line_tol: float = 1e-6, none_tol: float = 1e-6,
-          none_fraction: float = NONE_FRACTION, geometry=None):
+          none_fraction: float = NONE_FRACTION, geometry=None, fraction=None):
     """forward / backward / mixed / none for one mode (module docstring); None without rotor.
-    ``geometry``: :func:`rotor_geometry` at q0, where the caller has it (:func:`whirls`)."""
+    ``geometry``: :func:`rotor_geometry` at q0, and ``fraction`` the mode's
+    :func:`lateral_fraction`, where the caller has them (:func:`whirls`)."""
     geometry = geometry if geometry is not None else rotor_geometry(model, q0)
     orbits = station_orbits(model, q0, shape, s, geometry=geometry)
     if not orbits:
         return None
     lateral = max(o["lateral"] for o in orbits)
     ref = max(max(o["amplitude"] for o in orbits), max(o["body_motion"] for o in orbits))
-    if ref == 0 or lateral <= none_tol * ref or lateral_fraction(
-            model, q0, shape, geometry=geometry) <= none_fraction:
+    if fraction is None and not (ref == 0 or lateral <= none_tol * ref):
+        fraction = lateral_fraction(model, q0, shape, geometry=geometry)
+    if ref == 0 or lateral <= none_tol * ref or fraction <= none_fraction:
         return "none"
     if abs(complex(s).imag) <= line_tol * abs(complex(s)):
         return "mixed"  # a real eigenvalue: the orbit does not turn
