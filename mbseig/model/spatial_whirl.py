@@ -118,9 +118,9 @@ def lateral_fractions(model, q0, shapes, *, geometry=None) -> np.ndarray:
     """:func:`lateral_fraction` of every column of ``shapes`` (full coordinates), at once."""
     X_all = np.asarray(shapes, complex)
     K = X_all.shape[1]
-    ell = float(model.length_scale)
     lat2, tot2 = np.zeros(K), np.zeros(K)
     for r, a, _, _, _, E, starts in (geometry or rotor_geometry(model, q0)):
+        ell = float(model.length_scale)
         smap = r.station_map
         if smap is None:
             X = np.stack([aff.C @ X_all[aff.idx] for _, aff in r.stations])  # (station, xyz, mode)
@@ -146,6 +146,8 @@ def whirls(model, q0, shapes, eigenvalues, **options) -> list:
     """:func:`whirl` of every mode (the columns of ``shapes``, full coordinates, with their
     eigenvalues), the rotors' geometry at q0 formed once."""
     geometry = rotor_geometry(model, q0)
+    if not geometry:  # (no rotor: no whirl)
+        return [None] * shapes.shape[1]
     fractions = lateral_fractions(model, q0, shapes, geometry=geometry)
     return [whirl(model, q0, shapes[:, k], eigenvalues[k], geometry=geometry,
                   fraction=fractions[k], **options) for k in range(shapes.shape[1])]
