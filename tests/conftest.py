@@ -33,6 +33,9 @@ NOT_NUMERIC_MODULES = {
 # single tests in modules that are otherwise numeric (the test's name, parameters left off)
 NOT_NUMERIC_TESTS = {
     "test_report.py": {"test_report_is_deterministic": "the same report twice, byte for byte",
+                       "test_report_sections_and_time_domain_check": "headings, the commanded "
+                       "posture, the time-domain check's percent-level pass, the sensitivity "
+                       "ranking's first parameter and its unit",
                        "test_report_summary_names_units_provenance": "headings, names, units "
                        "and provenance of the page (its numbers: tests/test_cases.py)"},
     # the output's schema and the verdict rule over whatever modes a case lists: no value against
@@ -59,9 +62,24 @@ NOT_NUMERIC_TESTS = {
     "test_timedomain.py": {"test_damped_chain_every_mode_within_1_percent": "1 % tolerance"},
     "test_spatial_cli.py": {"test_report_on_every_spatial_case": "the report is written (the "
                             "verdict it prints: test_modes_and_check_on_every_spatial_case)"},
+    # the probabilities of instability against closed forms, within standard errors (or 1e-3
+    # for FORM): a kernel's rounding moves no sample's verdict across δ = 0 unless its δ lies
+    # within ~1e-13 of it (the verdict rule and its bounds stay numeric: test_batch_rules.py,
+    # test_cases.py, and here the batch against one sample at a time)
     "test_uncertainty.py": {"test_resume_gives_the_same_output": "a resumed study equals the "
                             "uninterrupted one: one kernel, twice",
-                            "test_bad_inputs_are_refused_in_one_line": "one-line refusals"},
+                            "test_bad_inputs_are_refused_in_one_line": "one-line refusals",
+                            "test_monte_carlo_matches_the_closed_form": "standard errors",
+                            "test_zero_unstable_samples_give_an_honest_interval": "no sample "
+                            "near the boundary",
+                            "test_form_is_exact_on_the_plane": "1e-3",
+                            "test_form_beta_is_negative_where_the_mean_is_unstable": "1e-3",
+                            "test_subset_simulation_reaches_a_small_probability": "3 CoV",
+                            "test_flutter_of_the_damped_ziegler_pendulum": "1e-3 and standard "
+                            "errors",
+                            "test_samples_without_a_model_are_counted_failed": "counts and "
+                            "messages",
+                            "test_readme_worked_example": "the README's 3 printed digits"},
     "test_guide.py": {"test_every_block_of_the_guide_runs": "the guide's commands exit 0 and "
                       "write their files"},
     "test_animate.py": {"test_report_embeds_one_animation_per_mode": "one animation a mode",

@@ -22,7 +22,8 @@ rounds, from converged neighbours; every sample must then be reached again from 
 equilibrium (no sample on another branch).  The modes of all of them come from
 :func:`~mbseig.studies.spectra.point_spectra`.  Where the batch declines (its reason), the task
 is split in two and each half tried again, down to ``ALONE`` samples, which are solved one at a
-time as ``mbseig modes`` solves them (from the case's positions).
+time as ``mbseig modes`` solves them (from the case's positions; the model from the same maker,
+which equals a build).
 
 Steady and periodic samples are solved one at a time (the one-point pipelines), in parallel
 where the runner decides it pays.  A sample whose reference motion or modes fail is ``failed``
@@ -65,14 +66,16 @@ def least_damping(spectrum) -> tuple:
     return delta, bound
 
 
-def _rest_one(spec, config, params, opts):
-    """(δ, bound, code, error) of one sample at rest, as ``mbseig modes`` solves it."""
+def _rest_one(spec, config, params, opts, make=None):
+    """(δ, bound, code, error) of one sample at rest, as ``mbseig modes`` solves it: its model
+    built (or ``make()``, the lean maker's model, equal to the build), its equilibrium from the
+    case's positions, its modes."""
     from ..statics import equilibrium
     from .continuation import linear_point
     from .spectra import point_spectra
 
     try:
-        model = spec.build(config, **params)
+        model = spec.build(config, **params) if make is None else make()
         eq = equilibrium(model, offer_stable=False, self_stress="report")
         sp = point_spectra([linear_point(eq.model, eq)], **opts)[0]
         if isinstance(sp, BaseException):
@@ -155,7 +158,8 @@ def _together(spec, config, fixed, names, X, q_start, opts, out):
         if got is None:
             for i in idx:
                 _put(out, i, _rest_one(spec, config, {**fixed, **dict(zip(names, rows[i],
-                                                                        strict=True))}, opts))
+                                                                        strict=True))}, opts,
+                                       make=lambda i=i: make_t(i)))
             continue
         spectra = point_spectra(got, **opts)
         for i, sp in zip(idx, spectra, strict=True):
