@@ -41,6 +41,8 @@ NOT_NUMERIC_TESTS = {
     # the output's schema and the verdict rule over whatever modes a case lists: no value against
     # a reference (every case's values: tests/test_cases.py and test_small_modes.py, numeric)
     "test_cli.py": {"test_modes_json_schema": "the JSON's keys, order and verdict rule",
+                    "test_executable_prompt_exit_delivers_the_whole_output": "a process's "
+                    "output equals main()'s in the same kernel, exit codes",
                     "test_modes_table_and_linearize": "the table's labels, files written"},
     "test_report_reading.py": {
         "test_one_page_style_for_every_motion": "the page's style sheet and layout",
@@ -59,7 +61,13 @@ NOT_NUMERIC_TESTS = {
                                     "and ω = Ω read from the printed 6 digits to 1e-5"},
     # an integration's error against a prediction at 1 %: another kernel's rounding (1e-15
     # relative) cannot move it (the rounding-level tests of that module stay numeric)
-    "test_timedomain.py": {"test_damped_chain_every_mode_within_1_percent": "1 % tolerance"},
+    "test_timedomain.py": {"test_damped_chain_every_mode_within_1_percent": "1 % tolerance",
+                           "test_cli_json_schema": "the JSON's keys and the tolerances it "
+                           "records"},
+    "test_beams3d.py": {"test_bad_input_one_line": "one-line refusals"},
+    "test_bad_input.py": {"test_real_process_exit_code": "an exit code and one line"},
+    "test_periodic_report.py": {"test_periodic_report_no_check_no_studies": "sections left out "
+                                "and a refusal"},
     "test_spatial_cli.py": {"test_report_on_every_spatial_case": "the report is written (the "
                             "verdict it prints: test_modes_and_check_on_every_spatial_case)"},
     # the probabilities of instability against closed forms, within standard errors (or 1e-3
