@@ -88,14 +88,21 @@ def _stability(model, q, lam, rank_tol, stiffness_tol, symmetry_tol) -> dict:
             if Kr.shape[0] > SPARSE_CHECK_MIN else None)
     if fast is not None:
         return {**rec, **fast}
-    norm = float(np.linalg.norm(Kr, 2)) or 1.0
     S = Kr - Kr.T
-    asym = float(np.linalg.norm(S, 2)) / norm if np.any(S) else 0.0  # (‖0‖₂ = 0 exactly)
+    if not np.any(S):  # exactly symmetric: ‖K_r‖₂ = max |μ|, from the one eigh it needs
+        mu, V = np.linalg.eigh(Kr)
+        norm = float(np.max(np.abs(mu))) or 1.0
+        asym = 0.0
+    else:
+        mu = None
+        norm = float(np.linalg.norm(Kr, 2)) or 1.0
+        asym = float(np.linalg.norm(S, 2)) / norm
     symmetric = asym <= symmetry_tol
     rec["symmetric"] = bool(symmetric)
     rec["asymmetry"] = asym
     if symmetric:
-        mu, V = np.linalg.eigh(0.5 * (Kr + Kr.T))
+        if mu is None:
+            mu, V = np.linalg.eigh(0.5 * (Kr + Kr.T))
         index = int(np.sum(mu < -stiffness_tol * norm))
         zero = int(np.sum(np.abs(mu) <= stiffness_tol * norm))
         rec.update(min_eigenvalue=float(mu[0]), index=index, zero=zero,
