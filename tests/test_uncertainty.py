@@ -159,7 +159,7 @@ def test_subset_simulation_reaches_a_small_probability(capsys, tmp_path):
 
 def test_resume_gives_the_same_output(capsys, tmp_path):
     args = [PENDULUM, "--param", "k1=normal(6, 1)", "--param", "k2=normal(6, 0.8)",
-            "--samples", 1500, "--method", "monte-carlo", "--resume", tmp_path / "kept"]
+            "--samples", 600, "--method", "monte-carlo", "--resume", tmp_path / "kept"]
     first = run_json(capsys, *args, "--out", tmp_path / "a")
     second = run_json(capsys, *args, "--out", tmp_path / "b")
     for out in (first, second):
