@@ -35,16 +35,24 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import MbseigError
+from ..model import Model
+from ..statics.family import Family
+from .batch_line import batch_line
+from .boundaries import _Start
+from .continuation import family_maker
+from .uncertainty_methods import CODES as WORDS
+from .uncertainty_methods import FAILED
 
-__all__ = ["CHUNK", "ALONE", "sample_task", "SampleEvaluator", "least_damping"]
+__all__ = ["CHUNK", "ALONE", "uncertainty_study", "UncertaintyStudy", "check_inputs",
+           "sample_task", "SampleEvaluator", "least_damping", "nominal_start"]
 
 #: samples one task solves together (the batch's stacked work grows with them; a declined
 #: batch is split, so a larger task only delays the split)
 CHUNK = 1000
 #: a declined batch is split down to this many samples, which are then solved one at a time
 ALONE = 8
-#: codes of the verdicts (the order of :data:`mbseig.modal.result.STABILITY_ORDER`), and failed
-CODES = {"stable": 0, "critical": 1, "unstable": 2, "failed": 3}
+#: the verdict codes of :mod:`~mbseig.studies.uncertainty_methods` by their words
+CODES = {w: k for k, w in enumerate(WORDS)}
 
 
 def least_damping(spectrum) -> tuple:
@@ -81,7 +89,7 @@ def _rest_one(spec, config, params, opts, make=None):
         if isinstance(sp, BaseException):
             raise sp
     except MbseigError as exc:
-        return np.nan, np.nan, CODES["failed"], exc.one_line()
+        return np.nan, np.nan, FAILED, exc.one_line()
     d, b = least_damping(sp)
     return d, b, CODES[str.__str__(sp.verdict)], None
 
@@ -92,7 +100,7 @@ def _steady_one(spec, config, params, opts):
     try:
         pt = _steady_point(spec, config, params)
     except MbseigError as exc:
-        return np.nan, np.nan, CODES["failed"], exc.one_line()
+        return np.nan, np.nan, FAILED, exc.one_line()
     rows = [r for r in pt.modes if not r.get("rigid_body")]
     if rows:
         r = min(rows, key=lambda r: r["delta"])
@@ -108,7 +116,7 @@ def _periodic_one(spec, config, params, opts):
     try:
         fl = periodic_analysis(spec, config=config, params=params).floquet
     except MbseigError as exc:
-        return np.nan, np.nan, CODES["failed"], exc.one_line()
+        return np.nan, np.nan, FAILED, exc.one_line()
     mod = np.abs(fl.multipliers)
     k = int(np.argmax(mod))
     T = float(fl.period)
@@ -123,11 +131,6 @@ _ONE = {"rest": _rest_one, "steady": _steady_one, "periodic": _periodic_one}
 def _together(spec, config, fixed, names, X, q_start, opts, out):
     """The samples X (rows) at rest solved together where the batch takes them (module
     docstring), into ``out`` = (δ, bound, code, errors) at the rows' positions."""
-    from ..model import Model
-    from ..statics.family import Family
-    from .batch_line import batch_line
-    from .boundaries import _Start
-    from .continuation import family_maker
     from .spectra import point_spectra
 
     B = X.shape[0]
@@ -148,7 +151,7 @@ def _together(spec, config, fixed, names, X, q_start, opts, out):
         got = None
         if idx.size > ALONE:
             try:
-                got = _batch(make_t, idx, q_start, Family, batch_line, _Start, Model)
+                got = _batch(make_t, idx, q_start)
             except (MbseigError, np.linalg.LinAlgError, ValueError, FloatingPointError):
                 got = None
         if got is None and idx.size > ALONE:
@@ -164,14 +167,14 @@ def _together(spec, config, fixed, names, X, q_start, opts, out):
         spectra = point_spectra(got, **opts)
         for i, sp in zip(idx, spectra, strict=True):
             if isinstance(sp, BaseException):
-                _put(out, i, (np.nan, np.nan, CODES["failed"],
+                _put(out, i, (np.nan, np.nan, FAILED,
                               sp.one_line() if isinstance(sp, MbseigError) else str(sp)))
             else:
                 d, b = least_damping(sp)
                 _put(out, i, (d, b, CODES[str.__str__(sp.verdict)], None))
 
 
-def _batch(make_t, idx, q_start, Family, batch_line, _Start, Model):
+def _batch(make_t, idx, q_start):
     """The linear models of the samples ``idx`` solved together, or None where the batch
     declines."""
     values = idx.astype(float)
@@ -195,7 +198,7 @@ def sample_task(spec, config, fixed, names, X, q_start, kind, opts) -> tuple:
     rest; None solves every sample on its own)."""
     X = np.asarray(X, float)
     n = X.shape[0]
-    out = (np.full(n, np.nan), np.full(n, np.nan), np.full(n, CODES["failed"], int),
+    out = (np.full(n, np.nan), np.full(n, np.nan), np.full(n, FAILED, int),
            [None] * n)
     if kind == "rest":
         order = np.argsort(X[:, 0], kind="stable")  # (neighbours close in the first input)
@@ -248,7 +251,6 @@ class SampleEvaluator:
 def nominal_start(spec, config, fixed, names, x0):
     """The equilibrium coordinates at the inputs' medians ``x0`` (the start of every batch at
     rest), or None where it has none (each sample then on its own)."""
-    from ..model import Model
     from ..statics import equilibrium
 
     try:
@@ -376,13 +378,8 @@ def uncertainty_study(case, inputs, *, config=None, fixed=None, samples=10_000, 
                 points=int(samples)) as runner:
         ev = SampleEvaluator(spec, config, fixed, names, runner, kind=kind, q_start=q_start,
                              safety=safety, stability_rtol=stability_rtol)
-
-        def evaluate(X, stage):
-            return ev(X, stage)
-
-        result = estimate(inputs, evaluate, method=method, samples=int(samples),
-                          seed=int(seed))
-        errors = list(ev.errors)
+        result = estimate(inputs, ev, method=method, samples=int(samples), seed=int(seed))
+        errors = list(ev.errors)  # (before the grid: its evaluations are not the estimate's)
         box = None
         if grid and len(inputs) == 2 and result.evaluated.x.shape[0] >= 2:
             box = _grid(ev, inputs, result.evaluated.x, GRID if kind == "rest" else GRID_MOVING)
@@ -403,5 +400,4 @@ def _grid(ev, inputs, X, n):
             g[j] = np.linspace(inp.arguments[0], inp.arguments[1], n)
     G1, G2 = np.meshgrid(g[0], g[1], indexing="ij")
     d, b, _ = ev(np.column_stack([G1.ravel(), G2.ravel()]), "boundary grid")
-    ev.errors = ev.errors[:-G1.size]  # (the grid's errors are not the estimate's)
     return g[0], g[1], d.reshape(n, n), b.reshape(n, n)
