@@ -94,6 +94,9 @@ class LinearModel:
     constraint_stiffness: bool = True
     tolerances: dict = field(default_factory=dict)
     constraint_jacobian: object = None  # sparse Φ_q when M, P, Q stay in full coordinates
+    #: the constraints' rank N already takes out (a local basis, mbseig.model.tangent): the
+    #: rows left in ``constraint_jacobian`` are in N's columns and have rank − eliminated
+    eliminated: int = 0
     B: np.ndarray = None  # dof × n_u: M ẍ + P ẋ + Q x = B u (None: not formed, sparse path)
     C: np.ndarray = None  # n_y × 2 dof: y = C [x; ẋ] + D u
     D: np.ndarray = None  # n_y × n_u
@@ -114,7 +117,7 @@ class LinearModel:
     @property
     def dof(self) -> int:
         if self.constraint_jacobian is not None:
-            return self.M.shape[0] - self.rank
+            return self.M.shape[0] - (self.rank - self.eliminated)
         return self.M.shape[0]
 
     @property
@@ -216,13 +219,21 @@ def _linearize(model, eq, rank_tol, constraint_stiffness, sparse, reference=None
     if use_sparse:
         G = model.phi_q(q0) if model.n_constraints else None
         N = sp.identity(model.n, format="csr") if G is None else None
+        M = model.mass_matrix(q0).tocsr()
+        tol = {"rank_tol": rank_tol, "sparse": True}
+        eliminated = 0
+        if G is not None and (local := _local(model, q0, rank_tol)) is not None:
+            # the triads by their tangent space, small joint components by their own null
+            # space (mbseig.model.tangent): the FE matrices plus what stays bordered
+            N, G, eliminated = local.N, local.kept, local.rank
+            M, C, K = (_project(N, A) for A in (M, C.tocsr(), K.tocsr()))
+            tol.update(local.record)
         return LinearModel(
-            M=model.mass_matrix(q0).tocsr(), P=C.tocsr(), Q=K.tocsr(), N=N, q0=q0, lam0=lam0,
+            M=M, P=C.tocsr(), Q=K.tocsr(), N=N, q0=q0, lam0=lam0,
             coordinate_names=model.coordinate_names, name=model.name, parameters=model.parameters,
             rank=eq.rank, n_constraints=model.n_constraints,
-            constraint_stiffness=constraint_stiffness,
-            tolerances={"rank_tol": rank_tol, "sparse": True}, constraint_jacobian=G,
-            display=Displayed(model, q0))
+            constraint_stiffness=constraint_stiffness, tolerances=tol, constraint_jacobian=G,
+            eliminated=eliminated, display=Displayed(model, q0))
     G = model.phi_q(q0, dense=True)
     N, rank, independent, sigma = (continuous_null_basis(G, model.n, rank_tol,
                                                          model.coordinate_names, reference)
@@ -244,6 +255,26 @@ def _linearize(model, eq, rank_tol, constraint_stiffness, sparse, reference=None
         n_constraints=model.n_constraints, constraint_stiffness=constraint_stiffness,
         tolerances=tol, independent=independent, rigid=rigid, display=display, **io,
     )
+
+
+def _local(model, q0, rank_tol):
+    """The local basis of a model with frames (:func:`mbseig.model.tangent.local_basis`), or
+    None for a model without triads (its constraints stay in the bordered pencil)."""
+    from .model.tangent import local_basis, triad_coordinates
+
+    if triad_coordinates(model)[0].shape[0] == 0:
+        return None
+    return local_basis(model, q0, rank_tol)
+
+
+def _project(N, A):
+    """Nᵀ A N (CSR); exactly symmetric where A is (the sums of Nᵀ A N in two orders differ by
+    rounding only)."""
+    R = (N.T @ A @ N).tocsr()
+    if (A != A.T).nnz == 0:
+        R = ((R + R.T) * 0.5).tocsr()
+    R.eliminate_zeros()
+    return R
 
 
 class Displayed:

@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..model.affine import Affine, combine
+from ..model.beam3d_batch import group_of
 from ..model.beam3d import (
     THEORIES,
     Beam3DElement,
@@ -266,6 +267,13 @@ def _node_frame(b, spec, k):
     return combine([(1.0, spec.pos[k]), (1.0, triad)], stack=True)
 
 
+def _masses(group, els, q0):
+    """The elements' masses at q₀ in one batch (one alone where the batch gave its error)."""
+    got = group.evaluate_all("mass", els, q0, None)
+    return [el.mass(q0) if isinstance(m, Exception) else m
+            for el, m in zip(els, got, strict=True)]
+
+
 def assemble(b, forces, constraints, mass_elements, mass_blocks, g_const, gravity):
     """Add the elements of every 3-D beam; return ({name: record}, [SpinningShaft])."""
     b.bind()
@@ -278,15 +286,21 @@ def assemble(b, forces, constraints, mass_elements, mass_blocks, g_const, gravit
                 constraints.append(triad_constraint(f"{spec.label} node {k} (rigid triad)",
                                                     frames[k]))
         f = Fields({}, spec.label, {})
+        els, at = [], []
         for k in range(spec.n_elements):
             l0 = float(spec.arcs[k + 1] - spec.arcs[k])
             w = combine([(1.0, frames[k]), (1.0, frames[k + 1])], stack=True)
             el = f.formed("the beam element's matrices", lambda s=spec, k=k, w=w, l0=l0:
                           Beam3DElement(f"{s.label} element {k + 1}", w, s.props, l0, s.R0,
                                         s.spin))
-            if el.idx.size == 0:
-                continue
-            M_ref = f.formed("the beam element's mass matrix", lambda el=el: el.mass(q0))
+            if el.idx.size:
+                els.append(el)
+                at.append((k, l0))
+        # the masses at the reference, all elements of the beam in one batch (a member's numbers
+        # do not depend on its batch: mbseig.model.beam3d_batch)
+        masses = f.formed("the beam element's mass matrix",
+                          lambda els=els, p=spec.props: _masses(group_of(p), els, q0))
+        for el, M_ref, (k, l0) in zip(els, masses, at, strict=True):
             forces.append(el)
             mass_elements.append((el, M_ref))
             mass_blocks.append((el.idx, el.idx, M_ref))

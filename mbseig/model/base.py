@@ -116,6 +116,11 @@ class Force(_Element):
     #: closed form (the 3-D beams), which the time-domain check uses instead of differences
     velocity_terms = None
 
+    def batch_group(self, q, qd=None):
+        """The batch that evaluates this element together with others of its kind at (q, q̇)
+        (the 3-D beams: :mod:`mbseig.model.beam3d_batch`), or None: evaluated alone."""
+        return None
+
     def force(self, q, qd):
         raise NotImplementedError
 

@@ -158,18 +158,9 @@ class Beam3DElement(Force, ConfigurationMass):
     affine_field = "frames"
 
     def __post_init__(self):
-        p, l0 = self.props, self.l0
-        em = element_matrices(p, l0)
+        em, planes = _constants(self.props, float(self.l0))
         S = frames_to_local(self.R0)
         nodes = Affine(self.frames.idx, S @ self.frames.C, S @ self.frames.d)
-        planes = []
-        for Phi, I_bend in ((em.Phi_y, p.Iz), (em.Phi_z, p.Iy)):
-            _, dN, _ = timoshenko_shape_functions(GAUSS_X, l0, Phi)
-            dphi = dN[:, [1, 3]]
-            Gm = (dphi.T * (GAUSS_W * l0)) @ dphi / l0
-            Kb = p.E * I_bend / (l0 * (1 + Phi)) * np.array([[4 + Phi, 2 - Phi],
-                                                              [2 - Phi, 4 + Phi]])
-            planes.append((Gm, Kb))
         object.__setattr__(self, "_nodes", nodes)
         object.__setattr__(self, "_em", em)
         object.__setattr__(self, "_planes", tuple(planes))
@@ -264,6 +255,10 @@ class Beam3DElement(Force, ConfigurationMass):
         real vectors; anything else (complex steps) is evaluated here alone."""
         return BATCHED and _real(q) and (qd is None or _real(qd))
 
+    def batch_group(self, q, qd=None):
+        """The batch that serves this element at (q, q̇) (:meth:`_batched`), or None."""
+        return group_of(self.props) if self._batched(q, qd) else None
+
     def kernel_record(self) -> dict:
         """This element's constant data for :class:`mbseig.model.beam3d_kernel.Stack`."""
         p, (Gz, Kbz), (Gy, Kby) = self.props, *self._planes
@@ -321,6 +316,31 @@ class Beam3DElement(Force, ConfigurationMass):
         """:meth:`mass` of this element alone."""
         T = self.velocity_map(q)
         return T.T @ self._em.M @ T
+
+
+def _constants(p, l0):
+    """(element matrices, bending planes' (G, K_b)) of an element of length l0: the same for
+    every element of a beam with that length, so made once per (properties, length) and kept
+    on the properties (read-only, shared)."""
+    kept = p.__dict__.get("_elements")
+    if kept is None:
+        kept = {}
+        object.__setattr__(p, "_elements", kept)
+    hit = kept.get(l0)
+    if hit is None:
+        em = element_matrices(p, l0)
+        planes = []
+        for Phi, I_bend in ((em.Phi_y, p.Iz), (em.Phi_z, p.Iy)):
+            _, dN, _ = timoshenko_shape_functions(GAUSS_X, l0, Phi)
+            dphi = dN[:, [1, 3]]
+            Gm = (dphi.T * (GAUSS_W * l0)) @ dphi / l0
+            Kb = p.E * I_bend / (l0 * (1 + Phi)) * np.array([[4 + Phi, 2 - Phi],
+                                                              [2 - Phi, 4 + Phi]])
+            planes.append((Gm, Kb))
+        for A in (em.M, em.K, em.G, em.Kg, *(x for pl in planes for x in pl)):
+            A.setflags(write=False)
+        hit = kept[l0] = (em, tuple(planes))
+    return hit
 
 
 def _real(v) -> bool:

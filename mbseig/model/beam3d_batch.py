@@ -84,6 +84,19 @@ class BatchGroup:
             raise result
         return result
 
+    def prime(self, kind, members, q, qd):
+        """Evaluate ``kind`` of every member at (q, q̇) in one batch, each result then served
+        once by :meth:`evaluate` (the caller is about to ask them all: the model's assembly)."""
+        members = [m for m in members if m.idx.size and m.idx.max() < q.shape[0]]
+        if not members:
+            return
+        cache = self.caches[kind]
+        cache.entries, cache.asked = {}, {}
+        dep = KINDS[kind]
+        for m, r in zip(members, self._run(kind, members, q, qd), strict=True):
+            mi = m.idx
+            cache.entries[m] = (q[mi].tobytes() + (qd[mi].tobytes() if dep else b""), r)
+
     def evaluate_all(self, kind, members, q, qd):
         """``kind`` of every member at (q, q̇), evaluated together (no cache; the results of a
         collapsed member are its EquilibriumError)."""

@@ -41,6 +41,7 @@ class BeamProperties3D:
         is not part of the properties."""
         state = dict(self.__dict__)
         state.pop("_batch", None)
+        state.pop("_elements", None)  # the element constants kept by mbseig.model.beam3d
         return state
 
     def __post_init__(self):

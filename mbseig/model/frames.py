@@ -106,13 +106,32 @@ class CoordinateFrames:
         s = self._arc_length(model, rec, k)
         if s is None:
             return f"{m['beam']} node {k + 1} of {len(rec['nodes'])}"
-        for name, at in (rec.get("stations") or {}).items():
-            if abs(at - s) <= 1e-9 * max(1.0, float(rec.get("length", 1.0))):
-                return f"{m['beam']}.{name}"
+        name = self._station_at(rec, s)
+        if name is not None:
+            return f"{m['beam']}.{name}"
         pts = rec.get("points") or []
         if pts and k in (0, len(rec["nodes"]) - 1):  # an end: the point the case names
             return f"{m['beam']} at {pts[0] if k == 0 else pts[-1]}"
         return f"{m['beam']} at s = {s:.4g} m"
+
+    def _station_at(self, rec, s):
+        """The first station (in the case's order) within 1e-9 · max(1, L) of arc length s, or
+        None (the stations sorted once per beam record)."""
+        stations = rec.get("stations") or {}
+        if not stations:
+            return None
+        kept = self.__dict__.setdefault("_stations", {})
+        hit = kept.get(id(rec))
+        if hit is None or hit[0] is not rec:
+            names = list(stations)
+            at = np.array([stations[nm] for nm in names], float)
+            order = np.argsort(at, kind="stable")
+            hit = kept[id(rec)] = (rec, at[order], order, names)
+        _, at, order, names = hit
+        tol = 1e-9 * max(1.0, float(rec.get("length", 1.0)))
+        lo, hi = np.searchsorted(at, s - tol, "left"), np.searchsorted(at, s + tol, "right")
+        near = [int(order[j]) for j in range(lo, hi) if abs(at[j] - s) <= tol]
+        return names[min(near)] if near else None
 
     def _arc_length(self, model, rec, k):
         """Arc length of node k of a straight beam in its reference configuration: the distance

@@ -17,7 +17,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..numerics import DENSE_ASSEMBLY, FAST_CSR, coo_sum, scatter
-from .base import BatchForce
+from .base import BatchForce, Force
 from .batched import kernel_groups
 from .cache import KeptValues
 
@@ -123,9 +123,22 @@ class Model:
         singles = [f for f in self.forces if not isinstance(f, BatchForce)]
         return kernel_groups(self.constraints), singles, kernel_groups(singles)
 
+    def _prime(self, elements, kind, q, qd=None):
+        """Evaluate ``kind`` of the batched elements (3-D beams) among ``elements`` at (q, q̇),
+        one batch per group, before the model asks them one by one."""
+        groups = {}
+        for e in elements:
+            g = e.batch_group(q, qd) if isinstance(e, Force) else None
+            if g is not None:
+                groups.setdefault(id(g), (g, []))[1].append(e)
+        for g, members in groups.values():
+            g.prime(kind, members, q, qd)
+
     def _each(self, which, method, *args):
         """[element.method(*args)] of the constraints (``which`` 0) or single forces (1)."""
         elements = self.constraints if which == 0 else self._groups[1]
+        if which == 1 and method in ("force", "jacobians") and self._batched_forces:
+            self._prime(elements, method, *args)
         groups = self._groups[2 * which]
         if not groups:
             return [getattr(e, method)(*args) for e in elements]
@@ -136,11 +149,19 @@ class Model:
         return [getattr(e, method)(*args) if v is None else v
                 for e, v in zip(elements, out, strict=True)]
 
+    @cached_property
+    def _batched_forces(self) -> bool:
+        """Whether some single force is evaluated in batches (:meth:`_prime`)."""
+        return any(isinstance(f, Force) and type(f).batch_group is not Force.batch_group
+                   for f in self.forces)
+
     def mass_matrix(self, q=None, *, fixed=False) -> sp.csr_matrix:
         """M(q): ``mass`` with the configuration-dependent element masses evaluated at q, the
         sums of ``mass + scatter(blocks)`` (no stored zeros; ``fixed``: one pattern at all q)."""
         if q is None or not self.mass_elements:
             return self.mass
+        if self._batched_forces:
+            self._prime([e for e, _ in self.mass_elements], "mass", q)
         blocks = [(e.idx, e.idx, e.mass(q) - M_ref) for e, M_ref in self.mass_elements]
         vals = [np.asarray(v, dtype=float).ravel() for _, _, v in blocks]
         S, pos, U = self._layout.mass_plan()
@@ -275,6 +296,10 @@ class Model:
             return f"coordinate {self.coordinate_names[k]}", "the sum of gravity and point forces"
         # evaluated under errstate "ignore": an overflow is judged by the results below
         with np.errstate(all="ignore"):
+            if _finite(lambda: self._assembled(q, qd)):
+                # the sums are finite, so is every term (a non-finite term leaves its sum
+                # inf or NaN): no element to name, without evaluating each one alone
+                return None
             for f in self.forces:
                 if isinstance(f, BatchForce):  # a batch: name the member
                     member = f.nonfinite_member(q, qd)
@@ -289,6 +314,16 @@ class Model:
                 if not _finite(lambda c=c: (c.phi(q), c.jac(q), c.hess(q, np.ones(c.n_eq)))):
                     return c.name, "the constraint or its derivatives"
         return None
+
+    def _assembled(self, q, qd):
+        """What :meth:`nonfinite_element` checks element by element, assembled (the data of
+        the sparse sums)."""
+        K, C = self.force_jacobians(q, qd)
+        out = [self.generalized_force(q, qd), K.data, C.data, self.mass_matrix(q).data]
+        if self.constraints:
+            out += [self.phi(q), self.phi_q(q).data,
+                    self.constraint_hessian(q, np.ones(self.n_constraints)).data]
+        return out
 
     def constraint_scales(self) -> np.ndarray:
         if not self.constraints:

@@ -1,0 +1,219 @@
+"""A local, exact basis of the constraints' null space: the node and body triads eliminated by
+their known tangent space, the other constraints component by component (docs/beams3d.md,
+"Lean flexible models").
+
+A spatial rigid body and a 3-D beam node carry a point r and three unit vectors u, v, w with
+six conditions (u·u = v·v = w·w = 1, u·v = v·w = w·u = 0).  Where they hold, the tangent space of
+the conditions is known exactly: a translation δr and a small rotation θ,
+
+    δu = θ × u,   δv = θ × v,   δw = θ × w,
+
+so the nine triad coordinates of a frame are replaced by the three columns (eᵢ × u, eᵢ × v,
+eᵢ × w)/√2 (i = x, y, z).  Those columns are orthonormal (Σ_k (eᵢ × k)·(eⱼ × k) = 2δᵢⱼ for an
+orthonormal triad), so the map T (n × n_t: these columns for every triad, a unit column for every
+other coordinate) is orthonormal and Φ_triad,q T = 0 exactly, with no decomposition at all.
+
+The other rows (joints, welds, drivers, fixed points) in those columns, G = Φ_other,q T, are
+sparse and couple few columns each.  They split into connected components (rows sharing a
+column); each component of at most :data:`LOCAL_MAX` columns gets the orthonormal basis of its
+own null space that is closest to its coordinate directions (the polar factor of mbseig.linear's
+"Null-space basis", here per component), and its rank is counted with the relative threshold
+``rank_tol`` · (largest singular value over the components).  A column no row touches keeps its
+unit column.  N = T · blockdiag(components, identity) is orthonormal, sparse and local: for a
+model of beams it is the standard finite-element basis (a translation and a rotation per node),
+so Nᵀ M N and Nᵀ K N are the FE matrices plus the joints.  A component larger than
+:data:`LOCAL_MAX` columns (a long closed chain) is not decomposed: its rows stay in the
+bordered pencil of the partial path, in the columns of N (``kept``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+
+__all__ = ["LOCAL_MAX", "LocalBasis", "local_basis", "triad_coordinates"]
+
+#: columns of a constraint component whose null space is taken by its own dense SVD; a larger
+#: component stays in the bordered pencil (an SVD there would cost as one of the whole Jacobian)
+LOCAL_MAX = 600
+_HALF = np.sqrt(0.5)
+
+
+@dataclass(frozen=True, eq=False)
+class LocalBasis:
+    """N (n × d, CSR, orthonormal) with Φ_q N = 0 on the eliminated rows, and what is left.
+
+    rank : the rank eliminated (6 per triad plus each component's rank); kept : the remaining
+    rows in the columns of N (CSR, None when none is left) and ``kept_rows`` their row indices
+    in Φ_q; triads, components, largest : counts for the record (the largest component's
+    columns)."""
+
+    N: sp.csr_matrix
+    rank: int
+    kept: object
+    kept_rows: np.ndarray
+    triads: int
+    components: int
+    largest: int
+
+    @property
+    def record(self) -> dict:
+        return {"basis": "local", "triads": self.triads, "components": self.components,
+                "largest_component": self.largest,
+                "bordered_rows": int(self.kept_rows.size)}
+
+
+def triad_coordinates(model):
+    """(rows, coords): the constraint rows (k × 6) of every frame's triad conditions whose nine
+    vector coordinates are free coordinates of that frame alone (k × 9: u, v, w each x, y, z),
+    found from the constraints' role ("triad", …); other triads (none in mbseig's builders) are
+    left with the other constraints."""
+    rows, coords, seen = [], [], set()
+    off = 0
+    for c in model.constraints:
+        n_eq = c.n_eq
+        if c.role and c.role[0] == "triad" and n_eq == 6:
+            idx = _selected(c.aff)
+            if idx is not None and not seen.intersection(idx.tolist()):
+                seen.update(idx.tolist())
+                rows.append(np.arange(off, off + 6))
+                coords.append(idx)
+        off += n_eq
+    if not rows:
+        return np.zeros((0, 6), np.intp), np.zeros((0, 9), np.intp)
+    return np.array(rows, np.intp), np.array(coords, np.intp)
+
+
+def _selected(aff):
+    """The nine coordinate indices of a frame map's triad rows (rows 3–11) where those rows
+    select distinct coordinates with unit weight and no offset; None otherwise."""
+    C, d = aff.C[3:], aff.d[3:]
+    if C.shape[0] != 9 or np.any(d != 0):
+        return None
+    nz = C != 0
+    if not np.all(nz.sum(axis=1) == 1):
+        return None
+    cols = np.argmax(nz, axis=1)
+    if np.any(C[np.arange(9), cols] != 1.0) or np.unique(cols).size != 9:
+        return None
+    if np.any(nz[:, cols].sum(axis=0) != 1) or nz.sum() != 9:
+        return None
+    return np.asarray(aff.idx, np.intp)[cols]
+
+
+def tangent_map(n, coords, q):
+    """T (n × n_t, CSR) of the module docstring and, per column, the coordinate it stands at
+    (a triad's three columns at its u.x)."""
+    k = coords.shape[0]
+    in_triad = np.zeros(n, bool)
+    in_triad[coords.ravel()] = True
+    plain = np.flatnonzero(~in_triad)
+    # column order: coordinates in their order, each triad's three rotations at its first one
+    anchor = np.concatenate([plain, np.repeat(coords[:, 0], 3)])
+    sub = np.concatenate([np.zeros(plain.size), np.tile([0.0, 1.0, 2.0], k)])
+    order = np.lexsort((sub, anchor))
+    n_t = order.size
+    col_of = np.empty(n_t, np.intp)
+    col_of[order] = np.arange(n_t)
+    rows = [plain]
+    cols = [col_of[:plain.size]]
+    vals = [np.ones(plain.size)]
+    if k:
+        E = q[coords].reshape(k, 3, 3)  # [triad, vector (u v w), component]
+        rc = col_of[plain.size:].reshape(k, 3)
+        for i in range(3):  # θ = eᵢ: δe = eᵢ × e for each of u, v, w
+            ei = np.eye(3)[i]
+            D = np.cross(ei, E) * _HALF  # (k, 3, 3)
+            rows.append(coords.ravel())
+            cols.append(np.repeat(rc[:, i], 9))
+            vals.append(D.reshape(-1))
+    T = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                      shape=(n, n_t))
+    T.eliminate_zeros()
+    return T, anchor[order]
+
+
+def local_basis(model, q, rank_tol, *, local_max=LOCAL_MAX) -> LocalBasis:
+    """The :class:`LocalBasis` of ``model`` at ``q`` (module docstring)."""
+    n = model.n
+    trows, coords = triad_coordinates(model)
+    T, _ = tangent_map(n, coords, q)
+    n_t = T.shape[1]
+    m = model.n_constraints
+    other = np.setdiff1d(np.arange(m), trows.ravel())
+    if other.size == 0:
+        return LocalBasis(T, 6 * coords.shape[0], None, other, coords.shape[0], 0, 0)
+    G = (model.phi_q(q)[other] @ T).tocsr()
+    G.eliminate_zeros()
+    pattern = abs(G).astype(bool).astype(np.int8)
+    m2 = G.shape[0]
+    graph = sp.bmat([[None, pattern], [pattern.T, None]], format="csr")
+    n_comp, label = connected_components(graph, directed=False)
+    row_lab, col_lab = label[:m2], label[m2:]
+    touched = np.unique(row_lab)
+    cols_of = _groups(col_lab, n_comp)
+    rows_of = _groups(row_lab, n_comp)
+    blocks, kept, largest = [], [], 0
+    for c in touched:
+        cc, rr = cols_of[c], rows_of[c]
+        largest = max(largest, cc.size)
+        if cc.size > local_max:
+            kept.append(rr)
+            continue
+        blocks.append((rr, cc, np.linalg.svd(G[rr][:, cc].toarray(), full_matrices=True)))
+    sigma_ref = max((b[2][1][0] for b in blocks if b[2][1].size), default=0.0)
+    vals_n = []
+    done = np.zeros(n_t, bool)
+    rank = 6 * coords.shape[0]
+    for _rr, cc, (_u, s, vt) in blocks:
+        r = int(np.sum(s > rank_tol * sigma_ref)) if sigma_ref > 0 else 0
+        rank += r
+        done[cc] = True
+        if vt.shape[0] > r:
+            vals_n.append((_closest(vt[r:].T), cc))  # orthonormal null space of the component
+    # assemble N2: identity for untouched (and kept) columns, the components' bases
+    free = np.flatnonzero(~done)
+    data, ri, ci = [np.ones(free.size)], [free], [np.arange(free.size)]
+    next_col = free.size
+    for Z, cc in vals_n:
+        rr_, jj = np.nonzero(Z)
+        data.append(Z[rr_, jj])
+        ri.append(cc[rr_])
+        ci.append(jj + next_col)
+        next_col += Z.shape[1]
+    # columns in the order of the coordinate each stands at (a component's at its first column)
+    anchors = np.concatenate([free] + [np.full(Z.shape[1], cc.min()) for Z, cc in vals_n])
+    sub = np.concatenate([np.zeros(free.size)] + [np.arange(Z.shape[1]) for Z, _ in vals_n])
+    order = np.lexsort((sub, anchors))
+    new = np.empty(next_col, np.intp)
+    new[order] = np.arange(next_col)
+    N2 = sp.csr_matrix((np.concatenate(data), (np.concatenate(ri), new[np.concatenate(ci)])),
+                       shape=(n_t, next_col))
+    N = (T @ N2).tocsr()
+    kept_rows = np.concatenate(kept) if kept else np.zeros(0, np.intp)
+    Gk = (G[kept_rows] @ N2).tocsr() if kept else None
+    return LocalBasis(N, rank, Gk, other[kept_rows], coords.shape[0],
+                      int(touched.size), largest)
+
+
+def _groups(labels, n_groups):
+    """Indices of each label value (a list of arrays, one per group)."""
+    order = np.argsort(labels, kind="stable")
+    bounds = np.searchsorted(labels[order], np.arange(n_groups + 1))
+    return [order[bounds[k]:bounds[k + 1]] for k in range(n_groups)]
+
+
+def _closest(Z):
+    """The orthonormal basis of span Z closest to the coordinate directions it selects by
+    column-pivoted QR (the polar factor of Π E): unit columns where the null space holds them."""
+    d = Z.shape[1]
+    _, _, piv = sla.qr(Z.T, mode="economic", pivoting=True)
+    sel = np.sort(piv[:d])
+    U, _, Vt = np.linalg.svd(Z[sel, :].T)
+    N = Z @ (U @ Vt)
+    N[np.abs(N) < 1e-15 * np.abs(N).max(initial=0.0)] = 0.0  # rounding of exact zeros only
+    return N
