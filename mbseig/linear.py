@@ -235,9 +235,15 @@ def _linearize(model, eq, rank_tol, constraint_stiffness, sparse, reference=None
             constraint_stiffness=constraint_stiffness, tolerances=tol, constraint_jacobian=G,
             eliminated=eliminated, display=Displayed(model, q0))
     G = model.phi_q(q0, dense=True)
-    N, rank, independent, sigma = (continuous_null_basis(G, model.n, rank_tol,
-                                                         model.coordinate_names, reference)
-                                   if basis is None or reference is not None else basis)
+    local = None
+    if basis is not None and reference is None:
+        N, rank, independent, sigma = basis
+    elif reference is None and model.n_constraints and \
+            (local := _local(model, q0, rank_tol)) is not None:
+        N, rank, independent, sigma = _dense_local(local, G, rank_tol, model.coordinate_names)
+    else:
+        N, rank, independent, sigma = continuous_null_basis(G, model.n, rank_tol,
+                                                            model.coordinate_names, reference)
     Md, Cd, Kd = model.mass_matrix(q0).toarray(), C, K
     if model.n_constraints == 0:
         Mr, Pr, Qr = Md, Cd, Kd
@@ -247,6 +253,8 @@ def _linearize(model, eq, rank_tol, constraint_stiffness, sparse, reference=None
     tol = {"rank_tol": rank_tol}
     if sigma is not None:
         tol["basis_min_cosine"] = sigma  # σ_min(Eᵀ Π E)^(1/2): how well E fixes N
+    if local is not None:
+        tol.update(local.record)
     rigid = DeclaredRigid(model, q0, lam0, Qr, N) if constraint_stiffness else None
     display = Displayed(model, q0)
     return LinearModel(
@@ -265,6 +273,20 @@ def _local(model, q0, rank_tol):
     if triad_coordinates(model)[0].shape[0] == 0:
         return None
     return local_basis(model, q0, rank_tol)
+
+
+def _dense_local(local, G, rank_tol, names):
+    """(N, rank, independent, cosine) of a dense model from its local basis: the rows a large
+    component left are eliminated in N's columns by :func:`continuous_null_basis` (an SVD of
+    those rows alone); ``independent`` names the coordinates whose unit columns N keeps."""
+    N = local.N.toarray()
+    rank, sigma = local.rank, None
+    if local.kept is not None:
+        Z, r, _, sigma = continuous_null_basis(local.kept.toarray(), N.shape[1], rank_tol)
+        N, rank = N @ Z, rank + r
+    unit = np.flatnonzero((np.abs(N) == 1.0).sum(axis=0) == 1)
+    rows = np.argmax(np.abs(N[:, unit]), axis=0) if unit.size else np.zeros(0, int)
+    return N, rank, tuple(names[i] for i in np.sort(rows)), sigma
 
 
 def _project(N, A):

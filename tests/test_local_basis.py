@@ -1,0 +1,155 @@
+"""The local null-space basis (mbseig.model.tangent): node and body triads eliminated by their
+exact tangent space, the other constraints component by component.
+
+References: the defining properties of a basis of null Φ_q (orthonormal columns, Φ_q N = 0,
+dimension n − rank Φ_q; rounding bounds below), and an independent path to the same modes,
+the global SVD null space of the whole Jacobian (mbseig.linear.continuous_null_basis, the basis
+mbseig used before): the eigenvalues of M, P, Q reduced by either basis agree within the sum of
+their first-order error bounds (each mode's ``error_estimate`` = κ η, with the bounds' safety
+factor 10), since both are exact reductions of one problem.
+"""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+import mbseig
+from mbseig.linear import continuous_null_basis
+from mbseig.model.tangent import local_basis, triad_coordinates
+
+CASES = Path(__file__).resolve().parent.parent / "cases"
+EPS = np.finfo(float).eps
+WITH_FRAMES = ["spatial_double_pendulum", "rssr_four_bar", "overhung_rotor_friswell",
+               "cantilever_3d_oblique", "column_buckling_3d", "spinning_shaft_rayleigh",
+               "rigid_rotor"]
+
+
+def _at_rest(name):
+    model = mbseig.load_case(CASES / f"{name}.toml")
+    eq = mbseig.equilibrium(model)
+    return model, eq
+
+
+@pytest.mark.parametrize("name", WITH_FRAMES)
+def test_local_basis_is_an_orthonormal_null_space_basis(name):
+    """‖NᵀN − I‖ and ‖Φ_q N‖ at the level of the triads' own rounding: every column is a unit
+    combination of at most 9 + (a component's) coordinates, so c·ε with c = 100 covers the
+    sums; the dimension equals n − rank of the whole Jacobian's SVD (relative threshold
+    rank_tol)."""
+    model, eq = _at_rest(name)
+    rank_tol = float(eq.tolerances.get("rank_tol", 1e-10))
+    assert triad_coordinates(model)[0].shape[0] > 0
+    lb = local_basis(model, eq.q, rank_tol)
+    N = lb.N.toarray()
+    G = model.phi_q(eq.q, dense=True)
+    _, rank, _, _ = continuous_null_basis(G, model.n, rank_tol)
+    assert lb.kept is None
+    assert N.shape == (model.n, model.n - rank) and lb.rank == rank
+    assert np.abs(N.T @ N - np.eye(N.shape[1])).max() <= 100 * EPS
+    # Φ_q N: the triad rows vanish where the triads are orthonormal (their residual at q0)
+    assert np.abs(G @ N).max() <= 100 * EPS * max(1.0, np.abs(G).max()) \
+        + 10 * np.abs(model.phi(eq.q)).max()
+
+
+@pytest.mark.parametrize("name", WITH_FRAMES)
+def test_local_and_global_bases_give_the_same_modes(name):
+    """Reference: the global SVD basis of the whole Jacobian (module docstring)."""
+    model, eq = _at_rest(name)
+    lin = mbseig.linearize(model, eq)
+    assert lin.tolerances["basis"] == "local"
+    a = mbseig.modes(lin)
+    rank_tol = lin.tolerances["rank_tol"]
+    G = model.phi_q(eq.q, dense=True)
+    Z, _, _, _ = continuous_null_basis(G, model.n, rank_tol)
+    K, C = model.force_jacobians(eq.q, dense=True)
+    K = K + model.constraint_hessian(eq.q, eq.lam, dense=True)
+    Md = model.mass_matrix(eq.q).toarray()
+    b = mbseig.modes(Z.T @ Md @ Z, Z.T @ C @ Z, Z.T @ K @ Z)
+    assert a.eigenvalues.size == b.eigenvalues.size
+    sa, sb = a.all_eigenvalues, b.all_eigenvalues
+    for s, err in zip(a.eigenvalues, a.error_estimate, strict=True):
+        j = int(np.argmin(np.abs(b.eigenvalues - s)))
+        bound = 10 * (err + b.error_estimate[j]) + 10 * EPS * max(1.0, np.abs(sa).max(),
+                                                                 np.abs(sb).max())
+        assert abs(b.eigenvalues[j] - s) <= bound, (s, b.eigenvalues[j], bound)
+
+
+def _shaft(tmp_path, spans=3, per=4):
+    """A free–free steel shaft on universal joints (translations and twist held) at every
+    metre: SPANS spans of PER Euler–Bernoulli elements."""
+    stations = ", ".join(f"s{k} = {float(k)}" for k in range(spans + 1))
+    text = f"""
+schema_version = 1
+dimension = 3
+[[points]]
+name = "a"
+position = [0.0, 0.0, 0.0]
+[[points]]
+name = "b"
+position = [{float(spans)}, 0.0, 0.0]
+[[beams]]
+name = "shaft"
+points = ["a", "b"]
+E = 2.1e11
+G = 8.1e10
+rho = 7800.0
+section = {{ shape = "circle", d = 0.05 }}
+elements = {spans * per}
+ends = ["free", "free"]
+stations = {{ {stations} }}
+""" + "".join(f"""
+[[joints]]
+name = "support {k}"
+type = "universal"
+bodies = ["ground", "shaft.s{k}"]
+at = [{float(k)}, 0.0, 0.0]
+axes = [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+""" for k in range(spans + 1))
+    path = tmp_path / "shaft.toml"
+    path.write_text(text)
+    return mbseig.load_case(path)
+
+
+def test_shaft_on_universal_joints_is_the_standard_fe_problem(tmp_path):
+    """A shaft on universal joints at its supports: each support removes its node's three
+    translations and its twist, so N keeps the other 2 rotations there as unit columns and is
+    the standard FE basis (6 per node) elsewhere: each support row touches one column of T."""
+    spans, per = 3, 4
+    model = _shaft(tmp_path, spans, per)
+    eq = mbseig.equilibrium(model)
+    lb = local_basis(model, eq.q, 1e-10)
+    nodes = spans * per + 1
+    assert lb.triads == nodes and lb.components == 4 * (spans + 1) and lb.largest == 1
+    assert lb.N.shape[1] == 6 * nodes - 4 * (spans + 1)
+    # every column is a node's translation (one unit entry) or rotation about a global axis
+    # (two entries ±1/√2 at the reference: e_i × e_i = 0)
+    counts = np.diff(sp.csc_matrix(lb.N).indptr)
+    assert set(counts.tolist()) == {1, 2}
+
+
+def test_a_component_beyond_the_local_limit_stays_bordered(tmp_path):
+    """With the component limit below the size of the joints' components, their rows stay in
+    the bordered pencil of the partial path, in N's columns; the lowest modes equal the dense
+    reduction's within the bounds (reference: the dense path on the same model)."""
+    model = _shaft(tmp_path)
+    eq = mbseig.equilibrium(model)
+    lb = local_basis(model, eq.q, 1e-10, local_max=0)
+    assert lb.kept is not None and lb.kept_rows.size == 16 and lb.rank == 6 * lb.triads
+    assert lb.kept.shape[1] == lb.N.shape[1]
+    G = model.phi_q(eq.q, dense=True)
+    # the kept rows in N's columns are the model's rows times N
+    np.testing.assert_allclose(lb.kept.toarray(), G[lb.kept_rows] @ lb.N.toarray(),
+                               atol=100 * EPS * np.abs(G).max())
+    N = lb.N
+    K, C = model.force_jacobians(eq.q)
+    K = K + model.constraint_hessian(eq.q, eq.lam)
+    M = model.mass_matrix(eq.q)
+    part = mbseig.modes(*((N.T @ A @ N).tocsr() for A in (M, C, K)), constraints=lb.kept,
+                        n_modes=4)
+    full = mbseig.modes(mbseig.linearize(model, eq))
+    for s, err in zip(part.eigenvalues, part.error_estimate, strict=True):
+        j = int(np.argmin(np.abs(full.eigenvalues - s)))
+        assert abs(full.eigenvalues[j] - s) <= 10 * (err + full.error_estimate[j]) \
+            + 1e3 * EPS * abs(s)
