@@ -149,8 +149,56 @@ def whirls(model, q0, shapes, eigenvalues, **options) -> list:
     if not geometry:  # (no rotor: no whirl)
         return [None] * shapes.shape[1]
     fractions = lateral_fractions(model, q0, shapes, geometry=geometry)
-    return [whirl(model, q0, shapes[:, k], eigenvalues[k], geometry=geometry,
-                  fraction=fractions[k], **options) for k in range(shapes.shape[1])]
+    return _whirls(model, shapes, np.asarray(eigenvalues, complex), geometry, fractions,
+                   **options)
+
+
+def _whirls(model, shapes, s, geometry, fractions, *, line_tol: float = 1e-6,
+            none_tol: float = 1e-6, none_fraction: float = NONE_FRACTION):
+    """:func:`whirl` of every mode at once: the orbits of :func:`station_orbits` as arrays
+    (station, mode) and the same rules, mode by mode."""
+    X = np.array(shapes, complex)
+    X[:, s.imag < 0] = X[:, s.imag < 0].conj()
+    K = X.shape[1]
+    ell = float(model.length_scale)
+    kap, lat, amp, body = [], [], [], []
+    for r, _, e1, e2, sigma, _, _ in geometry:
+        smap = r.station_map
+        if smap is None:
+            frame = r.frame.C @ X[r.frame.idx]
+            motion = ell * (np.max(np.abs(frame[3:]), axis=0) if frame.shape[0] > 3
+                            else np.zeros(K))
+            Xs = (np.stack([aff.C @ X[aff.idx] for _, aff in r.stations])
+                  if r.stations else np.zeros((0, 3, K)))
+        else:
+            mi = r.motion_idx
+            motion = ell * (np.max(np.abs(X[mi]), axis=0) if len(mi) else np.zeros(K))
+            Xs = (smap[1] @ X[smap[0]]).reshape(-1, 3, K)
+        X1, X2 = np.einsum("i,sim->sm", e1, Xs), np.einsum("i,sim->sm", e2, Xs)
+        rf, rb = np.abs(X1 + 1j * X2) / 2, np.abs(X1 - 1j * X2) / 2
+        tot = rf + rb
+        with np.errstate(invalid="ignore", divide="ignore"):
+            kap.append(np.where(tot > 0, sigma * (rf - rb) / np.where(tot > 0, tot, 1.0), 0.0))
+        lat.append(np.abs(X1) + np.abs(X2))
+        amp.append(np.sqrt(np.sum(np.abs(Xs) ** 2, axis=1)))
+        body.append(np.broadcast_to(motion, (Xs.shape[0], K)))
+    kap, lat, amp, body = (np.concatenate(a) for a in (kap, lat, amp, body))
+    if kap.shape[0] == 0:
+        return [None] * K
+    lateral = lat.max(axis=0)
+    ref = np.maximum(amp.max(axis=0), body.max(axis=0))
+    out = []
+    for k in range(K):
+        if ref[k] == 0 or lateral[k] <= none_tol * ref[k] or fractions[k] <= none_fraction:
+            out.append("none")
+        elif abs(s[k].imag) <= line_tol * abs(s[k]):
+            out.append("mixed")  # a real eigenvalue: the orbit does not turn
+        else:
+            keep = (lat[:, k] > none_tol * lateral[k]) & (np.abs(kap[:, k]) > line_tol)
+            senses = set(np.sign(kap[keep, k]).tolist())
+            out.append("forward" if senses == {1.0} else "backward" if senses == {-1.0}
+                       else "mixed")
+    return out
 
 
 def whirl(model, q0, shape, s=1j, *, line_tol: float = 1e-6, none_tol: float = 1e-6,

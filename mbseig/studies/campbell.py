@@ -18,6 +18,7 @@ whirl of each mode from :func:`mbseig.model.spatial_whirl.whirl`).  Along p:
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -59,6 +60,57 @@ def campbell_point(case, config, params):
                          whirl=whirls(model, eq.q, md.shapes, md.eigenvalues))
 
 
+class SpeedLine:
+    """The points of a Campbell sweep from one build (issue "Flexible models as lean as an FE
+    code": reuse across a sweep what does not change with the speed).
+
+    Where the swept parameter enters only the beams' spin and the rotors' speed
+    (:class:`~mbseig.casefile.speed_update.SpeedUpdate`), the case is built, solved for its
+    equilibrium and linearized once; each point takes the model with its speeds replaced
+    (equal, element by element, to a full build), the first point's equilibrium (the gyroscopic
+    forces vanish at rest, so it is every point's), its null-space basis and its rigid-body
+    directions by construction (geometry: the speed moves none), and linearizes and solves
+    that model.  ``reason`` says why a line cannot (then every point is built:
+    :func:`campbell_point`)."""
+
+    def __init__(self, spec, config, params, axis):
+        from ..casefile.speed_update import SpeedUpdate
+
+        self.spec, self.config, self.axis, self.reason = spec, config, axis, None
+        try:
+            model0 = spec.build(config, **params)
+            self.update = SpeedUpdate(spec.data, config, params, axis, model0)
+            self.reason = self.update.reason
+            if self.reason is None:
+                self.eq = equilibrium(model0)
+                if model0.commands:  # inverse statics: settings resolved per value
+                    self.reason = "the case has inverse-statics commands"
+                else:
+                    lin = linearize(model0, self.eq)
+                    self.basis = (lin.N, lin.rank, lin.independent,
+                                  lin.tolerances.get("basis_min_cosine"))
+                    self.rigid, self.sparse = lin.rigid, lin.constraint_jacobian is not None
+                    self.display = lin.display  # the names of the coordinates: one geometry
+        except MbseigError as exc:  # the points report it, each as its full build does
+            self.reason = exc.one_line()
+
+    def point(self, params):
+        """:func:`campbell_point` at ``params`` (the same record)."""
+        try:
+            model = self.update.make(params[self.axis])
+            eq = dataclasses.replace(self.eq, model=model)  # this value's model at rest
+            lin = linearize(model, eq, basis=None if self.sparse else self.basis)
+            md = modes(lin, rigid=self.rigid, display=self.display)
+        except MbseigError as exc:
+            return CampbellPoint(params=dict(params), error=exc.one_line())
+        rs = rotors(model)
+        return CampbellPoint(params=dict(params), error=None, eigenvalues=md.eigenvalues,
+                             shapes=md.shapes, tol=md.tolerance, kind=list(md.kind),
+                             stability=list(md.stability),
+                             speed=float(rs[0].speed) if rs else 0.0,
+                             whirl=whirls(model, self.eq.q, md.shapes, md.eigenvalues))
+
+
 def speed_parameter(case, name, values, *, config=None, fixed=None) -> bool:
     """Whether parameter ``name`` sets the speed of a rotor of the case (the rotor speed
     differs between the first and last value)."""
@@ -77,15 +129,21 @@ def _match(pt, ref_shape):
     return int(np.argmax(mac_matrix(ref_shape[:, None], pt["shapes"])[0]))
 
 
-def _crossing(case, config, params, axis, lo, hi, ref_shape, harmonic, xtol, f_lo, f_hi):
+def _crossing(case, config, params, axis, lo, hi, ref_shape, harmonic, xtol, f_lo, f_hi,
+              line=None):
     from scipy.optimize import brentq
+
+    def at(p):
+        if line is not None:
+            return line.point({**params, axis: p})
+        return campbell_point(case, config, {**params, axis: p})
 
     def f(p):
         if p == lo:
             return f_lo
         if p == hi:
             return f_hi
-        pt = campbell_point(case, config, {**params, axis: p})
+        pt = at(p)
         if pt["error"]:
             raise MbseigError(f"critical speed search at {axis} = {p!r}: {pt['error']}",
                               element="campbell")
@@ -93,7 +151,7 @@ def _crossing(case, config, params, axis, lo, hi, ref_shape, harmonic, xtol, f_l
         return float(abs(pt["eigenvalues"][c].imag) - harmonic * abs(pt["speed"]))
 
     root = brentq(f, lo, hi, xtol=xtol)
-    pt = campbell_point(case, config, {**params, axis: root})
+    pt = at(root)
     c = _match(pt, ref_shape)
     return {"value": float(root), "speed": pt["speed"], "whirl": pt["whirl"][c],
             "frequency": float(abs(pt["eigenvalues"][c].imag))}
@@ -116,6 +174,7 @@ class CampbellResult:
     tolerances: dict = field(default_factory=dict)
     tolerance: np.ndarray = None  # (points, tracks): each eigenvalue's stability tolerance [1/s]
     units: dict = field(default_factory=dict)  # parameter → unit, for the figures' axes
+    reuse: str = ""  # how the points were made (SpeedLine)
 
     @property
     def frequency(self):
@@ -174,8 +233,13 @@ def campbell(case, parameter, values, *, config=None, fixed=None, harmonic=1.0, 
     fixed = dict(fixed or {})
     calls = [((spec, config, {**fixed, parameter: float(v)}), {}) for v in values]
     xtol = xtol_rel * abs(float(values[-1] - values[0]))
-    with Runner(jobs=jobs) as runner:
-        points = runner.map(campbell_point, calls, "points")
+    line = SpeedLine(spec, config, {**fixed, parameter: float(values[0])}, parameter)
+    line = line if line.reason is None else None
+    with Runner(jobs=jobs if line is None else 1) as runner:
+        if line is not None:  # one build, in this process (module docstring of SpeedLine)
+            points = [line.point(args[2]) for args, _ in calls]
+        else:
+            points = runner.map(campbell_point, calls, "points")
         bad = next((p["error"] for p in points if p["error"]), None)
         if bad:
             raise MbseigError(bad, element="campbell")
@@ -210,7 +274,10 @@ def campbell(case, parameter, values, *, config=None, fixed=None, harmonic=1.0, 
                                   float(values[k + 1]), shape, harmonic, xtol, float(a), float(b)),
                                  {}))
                 meta.append(j)
-        found = runner.map(_crossing, searches, "critical speeds")
+        if line is not None:
+            found = [_crossing(*args, line=line) for args, _ in searches]
+        else:
+            found = runner.map(_crossing, searches, "critical speeds")
     critical = []
     for c in sorted(({**res, "mode": j} for j, res in zip(meta, found, strict=True)),
                     key=lambda c: c["value"]):
@@ -222,7 +289,8 @@ def campbell(case, parameter, values, *, config=None, fixed=None, harmonic=1.0, 
     return CampbellResult(case=spec.name, parameter=parameter, values=values, speeds=speeds,
                           tracks=S, whirl=whirls, kind=kinds, critical_speeds=critical,
                           harmonic=harmonic, tolerances={"xtol": xtol, "xtol_rel": xtol_rel},
-                          tolerance=tol)
+                          tolerance=tol, reuse="one build, the speeds replaced at each point"
+                          if line is not None else "built at every point")
 
 
 @dataclass(frozen=True, eq=False)
