@@ -131,7 +131,7 @@ def test_refinement_max_elements_limit(tmp_path, capsys):
     number rule first)."""
     path = edited(tmp_path, "simply_supported_beam", "accuracy = 1e-3",
                   "accuracy = 1e-3\nmax_elements = 1e6")
-    refused(capsys, ["modes", path], "refinement: max_elements must be an integer in 2..4096")
+    refused(capsys, ["modes", path], "refinement: max_elements must be an integer in 2..100000")
 
 
 def test_report_study_count_limit(tmp_path, capsys):

@@ -49,7 +49,7 @@ __all__ = ["BeamTheoryWarning", "EB_SLENDERNESS", "MIN_SLENDERNESS", "AUTO_START
 EB_SLENDERNESS = 10.0  # below this, Euler–Bernoulli neglects shear that matters
 MIN_SLENDERNESS = 5.0  # below this, no beam theory is adequate
 AUTO_START_ELEMENTS = 2  # elements of an "auto" beam before refinement
-MAX_ELEMENTS = 4096  # elements of one beam (a stated limit: README, "Input rules")
+MAX_ELEMENTS = 100_000  # elements of one beam (a stated limit: README, "Input rules")
 MIN_NORMAL = float(np.finfo(float).tiny)  # smallest normal double
 
 
