@@ -173,3 +173,23 @@ def test_clustered_lowest_modes_in_one_lanczos_run(tmp_path):
                                    return_eigenvectors=False)))
     assert np.all(np.abs(np.sort(md.omega_n) - w) <= 10 * md.error_estimate + 1e3 * EPS * w)
     assert w[19] / w[0] < 1.0015
+
+
+@pytest.mark.parametrize("name", ["column_buckling_3d", "overhung_rotor_friswell",
+                                  "spatial_double_pendulum"])
+def test_statics_with_the_local_basis(name, monkeypatch):
+    """The static stability of a model with frames from the local basis: the same verdict,
+    index and smallest eigenvalue of K_r as from the SVD basis (reference: the SVD of the whole
+    Φ_q, forced by hiding the triads).  The two K_r are similar by an orthogonal matrix, so
+    their eigenvalues agree to rounding: c·ε·‖K_r‖ with c = 1e3 (n ≤ 100)."""
+    import mbseig.statics.stiffness as st
+
+    model, eq = _at_rest(name)
+    a = st.static_stability(model, eq.q, eq.lam)
+    Kr_a, _ = st.reduced_stiffness(model, eq.q, eq.lam)
+    monkeypatch.setattr(st, "triad_coordinates", lambda m: (np.zeros((0, 6)), None))
+    b = st.static_stability(model, eq.q, eq.lam)
+    Kr_b, _ = st.reduced_stiffness(model, eq.q, eq.lam)
+    assert (a.verdict, a.index, a.dof) == (b.verdict, b.index, b.dof)
+    mu_a, mu_b = np.linalg.eigvalsh(Kr_a), np.linalg.eigvalsh(Kr_b)
+    assert np.abs(mu_a - mu_b).max() <= 1e3 * EPS * np.abs(mu_b).max()

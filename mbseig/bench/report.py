@@ -322,6 +322,10 @@ def write_report(res, out_dir):
         from .uncertainty_rows import report_lines
 
         L += report_lines(_rows(res, "uncertainty"))
+    if _rows(res, "lean"):
+        from .lean_rows import report_lines as lean_lines
+
+        L += lean_lines(_rows(res, "lean"))
     small = _rows(res, "small")
     if small:
         _table(L, "Small models, stage by stage",

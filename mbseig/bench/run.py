@@ -35,6 +35,9 @@ timedomain the time-domain check's integrator (mbseig.check) against loose setti
 failures   mbseig.bench.failcases: where naive methods give the wrong verdict.
 nlevp      quadratic eigenproblems of the NLEVP collection (mbseig.bench.nlevp), each with its
            verdict, backward error or refusal.
+lean       lean flexible models (mbseig.bench.lean_rows): a multi-span shaft of 10³ … 10⁵ DOF
+           against an FE floor script (time and memory, fresh processes), Campbell sweeps
+           against ROSS's run_campbell (MBSEIG_ROSS_PYTHON), FE bodies against LAPACK's error.
 """
 
 from __future__ import annotations
@@ -81,7 +84,7 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
     repeats = repeats or (1 if quick else 3)
     all_sections = ("dense", "structured", "partial", "large", "startup", "peer", "sweeps",
                     "jacobians", "constraint", "timedomain", "failures", "nlevp", "rotor", "beams",
-                    "slepc", "spatial", "batch", "uncertainty")
+                    "slepc", "spatial", "batch", "uncertainty", "lean")
     sections = sections or all_sections
     cfg = {
         "quick": quick, "repeats": repeats, "threads": threads,
@@ -150,6 +153,10 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
             from .uncertainty_rows import bench_uncertainty
 
             res["rows"] += bench_uncertainty(log, repeats=repeats, quick=quick)
+        if "lean" in sections:  # ROSS only where MBSEIG_ROSS_PYTHON names a Python with it
+            from .lean_rows import bench_lean
+
+            res["rows"] += bench_lean(log, repeats=repeats, quick=quick)
         if "failures" in sections:
             res["failures"] = [{k: getattr(c, k)
                                 for k in ("name", "naive_method", "naive", "mbseig", "reference",

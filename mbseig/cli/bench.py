@@ -16,7 +16,7 @@ def register(sub):
                    choices=["dense", "structured", "partial", "large", "startup", "peer",
                             "sweeps", "jacobians", "constraint", "timedomain", "failures", "nlevp",
                             "rotor", "beams", "slepc", "spatial", "batch",
-                            "uncertainty"],
+                            "uncertainty", "lean"],
                    help="run only these sections")
     p.set_defaults(run=run)
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..model.cache import KeptValues
+from ..model.system import Model
 from .linalg import SMALL, multipliers
 
 
@@ -68,8 +69,21 @@ class Memo:
         full = bool(check) or small
         lam, rank, how = self._solves.get(
             (q.tobytes(), float(rank_tol), full),
-            lambda: multipliers(self.phi_q(q), self.generalized_force(q), rank_tol, check=full))
+            lambda: multipliers(self.phi_q(q), self.generalized_force(q), rank_tol, check=full,
+                                rank=self._local_rank(q, rank_tol) if full and not small
+                                else None))
         return lam.copy(), (rank if check else m), how
+
+    def _local_rank(self, q, rank_tol):
+        """The rank of Φ_q(q) from the local basis of a model with frames (no SVD of the whole
+        Jacobian: :mod:`mbseig.model.tangent`), or None (no frames, or rows it leaves)."""
+        from ..model.tangent import local_basis, triad_coordinates
+
+        model = self._model
+        if not isinstance(model, Model) or triad_coordinates(model)[0].shape[0] == 0:
+            return None
+        local = local_basis(model, q, rank_tol)
+        return local.rank if local.kept is None else None
 
     def constraint_hessian(self, q, lam, *, dense=None):
         return self._get(("H", q.tobytes(), np.asarray(lam).tobytes()),

@@ -292,7 +292,7 @@ def solve_bordered(A, col, row, corner, f, g, weights=None):
     return z[:N], float(z[N])
 
 
-def multipliers(Phi_q, g, rank_tol, *, check):
+def multipliers(Phi_q, g, rank_tol, *, check, rank=None):
     """(λ, rank of Φ_q, how the rank was found) with λ the least-squares solution of Φ_qᵀλ = g.
 
     Small models (up to ``SMALL`` unknowns), and any model up to ``DENSE_LIMIT`` whose
@@ -300,7 +300,9 @@ def multipliers(Phi_q, g, rank_tol, *, check):
     revealed by the singular values (``check``).  Otherwise the normal equations
     Φ_q Φ_qᵀ λ = Φ_q g by sparse LU; that needs independent constraints, so a pivot below
     rank_tol² of the largest (the square: Φ_qΦ_qᵀ squares the singular values) means dependent
-    constraints: the SVD up to ``DENSE_LIMIT``, an error beyond (instead of a guess).
+    constraints: the SVD up to ``DENSE_LIMIT``, an error beyond (instead of a guess).  ``rank``:
+    the rank already found by a decomposition of Φ_q (the local basis of a model with frames,
+    :mod:`mbseig.model.tangent`); where it is m and the pivots agree, no SVD is made for it.
     """
     m, n = Phi_q.shape
     if m == 0:
@@ -318,6 +320,9 @@ def multipliers(Phi_q, g, rank_tol, *, check):
             if m + n > DENSE_LIMIT or not check:
                 return lam, m, ("sparse LU of Φ_q Φ_qᵀ (independent constraints verified by its "
                                 "pivots)")
+            if rank == m:
+                return lam, m, ("sparse LU of Φ_q Φ_qᵀ (independent constraints: the local "
+                                "basis's rank and the LU's pivots)")
             return lam, constraint_rank(Phi_q, rank_tol)[0], "SVD of Φ_q"
         if m + n > DENSE_LIMIT:
             raise EquilibriumError(

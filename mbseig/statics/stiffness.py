@@ -31,6 +31,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
+from ..model.tangent import local_basis, triad_coordinates
 from ..numerics import dense
 from .result import StaticStability
 
@@ -43,9 +44,17 @@ SELF_STRESS_TOL = 1e-8  # relative stiffness change of a unit self-stress that c
 
 
 def _basis(model, q, rank_tol):
+    """(N, left null space of Φ_q, Φ_q, rank).  A model with frames takes the local basis of
+    :mod:`mbseig.model.tangent` (the triads by their tangent space, the joints component by
+    component: no SVD of the whole Jacobian) where it leaves no constraint redundant (the left
+    null space, the self-stress states, is then empty); otherwise the SVD of Φ_q."""
     Phi_q = dense(model.phi_q(q, dense=True))
     if Phi_q.shape[0] == 0:
         return np.eye(model.n), np.zeros((0, 0)), Phi_q, 0
+    if triad_coordinates(model)[0].shape[0]:
+        local = local_basis(model, q, rank_tol)
+        if local.kept is None and local.rank == Phi_q.shape[0]:
+            return local.N, np.zeros((Phi_q.shape[0], 0)), Phi_q, local.rank  # (sparse)
     U, s, Vt = sla.svd(Phi_q, full_matrices=True)
     rank = int(np.sum(s > rank_tol * s[0])) if s.size and s[0] > 0 else 0
     return Vt[rank:].T, U[:, rank:], Phi_q, rank
@@ -54,6 +63,11 @@ def _basis(model, q, rank_tol):
 def reduced_stiffness(model, q, lam, rank_tol=1e-10):
     """(K_r, N) at q with multipliers λ."""
     N, _, Phi_q, _ = _basis(model, q, rank_tol)
+    if sp.issparse(N):  # the local basis: Nᵀ K N from the sparse matrices
+        K, _ = model.force_jacobians(q)
+        if model.n_constraints:
+            K = K + model.constraint_hessian(q, lam)
+        return (N.T @ K @ N).toarray(), N
     K, _ = model.force_jacobians(q, dense=True)
     Kt = dense(K)
     if model.n_constraints:
