@@ -68,9 +68,12 @@ class SpeedLine:
     (:class:`~mbseig.casefile.speed_update.SpeedUpdate`), the case is built, solved for its
     equilibrium and linearized once; each point takes the model with its speeds replaced
     (equal, element by element, to a full build), the first point's equilibrium (the gyroscopic
-    forces vanish at rest, so it is every point's), its null-space basis and its rigid-body
-    directions by construction (geometry: the speed moves none), and linearizes and solves
-    that model.  ``reason`` says why a line cannot (then every point is built:
+    forces vanish at rest, so it is every point's), its null-space basis, its rigid-body
+    directions by construction (geometry: the speed moves none), and its reduced mass and
+    stiffness (the speeds enter neither: the beams' K leaves out the gyroscopic ∂/∂q, which
+    vanishes at rest, and a rotor's force is ∝ q̇); only P = Nᵀ C N is formed again, as
+    :func:`mbseig.linearize` forms it, and the modes solved.  A sparse (large) model is
+    linearized again whole.  ``reason`` says why a line cannot (then every point is built:
     :func:`campbell_point`)."""
 
     def __init__(self, spec, config, params, axis):
@@ -86,7 +89,8 @@ class SpeedLine:
                 if model0.commands:  # inverse statics: settings resolved per value
                     self.reason = "the case has inverse-statics commands"
                 else:
-                    lin = linearize(model0, self.eq)
+                    lin = linearize(model0, self.eq, signals=False)
+                    self.lin0 = lin
                     self.basis = (lin.N, lin.rank, lin.independent,
                                   lin.tolerances.get("basis_min_cosine"))
                     self.rigid, self.sparse = lin.rigid, lin.constraint_jacobian is not None
@@ -98,8 +102,14 @@ class SpeedLine:
         """:func:`campbell_point` at ``params`` (the same record)."""
         try:
             model = self.update.make(params[self.axis])
-            eq = dataclasses.replace(self.eq, model=model)  # this value's model at rest
-            lin = linearize(model, eq, basis=None if self.sparse else self.basis)
+            if self.sparse:
+                eq = dataclasses.replace(self.eq, model=model)  # this value's model at rest
+                lin = linearize(model, eq, signals=False)
+            else:  # only the damping changes: P = Nᵀ C N as linearize forms it, M and Q kept
+                _, C = model.force_jacobians(self.eq.q, dense=True)
+                N = self.lin0.N
+                P = C if model.n_constraints == 0 else N.T @ C @ N
+                lin = dataclasses.replace(self.lin0, P=P, parameters=model.parameters)
             md = modes(lin, rigid=self.rigid, display=self.display)
         except MbseigError as exc:
             return CampbellPoint(params=dict(params), error=exc.one_line())
@@ -133,10 +143,13 @@ def _crossing(case, config, params, axis, lo, hi, ref_shape, harmonic, xtol, f_l
               line=None):
     from scipy.optimize import brentq
 
+    seen = {}  # the points solved: Brent's root is its last iterate, solved already
+
     def at(p):
-        if line is not None:
-            return line.point({**params, axis: p})
-        return campbell_point(case, config, {**params, axis: p})
+        if p not in seen:
+            seen[p] = (line.point({**params, axis: p}) if line is not None
+                       else campbell_point(case, config, {**params, axis: p}))
+        return seen[p]
 
     def f(p):
         if p == lo:
