@@ -71,7 +71,15 @@ def triad_coordinates(model):
     """(rows, coords): the constraint rows (k × 6) of every frame's triad conditions whose nine
     vector coordinates are free coordinates of that frame alone (k × 9: u, v, w each x, y, z),
     found from the constraints' role ("triad", …); other triads (none in mbseig's builders) are
-    left with the other constraints."""
+    left with the other constraints.  Found once per model (the model's structure)."""
+    kept = model.__dict__.get("_triads")
+    if kept is None or kept[0] is not model.constraints:
+        kept = (model.constraints, _triads(model))
+        model.__dict__["_triads"] = kept
+    return kept[1]
+
+
+def _triads(model):
     rows, coords, seen = [], [], set()
     off = 0
     for c in model.constraints:
@@ -138,7 +146,19 @@ def tangent_map(n, coords, q):
 
 
 def local_basis(model, q, rank_tol, *, local_max=LOCAL_MAX) -> LocalBasis:
-    """The :class:`LocalBasis` of ``model`` at ``q`` (module docstring)."""
+    """The :class:`LocalBasis` of ``model`` at ``q`` (module docstring); the last one is kept on
+    the model (the statics' rank and the linearization ask at the same q)."""
+    q = np.asarray(q, float)
+    key = (q.tobytes(), float(rank_tol), int(local_max))
+    kept = model.__dict__.get("_local_basis")
+    if kept is not None and kept[0] == key and kept[1] is model.constraints:
+        return kept[2]
+    got = _local_basis(model, q, rank_tol, local_max)
+    model.__dict__["_local_basis"] = (key, model.constraints, got)
+    return got
+
+
+def _local_basis(model, q, rank_tol, local_max):
     n = model.n
     trows, coords = triad_coordinates(model)
     T, _ = tangent_map(n, coords, q)
