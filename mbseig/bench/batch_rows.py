@@ -15,25 +15,19 @@ before and after, the points, the boundaries found, and whether the goal is met.
 
 from __future__ import annotations
 
-import os
 import statistics
 import time
 import warnings
 
 import numpy as np
 
-from .cases import case_path
+from .cases import case_path, load_average
 
 __all__ = ["bench_batch", "GOALS"]
 
 GOALS = {"device C4 over f": 3000.0, "device over k_a": 3000.0, "bicycle over v": 2000.0}
 
 
-def _load():
-    try:
-        return [round(x, 2) for x in os.getloadavg()]
-    except OSError:
-        return None
 
 
 def _timed(run, repeats):
@@ -87,7 +81,7 @@ def bench_batch(log, *, repeats=3, quick=False):
     from ..studies.steady_sweep import steady_sweep
 
     rows = []
-    load0 = _load()
+    load0 = load_average()
     n_dev = 400 if quick else 2000
     device = read_case(case_path("hand_device"))
     with warnings.catch_warnings():
@@ -140,7 +134,7 @@ def bench_batch(log, *, repeats=3, quick=False):
                                   f"one at a time ({res.batch})"]))
         log(f"batch bicycle over v: {n_b} points {statistics.median(times):.2f} s "
             f"({rows[-1]['rate']:.0f} points/s; goal 2000), {nb} boundaries")
-    load1 = _load()
+    load1 = load_average()
     for r in rows:
         r["load"] = {"start": load0, "end": load1}
     return rows

@@ -35,9 +35,10 @@ from pathlib import Path
 
 import numpy as np
 
+from .cases import case_path, load_average
+
 __all__ = ["FLOOR_SCRIPT", "bench_lean", "report_lines", "shaft_case"]
 
-ROOT = Path(__file__).resolve().parents[2]
 PER_SPAN = 25
 SHAFT_SPANS = (7, 68, 685)  # 1,022, 9,928 and 100,010 degrees of freedom
 EPS = np.finfo(float).eps
@@ -224,7 +225,7 @@ def _rotor_rows(repeats, log, ross_python):
 
     rows = []
     for label, case, which, speeds in ROTORS:
-        spec = read_case(ROOT / "cases" / f"{case}.toml")
+        spec = read_case(case_path(case))
         with blas_limit(1):
             campbell(spec, "Omega", speeds[:3])  # (warm)
             times = []
@@ -356,21 +357,16 @@ rotations = ["clamped", "tip"]
 
 def bench_lean(log, *, repeats=3, quick=False, ross_python=None):
     """The rows (module docstring)."""
-    load0 = _load()
+    load0 = load_average()
     rows = _shaft_rows(SHAFT_SPANS[:2] if quick else SHAFT_SPANS, repeats, log)
     rows += _rotor_rows(repeats, log, ross_python or os.environ.get("MBSEIG_ROSS_PYTHON"))
     rows += _fe_rows(log)
-    load1 = _load()
+    load1 = load_average()
     for r in rows:
         r["load"] = {"start": load0, "end": load1}
     return rows
 
 
-def _load():
-    try:
-        return [round(x, 2) for x in os.getloadavg()]
-    except OSError:
-        return None
 
 
 def report_lines(rows) -> list:

@@ -60,6 +60,7 @@ from .dense_rows import (
     capped_threads,
     json_default,
 )
+from .cases import load_average
 from .failcases import run_all
 from .nlevp import bench_nlevp
 from .peer import bench_peer
@@ -103,7 +104,7 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
         "peer_sizes": [20] if quick else [50, 200, 500],
         "sweep_grid": (2, 5) if quick else (6, 20),
     }
-    res = {"config": cfg, "rows": [], "machine": _machine(), "load": {"start": _load()}}
+    res = {"config": cfg, "rows": [], "machine": _machine(), "load": {"start": load_average()}}
     t_start = time.perf_counter()
     with capped_threads(threads), warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
@@ -175,7 +176,7 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
     if "startup" in sections:
         res["rows"] += bench_startup(cfg["startup_repeats"], log)
     res["elapsed"] = time.perf_counter() - t_start
-    res["load"]["end"] = _load()
+    res["load"]["end"] = load_average()
     (out_dir / "benchmarks.json").write_text(json.dumps(res, indent=1, default=json_default))
     write_report(res, out_dir)
     return res
@@ -183,12 +184,6 @@ def run_bench(*, quick=False, out_dir=None, repeats=None, threads=1, sections=No
 
 
 
-def _load():
-    """The machine's load averages over 1, 5 and 15 minutes (None where the system has none)."""
-    try:
-        return [round(x, 2) for x in os.getloadavg()]
-    except (AttributeError, OSError):
-        return None
 
 
 def _machine():

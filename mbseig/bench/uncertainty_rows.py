@@ -17,12 +17,11 @@ before and after, and whether the goal is met.
 from __future__ import annotations
 
 import math
-import os
 import statistics
 import time
 import warnings
 
-from .cases import case_path
+from .cases import case_path, load_average
 
 __all__ = ["bench_uncertainty", "DEVICE_INPUTS", "SUBSET_INPUTS"]
 
@@ -34,11 +33,6 @@ SEEDS = range(10)
 MG_L = 9.81  # m g / l of the pendulum case
 
 
-def _load():
-    try:
-        return [round(x, 2) for x in os.getloadavg()]
-    except OSError:
-        return None
 
 
 def _closed_form(mu1, s1, mu2, s2):
@@ -57,7 +51,7 @@ def bench_uncertainty(log, *, repeats=3, quick=False):
     from ..studies.uncertainty_methods import parse_input
 
     rows = []
-    load0 = _load()
+    load0 = load_average()
     device = read_case(case_path("hand_device"))
     pend = read_case(case_path("inverted_pendulum_springs"))
     n = 10_000 if quick else 100_000
@@ -129,7 +123,7 @@ def bench_uncertainty(log, *, repeats=3, quick=False):
         log(f"uncertainty FORM: beta {res.reliability_index:.7g} (exact {beta:.7g}, "
             f"error {err_beta:.1e}), design point error {err_point:.1e}, "
             f"{res.evaluations} evaluations")
-    load1 = _load()
+    load1 = load_average()
     for r in rows:
         r["load"] = {"start": load0, "end": load1}
     return rows
