@@ -10,10 +10,11 @@ code"), section "lean", against the issue's goals:
   peak memory (each process's own ``ru_maxrss``), medians of ``repeats`` runs taken in turn;
   goal ≤ 2× both, and the 20 frequencies within 1e-8;
 - **rotors**: a Campbell sweep of ROSS's example rotor (cases/ross_example_rotor.toml,
-  51 speeds, 0–5000 rpm) and of Friswell's ex. 5.9.9 (cases/overhung_rotor_friswell.toml,
-  41 speeds, 0–800 rad/s), mbseig's ``campbell`` (whirl, log decrement and critical speeds)
-  against ROSS 2.3's ``run_campbell`` on the same rotor and speeds in its own interpreter
-  (``MBSEIG_ROSS_PYTHON``), per speed; goal: no slower;
+  51 speeds, 0–5000 rpm), of Friswell's ex. 5.9.1–5.9.3 (the same case with the larger second
+  disk and their bearings, 41 speeds, 0–4000 rpm) and of Friswell's ex. 5.9.9
+  (cases/overhung_rotor_friswell.toml, 41 speeds, 0–800 rad/s), mbseig's ``campbell`` (whirl,
+  log decrement and critical speeds) against ROSS 2.3's ``run_campbell`` on the same rotor and
+  speeds in its own interpreter (``MBSEIG_ROSS_PYTHON``), per speed; goal: no slower;
 - **FE bodies**: a Timoshenko bar exported as a 3-D FE body (every internal mode kept), clamped
   at one end, a rigid tip body carried at the other; mbseig's frequencies from the case against
   34-digit ones (mpmath) of the assembled matrices (the FE body's with the tip's mass and
@@ -202,7 +203,19 @@ def friswell():
     bearings = [rs.BearingElement(n=0, kxx=1e7, kyy=1e7, cxx=0.0),
                 rs.BearingElement(n=4, kxx=1e7, kyy=1e7, cxx=0.0)]
     return rs.Rotor(shaft, [disk], bearings)
-make = rs.rotor_example if which == "example" else friswell
+def friswell_59(kyy):  # ex. 5.9.1-5.9.3: two disks, bearings kxx = 1 MN/m and kyy
+    steel = rs.Material(name="Steel", rho=7810, E=211e9, G_s=81.2e9)
+    shaft = [rs.ShaftElement(L=0.25, idl=0.0, odl=0.05, material=steel, shear_effects=True,
+                             rotary_inertia=True, gyroscopic=True) for _ in range(6)]
+    disks = [rs.DiskElement.from_geometry(n=2, material=steel, width=0.07, i_d=0.05, o_d=0.28),
+             rs.DiskElement.from_geometry(n=4, material=steel, width=0.07, i_d=0.05, o_d=0.35)]
+    bearings = [rs.BearingElement(n=0, kxx=1e6, kyy=kyy, cxx=0.0),
+                rs.BearingElement(n=6, kxx=1e6, kyy=kyy, cxx=0.0)]
+    return rs.Rotor(shaft, disks, bearings)
+makers = {"example": rs.rotor_example, "friswell_5_9_9": friswell,
+          "friswell_5_9_1": lambda: friswell_59(1e6), "friswell_5_9_2": lambda: friswell_59(0.8e6),
+          "friswell_5_9_3": lambda: friswell_59(0.2e6)}
+make = makers[which]
 make().run_campbell(speeds[:2])  # (warm: imports and compilation)
 times = []
 for _ in range(repeats):
@@ -212,9 +225,20 @@ for _ in range(repeats):
 print(json.dumps({"times": times}))
 """
 
-ROTORS = (("ROSS's example rotor (rotor_example)", "ross_example_rotor", "example",
+#: Friswell's ex. 5.9.1-5.9.3 on cases/ross_example_rotor.toml: the larger second disk
+_BIG_DISK = {"m_disk1": 51.5252611115262, "Id1": 0.42358058405433824,
+             "Ip1": 0.8050822048675967}
+_RPM4000 = np.linspace(0.0, 4000 * np.pi / 30, 41)
+#: (label, case, fixed parameters, ROSS's builder, speeds [rad/s])
+ROTORS = (("ROSS's example rotor (rotor_example)", "ross_example_rotor", {}, "example",
            np.linspace(0.0, 5000 * np.pi / 30, 51)),
-          ("Friswell ex. 5.9.9 (overhung)", "overhung_rotor_friswell", "friswell_5_9_9",
+          ("Friswell ex. 5.9.1 (isotropic bearings)", "ross_example_rotor",
+           {**_BIG_DISK, "kzz": 1e6}, "friswell_5_9_1", _RPM4000),
+          ("Friswell ex. 5.9.2 (anisotropic bearings)", "ross_example_rotor",
+           {**_BIG_DISK, "kzz": 0.8e6}, "friswell_5_9_2", _RPM4000),
+          ("Friswell ex. 5.9.3 (mixed modes)", "ross_example_rotor",
+           {**_BIG_DISK, "kzz": 0.2e6}, "friswell_5_9_3", _RPM4000),
+          ("Friswell ex. 5.9.9 (overhung)", "overhung_rotor_friswell", {}, "friswell_5_9_9",
            np.linspace(0.0, 800.0, 41)))
 
 
@@ -224,14 +248,14 @@ def _rotor_rows(repeats, log, ross_python):
     from ..studies.campbell import campbell
 
     rows = []
-    for label, case, which, speeds in ROTORS:
+    for label, case, fixed, which, speeds in ROTORS:
         spec = read_case(case_path(case))
         with blas_limit(1):
-            campbell(spec, "Omega", speeds[:3])  # (warm)
+            campbell(spec, "Omega", speeds[:3], fixed=fixed)  # (warm)
             times = []
             for _ in range(repeats):
                 t = time.perf_counter()
-                res = campbell(spec, "Omega", speeds)
+                res = campbell(spec, "Omega", speeds, fixed=fixed)
                 times.append(time.perf_counter() - t)
         per = statistics.median(times) / speeds.size
         ross, why = None, "no ROSS interpreter (MBSEIG_ROSS_PYTHON)"
