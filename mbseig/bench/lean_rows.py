@@ -287,7 +287,11 @@ TIP_INERTIA = (0.01, 0.02, 0.03)
 
 
 def _fe_rows(log):
-    import mpmath as mp
+    try:
+        import mpmath as mp
+    except ImportError:  # (the test extra has it; a plain install may not)
+        log("lean FE bodies not run: their 34-digit references need mpmath (pip install mpmath)")
+        return []
     import scipy.linalg as sla
 
     import mbseig
