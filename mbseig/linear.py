@@ -279,7 +279,7 @@ def _dense_local(local, G, rank_tol, names):
     """(N, rank, independent, cosine) of a dense model from its local basis: the rows a large
     component left are eliminated in N's columns by :func:`continuous_null_basis` (an SVD of
     those rows alone); ``independent`` names the coordinates whose unit columns N keeps."""
-    N = local.N.toarray()
+    N = local.dense()
     rank, sigma = local.rank, None
     if local.kept is not None:
         Z, r, _, sigma = continuous_null_basis(local.kept.toarray(), N.shape[1], rank_tol)

@@ -40,25 +40,45 @@ __all__ = ["LOCAL_MAX", "LocalBasis", "local_basis", "triad_coordinates"]
 #: columns of a constraint component whose null space is taken by its own dense SVD; a larger
 #: component stays in the bordered pencil (an SVD there would cost as one of the whole Jacobian)
 LOCAL_MAX = 600
+#: columns of T up to which the joints are eliminated together by one dense SVD (:func:`_small`:
+#: below it finding components costs more than the SVD: 0.36 against 1.3 ms, 21 coordinates)
+SMALL_DENSE = 200
 _HALF = np.sqrt(0.5)
 
 
 @dataclass(frozen=True, eq=False)
 class LocalBasis:
-    """N (n × d, CSR, orthonormal) with Φ_q N = 0 on the eliminated rows, and what is left.
+    """N (n × d, orthonormal) with Φ_q N = 0 on the eliminated rows, and what is left.
 
-    rank : the rank eliminated (6 per triad plus each component's rank); kept : the remaining
-    rows in the columns of N (CSR, None when none is left) and ``kept_rows`` their row indices
-    in Φ_q; triads, components, largest : counts for the record (the largest component's
-    columns)."""
+    basis : N as found (CSR; a dense array for a small model, :func:`_small`), read as CSR by
+    :attr:`N` and as an array by :meth:`dense`; rank : the rank eliminated (6 per triad plus
+    each component's rank); kept : the remaining rows in the columns of N (CSR, None when none
+    is left) and ``kept_rows`` their row indices in Φ_q; triads, components, largest : counts
+    for the record (the largest component's columns)."""
 
-    N: sp.csr_matrix
+    basis: object
     rank: int
     kept: object
     kept_rows: np.ndarray
     triads: int
     components: int
     largest: int
+
+    @property
+    def N(self) -> sp.csr_matrix:
+        got = self.__dict__.get("_csr")
+        if got is None:
+            got = self.basis if sp.issparse(self.basis) else sp.csr_matrix(self.basis)
+            object.__setattr__(self, "_csr", got)
+        return got
+
+    def dense(self) -> np.ndarray:
+        return self.basis.toarray() if sp.issparse(self.basis) else self.basis
+
+    @property
+    def small(self) -> bool:
+        """Whether N was found dense (a small model)."""
+        return not sp.issparse(self.basis)
 
     @property
     def record(self) -> dict:
@@ -113,36 +133,50 @@ def _selected(aff):
     return np.asarray(aff.idx, np.intp)[cols]
 
 
-def tangent_map(n, coords, q):
-    """T (n × n_t, CSR) of the module docstring and, per column, the coordinate it stands at
-    (a triad's three columns at its u.x)."""
+def tangent_map(n, coords, q, *, dense=False):
+    """T (n × n_t, CSR; an array with ``dense``) of the module docstring and, per column, the
+    coordinate it stands at (a triad's three columns at its u.x)."""
     k = coords.shape[0]
-    in_triad = np.zeros(n, bool)
-    in_triad[coords.ravel()] = True
-    plain = np.flatnonzero(~in_triad)
-    # column order: coordinates in their order, each triad's three rotations at its first one
-    anchor = np.concatenate([plain, np.repeat(coords[:, 0], 3)])
-    sub = np.concatenate([np.zeros(plain.size), np.tile([0.0, 1.0, 2.0], k)])
-    order = np.lexsort((sub, anchor))
-    n_t = order.size
-    col_of = np.empty(n_t, np.intp)
-    col_of[order] = np.arange(n_t)
+    plain, col_of, anchor = _layout(n, coords)
+    n_t = col_of.size
     rows = [plain]
     cols = [col_of[:plain.size]]
     vals = [np.ones(plain.size)]
     if k:
-        E = q[coords].reshape(k, 3, 3)  # [triad, vector (u v w), component]
+        E = q[coords].reshape(k, 3, 3) * _HALF  # [triad, vector (u v w), component]
+        x, y, z = E[..., 0], E[..., 1], E[..., 2]
+        zero = np.zeros_like(x)
         rc = col_of[plain.size:].reshape(k, 3)
-        for i in range(3):  # θ = eᵢ: δe = eᵢ × e for each of u, v, w
-            ei = np.eye(3)[i]
-            D = np.cross(ei, E) * _HALF  # (k, 3, 3)
+        # θ = eᵢ: δe = eᵢ × e for each of u, v, w (e_x × e = (0, −e_z, e_y), and so on)
+        for i, D in enumerate((np.stack([zero, -z, y], axis=-1),
+                               np.stack([z, zero, -x], axis=-1),
+                               np.stack([-y, x, zero], axis=-1))):
             rows.append(coords.ravel())
             cols.append(np.repeat(rc[:, i], 9))
             vals.append(D.reshape(-1))
-    T = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                      shape=(n, n_t))
+    r, c, v = np.concatenate(rows), np.concatenate(cols), np.concatenate(vals)
+    if dense:
+        T = np.zeros((n, n_t))
+        T[r, c] = v  # (one entry per pair)
+        return T, anchor
+    T = sp.csr_matrix((v, (r, c)), shape=(n, n_t))
     T.eliminate_zeros()
-    return T, anchor[order]
+    return T, anchor
+
+
+def _layout(n, coords):
+    """(plain coordinates, the column of each T column's entry list, the coordinate each
+    column stands at): coordinates in their order, each triad's three rotations at its u.x."""
+    k = coords.shape[0]
+    in_triad = np.zeros(n, bool)
+    in_triad[coords.ravel()] = True
+    plain = np.flatnonzero(~in_triad)
+    anchor = np.concatenate([plain, np.repeat(coords[:, 0], 3)])
+    sub = np.concatenate([np.zeros(plain.size), np.tile([0.0, 1.0, 2.0], k)])
+    order = np.lexsort((sub, anchor))
+    col_of = np.empty(order.size, np.intp)
+    col_of[order] = np.arange(order.size)
+    return plain, col_of, anchor[order]
 
 
 def local_basis(model, q, rank_tol, *, local_max=LOCAL_MAX) -> LocalBasis:
@@ -161,10 +195,15 @@ def local_basis(model, q, rank_tol, *, local_max=LOCAL_MAX) -> LocalBasis:
 def _local_basis(model, q, rank_tol, local_max):
     n = model.n
     trows, coords = triad_coordinates(model)
+    m = model.n_constraints
+    keep = np.ones(m, bool)
+    keep[trows.ravel()] = False
+    other = np.flatnonzero(keep)
+    if n - 6 * coords.shape[0] <= min(SMALL_DENSE, local_max):  # all of it one component
+        return _small(model, q, rank_tol, tangent_map(n, coords, q, dense=True)[0], other,
+                      coords.shape[0])
     T, _ = tangent_map(n, coords, q)
     n_t = T.shape[1]
-    m = model.n_constraints
-    other = np.setdiff1d(np.arange(m), trows.ravel())
     if other.size == 0:
         return LocalBasis(T, 6 * coords.shape[0], None, other, coords.shape[0], 0, 0)
     G = (model.phi_q(q)[other] @ T).tocsr()
@@ -218,6 +257,23 @@ def _local_basis(model, q, rank_tol, local_max):
     Gk = (G[kept_rows] @ N2).tocsr() if kept else None
     return LocalBasis(N, rank, Gk, other[kept_rows], coords.shape[0],
                       int(touched.size), largest)
+
+
+def _small(model, q, rank_tol, Td, other, n_triads):
+    """A small model (at most SMALL_DENSE columns of T), dense throughout: its joints in T's
+    columns at once by one SVD of those rows (a few dozen columns: cheaper than finding
+    components) and the polar factor closest to the coordinate directions.  The polar factor
+    of the block-diagonal projector is block diagonal where the selection is, so this is the
+    local basis up to the selection of the coordinates (and rounding)."""
+    if other.size == 0:
+        return LocalBasis(Td, 6 * n_triads, None, other, n_triads, 0, 0)
+    G = model.phi_q(q, dense=True)[other] @ Td
+    _, sv, vt = np.linalg.svd(G, full_matrices=True)
+    r = int(np.sum(sv > rank_tol * sv[0])) if sv.size and sv[0] > 0 else 0
+    Z = vt[r:].T
+    N = Td @ _closest(Z) if Z.shape[1] else np.zeros((Td.shape[0], 0))
+    touched = int(np.count_nonzero(np.any(G != 0, axis=0)))
+    return LocalBasis(N, 6 * n_triads + r, None, np.zeros(0, np.intp), n_triads, 1, touched)
 
 
 def _groups(labels, n_groups):

@@ -53,8 +53,9 @@ def _basis(model, q, rank_tol):
         return np.eye(model.n), np.zeros((0, 0)), Phi_q, 0
     if triad_coordinates(model)[0].shape[0]:
         local = local_basis(model, q, rank_tol)
-        if local.kept is None and local.rank == Phi_q.shape[0]:
-            return local.N, np.zeros((Phi_q.shape[0], 0)), Phi_q, local.rank  # (sparse)
+        if local.kept is None and local.rank == Phi_q.shape[0]:  # (sparse but for small ones)
+            N = local.dense() if local.small else local.N
+            return N, np.zeros((Phi_q.shape[0], 0)), Phi_q, local.rank
     U, s, Vt = sla.svd(Phi_q, full_matrices=True)
     rank = int(np.sum(s > rank_tol * s[0])) if s.size and s[0] > 0 else 0
     return Vt[rank:].T, U[:, rank:], Phi_q, rank
