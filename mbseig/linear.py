@@ -42,7 +42,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
 
 from .arguments import check
@@ -51,6 +50,7 @@ from .model.linear_case import LinearCase
 from .model.signals import input_forces, output_rows
 from .numerics import (
     DOUBLE_RANGE,
+    closest_basis,
     element_name,
     null_space_basis,
     require_finite,
@@ -382,10 +382,8 @@ def continuous_null_basis(Phi_q, n, rank_tol, names=None, reference=None):
     d = Z.shape[1]
     if Phi_q.shape[0] == 0 or d == 0:
         return Z, rank, tuple(names) if d == n else (), None
-    if reference is None:
-        _, _, piv = sla.qr(Z.T, mode="economic", pivoting=True)
-        sel = np.sort(piv[:d])
-    else:
+    sel = None
+    if reference is not None:
         sel = []
         for r in reference:
             if isinstance(r, str) and r in names:
@@ -400,15 +398,13 @@ def continuous_null_basis(Phi_q, n, rank_tol, names=None, reference=None):
         if sel.size != d:
             raise CaseError(f"reference names {sel.size} coordinates for a null space of "
                             f"dimension {d}", element="linearization")
-    A = Z[sel, :].T  # Zᵀ E
-    U, sv, Vt = np.linalg.svd(A)
-    if reference is not None and sv[-1] <= 1e-8:
+    N, sel, cosine = closest_basis(Z, sel)  # the polar factor of Π E (Zᵀ E = U Σ Vᵀ)
+    if reference is not None and cosine <= 1e-8:
         raise CaseError("the reference coordinates do not fix the null space (repeated, or a "
                         "direction the constraints forbid): N would be arbitrary",
                         element="linearization")
-    N = Z @ (U @ Vt)
     # N is the polar factor of Π E: independent of the SVD's choice of Z (up to rounding)
-    return N, rank, tuple(names[i] for i in sel), float(sv[-1])
+    return N, rank, tuple(names[i] for i in sel), cosine
 
 
 def _signals(model, q0, N, G, rank, Md, Cd, Kd, Mr, Pr, Qr):

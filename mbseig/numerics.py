@@ -212,6 +212,21 @@ def null_space_basis(Phi_q, n, rank_tol):
     return vt[rank:].T.copy(), rank
 
 
+def closest_basis(Z, sel=None):
+    """(N, selection, cosine): among the orthonormal bases of span Z (Z orthonormal, n × d),
+    the one closest to the coordinate directions E = I[:, sel] (the polar factor of Π E,
+    Π = Z Zᵀ: N = Z U Vᵀ with Zᵀ E = U Σ Vᵀ).  ``sel`` defaults to the d coordinates chosen by
+    column-pivoted QR of Zᵀ (sorted); ``cosine`` is σ_min(Zᵀ E), how well E fixes N.  It
+    depends on span Z alone, not on the basis Z an SVD returned (docs/design.md, "Null-space
+    basis")."""
+    d = Z.shape[1]
+    if sel is None:
+        _, _, piv = sla.qr(Z.T, mode="economic", pivoting=True)
+        sel = np.sort(piv[:d])
+    U, sv, Vt = np.linalg.svd(Z[sel, :].T)
+    return Z @ (U @ Vt), sel, float(sv[-1]) if sv.size else 1.0
+
+
 def colnorm(X):
     """Column 2-norms of a real or complex block without complex temporaries."""
     if np.iscomplexobj(X):

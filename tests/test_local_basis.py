@@ -72,6 +72,8 @@ def test_local_and_global_bases_give_the_same_modes(name):
     sa, sb = a.all_eigenvalues, b.all_eigenvalues
     for s, err in zip(a.eigenvalues, a.error_estimate, strict=True):
         j = int(np.argmin(np.abs(b.eigenvalues - s)))
+        # the bounds (safety 10 on κη), plus the rounding of a zero eigenvalue (rigid-body
+        # modes: their κη is ~0), 10 ε of the largest |s|
         bound = 10 * (err + b.error_estimate[j]) + 10 * EPS * max(1.0, np.abs(sa).max(),
                                                                  np.abs(sb).max())
         assert abs(b.eigenvalues[j] - s) <= bound, (s, b.eigenvalues[j], bound)
@@ -125,6 +127,8 @@ def test_a_component_beyond_the_local_limit_stays_bordered(tmp_path):
     full = mbseig.modes(mbseig.linearize(model, eq))
     for s, err in zip(part.eigenvalues, part.error_estimate, strict=True):
         j = int(np.argmin(np.abs(full.eigenvalues - s)))
+        # the bounds (safety 10 on κη) plus the rounding of forming Nᵀ A N in two bases:
+        # sums of up to 24 terms an entry, 1e3 ε |s| covers it
         assert abs(full.eigenvalues[j] - s) <= 10 * (err + full.error_estimate[j]) \
             + 1e3 * EPS * abs(s)
 
@@ -145,6 +149,8 @@ def test_clustered_lowest_modes_in_one_lanczos_run(tmp_path):
     assert md.tolerances["arpack_k"] == 22 and len(md.tolerances["shifts"]) == 1
     w = np.sqrt(np.sort(spla.eigsh(lin.Q.tocsc(), 20, lin.M.tocsc(), sigma=0.0,
                                    return_eigenvectors=False)))
+    # mbseig's bounds (safety 10 on κη) plus the reference's own convergence: eigsh to
+    # machine precision on ω², a few hundred ulps on ω (1e3 ε |ω|)
     assert np.all(np.abs(np.sort(md.omega_n) - w) <= 10 * md.error_estimate + 1e3 * EPS * w)
     assert w[19] / w[0] < 1.0015
 

@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from .cases import case_path, load_average
+from .rotor_rows import ROSS_FRISWELL_599
 
 __all__ = ["FLOOR_SCRIPT", "bench_lean", "report_lines", "shaft_case"]
 
@@ -187,7 +188,7 @@ def _shaft_rows(spans_list, repeats, log):
     return rows
 
 
-#: run by the ROSS interpreter: argv = rotor ("example" or "friswell_5_9_9"), repeats, speeds
+#: run by the ROSS interpreter: argv = rotor (a key of ``makers``), repeats, speeds [rad/s]
 ROSS_CAMPBELL = r"""
 import json, sys, time, warnings
 warnings.simplefilter("ignore")
@@ -195,14 +196,7 @@ import numpy as np
 import ross as rs
 which, repeats = sys.argv[1], int(sys.argv[2])
 speeds = np.array([float(x) for x in sys.argv[3:]])
-def friswell():
-    steel = rs.Material(name="steel_friswell", rho=7810, E=211e9, G_s=81.2e9)
-    shaft = [rs.ShaftElement(L=0.25, idl=0.0, odl=0.05, material=steel, shear_effects=True,
-                             rotary_inertia=True, gyroscopic=True) for _ in range(6)]
-    disk = rs.DiskElement.from_geometry(n=6, material=steel, width=0.07, i_d=0.05, o_d=0.35)
-    bearings = [rs.BearingElement(n=0, kxx=1e7, kyy=1e7, cxx=0.0),
-                rs.BearingElement(n=4, kxx=1e7, kyy=1e7, cxx=0.0)]
-    return rs.Rotor(shaft, [disk], bearings)
+""" + ROSS_FRISWELL_599 + r"""
 def friswell_59(kyy):  # ex. 5.9.1-5.9.3: two disks, bearings kxx = 1 MN/m and kyy
     steel = rs.Material(name="Steel", rho=7810, E=211e9, G_s=81.2e9)
     shaft = [rs.ShaftElement(L=0.25, idl=0.0, odl=0.05, material=steel, shear_effects=True,

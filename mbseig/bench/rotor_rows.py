@@ -34,24 +34,31 @@ ROOT = Path(__file__).resolve().parents[2]
 CASE = ROOT / "cases" / "overhung_rotor_friswell.toml"
 STORED = ROOT / "tests" / "data" / "ross" / "friswell_lateral.json"
 
-#: run by the ROSS interpreter: argv = [speeds..., repeats]; prints {"times": [...], "n_modes"}
+#: Friswell's ex. 5.9.9 as ROSS builds it (``friswell()``), for the scripts the ROSS
+#: interpreter runs (this module's and :mod:`mbseig.bench.lean_rows`')
+ROSS_FRISWELL_599 = """
+def friswell():
+    steel = rs.Material(name="steel_friswell", rho=7810, E=211e9, G_s=81.2e9)
+    shaft = [rs.ShaftElement(L=0.25, idl=0.0, odl=0.05, material=steel, shear_effects=True,
+                             rotary_inertia=True, gyroscopic=True) for _ in range(6)]
+    disk = rs.DiskElement.from_geometry(n=6, material=steel, width=0.07, i_d=0.05, o_d=0.35)
+    bearings = [rs.BearingElement(n=0, kxx=1e7, kyy=1e7, cxx=0.0),
+                rs.BearingElement(n=4, kxx=1e7, kyy=1e7, cxx=0.0)]
+    return rs.Rotor(shaft, [disk], bearings)
+"""
+
+#: run by the ROSS interpreter: argv = [speeds..., repeats]; prints {"times": [...]}
 ROSS_SCRIPT = """
 import json, sys, time, warnings
 warnings.simplefilter("ignore")
 import numpy as np
 import ross as rs
 speeds = np.array([float(x) for x in sys.argv[1:-1]]); repeats = int(sys.argv[-1])
-steel = rs.Material(name="steel_friswell", rho=7810, E=211e9, G_s=81.2e9)
-shaft = [rs.ShaftElement(L=0.25, idl=0.0, odl=0.05, material=steel, shear_effects=True,
-                         rotary_inertia=True, gyroscopic=True) for _ in range(6)]
-disk = rs.DiskElement.from_geometry(n=6, material=steel, width=0.07, i_d=0.05, o_d=0.35)
-bearings = [rs.BearingElement(n=0, kxx=1e7, kyy=1e7, cxx=0.0),
-            rs.BearingElement(n=4, kxx=1e7, kyy=1e7, cxx=0.0)]
+""" + ROSS_FRISWELL_599 + """
 times = []
 for _ in range(repeats):
     t = time.perf_counter()
-    rotor = rs.Rotor(shaft, [disk], bearings)
-    rotor.run_campbell(speeds, frequencies=6)
+    friswell().run_campbell(speeds, frequencies=6)
     times.append(time.perf_counter() - t)
 print(json.dumps({"times": times}))
 """

@@ -31,9 +31,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
+
+from ..numerics import closest_basis
 
 __all__ = ["LOCAL_MAX", "LocalBasis", "local_basis", "triad_coordinates"]
 
@@ -134,10 +135,10 @@ def _selected(aff):
 
 
 def tangent_map(n, coords, q, *, dense=False):
-    """T (n × n_t, CSR; an array with ``dense``) of the module docstring and, per column, the
-    coordinate it stands at (a triad's three columns at its u.x)."""
+    """T (n × n_t, CSR; an array with ``dense``) of the module docstring: its columns in the
+    order of the coordinates, each triad's three rotations at its u.x."""
     k = coords.shape[0]
-    plain, col_of, anchor = _layout(n, coords)
+    plain, col_of = _layout(n, coords)
     n_t = col_of.size
     rows = [plain]
     cols = [col_of[:plain.size]]
@@ -158,15 +159,15 @@ def tangent_map(n, coords, q, *, dense=False):
     if dense:
         T = np.zeros((n, n_t))
         T[r, c] = v  # (one entry per pair)
-        return T, anchor
+        return T
     T = sp.csr_matrix((v, (r, c)), shape=(n, n_t))
     T.eliminate_zeros()
-    return T, anchor
+    return T
 
 
 def _layout(n, coords):
-    """(plain coordinates, the column of each T column's entry list, the coordinate each
-    column stands at): coordinates in their order, each triad's three rotations at its u.x."""
+    """(the coordinates outside every triad, the column of each of them and then of each
+    triad's three rotations): coordinates in their order, a triad's rotations at its u.x."""
     k = coords.shape[0]
     in_triad = np.zeros(n, bool)
     in_triad[coords.ravel()] = True
@@ -176,7 +177,7 @@ def _layout(n, coords):
     order = np.lexsort((sub, anchor))
     col_of = np.empty(order.size, np.intp)
     col_of[order] = np.arange(order.size)
-    return plain, col_of, anchor[order]
+    return plain, col_of
 
 
 def local_basis(model, q, rank_tol, *, local_max=LOCAL_MAX) -> LocalBasis:
@@ -200,9 +201,9 @@ def _local_basis(model, q, rank_tol, local_max):
     keep[trows.ravel()] = False
     other = np.flatnonzero(keep)
     if n - 6 * coords.shape[0] <= min(SMALL_DENSE, local_max):  # all of it one component
-        return _small(model, q, rank_tol, tangent_map(n, coords, q, dense=True)[0], other,
+        return _small(model, q, rank_tol, tangent_map(n, coords, q, dense=True), other,
                       coords.shape[0])
-    T, _ = tangent_map(n, coords, q)
+    T = tangent_map(n, coords, q)
     n_t = T.shape[1]
     if other.size == 0:
         return LocalBasis(T, 6 * coords.shape[0], None, other, coords.shape[0], 0, 0)
@@ -284,12 +285,9 @@ def _groups(labels, n_groups):
 
 
 def _closest(Z):
-    """The orthonormal basis of span Z closest to the coordinate directions it selects by
-    column-pivoted QR (the polar factor of Π E): unit columns where the null space holds them."""
-    d = Z.shape[1]
-    _, _, piv = sla.qr(Z.T, mode="economic", pivoting=True)
-    sel = np.sort(piv[:d])
-    U, _, Vt = np.linalg.svd(Z[sel, :].T)
-    N = Z @ (U @ Vt)
-    N[np.abs(N) < 1e-15 * np.abs(N).max(initial=0.0)] = 0.0  # rounding of exact zeros only
+    """:func:`mbseig.numerics.closest_basis` of span Z, its rounding of exact zeros (below
+    1e-15 of the largest entry) set to zero, so that N keeps the sparsity of the coordinate
+    directions it holds: unit columns where the null space holds them."""
+    N = closest_basis(Z)[0]
+    N[np.abs(N) < 1e-15 * np.abs(N).max(initial=0.0)] = 0.0
     return N
