@@ -127,3 +127,18 @@ def test_executable_prompt_exit_delivers_the_whole_output(tmp_path):
     r = subprocess.run([sys.executable, "-m", "mbseig", "modes", str(tmp_path / "missing.toml")],
                        capture_output=True, text=True)
     assert r.returncode == 2 and r.stdout == "" and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_help_of_every_command_prints_and_exits_zero(capsys):
+    """``mbseig --help`` and ``mbseig COMMAND --help`` print their usage and exit 0: argparse
+    expands ``%`` in help texts, so an unescaped percent sign in one command's help is a
+    traceback in the top-level help (95 % once was). Reference: argparse's documented exit
+    status 0 for --help."""
+    from mbseig.cli import SUBCOMMANDS
+
+    for argv in (["--help"], *([name, "--help"] for name in SUBCOMMANDS)):
+        with pytest.raises(SystemExit) as stop:
+            main(argv)
+        assert stop.value.code == 0, argv
+        out = capsys.readouterr().out
+        assert out.startswith("usage: mbseig"), argv

@@ -25,7 +25,7 @@ from .common import (
 
 def register(sub):
     p = sub.add_parser(
-        "uncertainty", help="probability of instability under random parameters, its 95 % "
+        "uncertainty", help="probability of instability under random parameters, its 95 %% "
                             "interval, the reliability index and the drivers",
         description="The probability that the case is unstable when parameters are random: "
                     "--param NAME=normal(MU,SIGMA) | lognormal(MEDIAN,SIGMA_LOG) | "
