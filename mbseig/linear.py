@@ -213,9 +213,15 @@ def _linearize(model, eq, rank_tol, constraint_stiffness, sparse, reference=None
                            D=np.zeros((0, 0)), independent=tuple(model.coordinate_names))
     q0, lam0 = eq.q, eq.lam
     use_sparse = model.n > SPARSE_MIN if sparse is None else sparse
-    K, C = model.force_jacobians(q0, dense=not use_sparse)  # (dense: no CSR round trip)
+    local = None
+    if not use_sparse and basis is None and reference is None and model.n_constraints:
+        local = _local(model, q0, rank_tol)
+    # sparse Jacobians where N is (the sparse path, and a dense model's sparse local basis,
+    # projected sparse before it is made dense); a dense model's own otherwise (no CSR round trip)
+    sparse_jacobians = use_sparse or (local is not None and not local.small)
+    K, C = model.force_jacobians(q0, dense=not sparse_jacobians)
     if constraint_stiffness and model.n_constraints:
-        K = K + model.constraint_hessian(q0, lam0, dense=not use_sparse)
+        K = K + model.constraint_hessian(q0, lam0, dense=not sparse_jacobians)
     if use_sparse:
         G = model.phi_q(q0) if model.n_constraints else None
         N = sp.identity(model.n, format="csr") if G is None else None
@@ -235,19 +241,24 @@ def _linearize(model, eq, rank_tol, constraint_stiffness, sparse, reference=None
             constraint_stiffness=constraint_stiffness, tolerances=tol, constraint_jacobian=G,
             eliminated=eliminated, display=Displayed(model, q0))
     G = model.phi_q(q0, dense=True)
-    local = None
+    Z = None
     if basis is not None and reference is None:
         N, rank, independent, sigma = basis
-    elif reference is None and model.n_constraints and \
-            (local := _local(model, q0, rank_tol)) is not None:
-        N, rank, independent, sigma = _dense_local(local, G, rank_tol, model.coordinate_names)
+    elif local is not None:
+        N, rank, independent, sigma, Z = _dense_local(local, rank_tol, model.coordinate_names)
     else:
         N, rank, independent, sigma = continuous_null_basis(G, model.n, rank_tol,
                                                             model.coordinate_names, reference)
-    Md, Cd, Kd = model.mass_matrix(q0).toarray(), C, K
-    if model.n_constraints == 0:
+    if sparse_jacobians:  # Nᵀ A N = Zᵀ (N_localᵀ A N_local) Z, the inner product sparse
+        Md, Cd, Kd = model.mass_matrix(q0).tocsr(), C.tocsr(), K.tocsr()
+        Mr, Pr, Qr = (_project(local.N, A).toarray() for A in (Md, Cd, Kd))
+        if Z is not None:
+            Mr, Pr, Qr = (Z.T @ A @ Z for A in (Mr, Pr, Qr))
+    elif model.n_constraints == 0:
+        Md, Cd, Kd = model.mass_matrix(q0).toarray(), C, K
         Mr, Pr, Qr = Md, Cd, Kd
     else:
+        Md, Cd, Kd = model.mass_matrix(q0).toarray(), C, K
         Mr, Pr, Qr = (N.T @ A @ N for A in (Md, Cd, Kd))
     io = _signals(model, q0, N, G, rank, Md, Cd, Kd, Mr, Pr, Qr) if signals else {}
     tol = {"rank_tol": rank_tol}
@@ -275,18 +286,19 @@ def _local(model, q0, rank_tol):
     return local_basis(model, q0, rank_tol)
 
 
-def _dense_local(local, G, rank_tol, names):
-    """(N, rank, independent, cosine) of a dense model from its local basis: the rows a large
-    component left are eliminated in N's columns by :func:`continuous_null_basis` (an SVD of
-    those rows alone); ``independent`` names the coordinates whose unit columns N keeps."""
+def _dense_local(local, rank_tol, names):
+    """(N, rank, independent, cosine, Z) of a dense model from its local basis: the rows a
+    large component left are eliminated in the local basis's columns by
+    :func:`continuous_null_basis` (an SVD of those rows alone), N = N_local Z (Z None when no
+    rows were left); ``independent`` names the coordinates whose unit columns N keeps."""
     N = local.dense()
-    rank, sigma = local.rank, None
+    rank, sigma, Z = local.rank, None, None
     if local.kept is not None:
         Z, r, _, sigma = continuous_null_basis(local.kept.toarray(), N.shape[1], rank_tol)
         N, rank = N @ Z, rank + r
     unit = np.flatnonzero((np.abs(N) == 1.0).sum(axis=0) == 1)
     rows = np.argmax(np.abs(N[:, unit]), axis=0) if unit.size else np.zeros(0, int)
-    return N, rank, tuple(names[i] for i in np.sort(rows)), sigma
+    return N, rank, tuple(names[i] for i in np.sort(rows)), sigma, Z
 
 
 def _project(N, A):
