@@ -121,6 +121,29 @@ def frames_to_local(R0: np.ndarray) -> np.ndarray:
     return np.kron(np.eye(2), node)
 
 
+_EYE24 = np.eye(24)
+_S_KEPT = 16  # section frames whose S is kept (a model's beams: one frame each, mostly)
+_S_CACHE: dict = {}
+
+
+def _node_map(R0, C):
+    """S C of an element (the frames map C to the section axes): S made once per section
+    frame R0 and kept (read-only); where C is the identity (the element's coordinates are its
+    two nodes' own, in order) S itself, shared, since S I = S exactly."""
+    R0 = np.asarray(R0, float)
+    key = R0.tobytes()
+    S = _S_CACHE.get(key)
+    if S is None:
+        S = frames_to_local(R0)
+        S.setflags(write=False)
+        if len(_S_CACHE) >= _S_KEPT:
+            _S_CACHE.pop(next(iter(_S_CACHE)))
+        _S_CACHE[key] = S
+    if C.shape == (24, 24) and np.array_equal(C, _EYE24):
+        return S, S
+    return S, S @ C
+
+
 _D = np.zeros((3, 24))
 _D[:, 12:15] = np.eye(3)
 _D[:, 0:3] = -np.eye(3)
@@ -159,8 +182,8 @@ class Beam3DElement(Force, ConfigurationMass):
 
     def __post_init__(self):
         em, planes = _constants(self.props, float(self.l0))
-        S = frames_to_local(self.R0)
-        nodes = Affine(self.frames.idx, S @ self.frames.C, S @ self.frames.d)
+        S, SC = _node_map(self.R0, self.frames.C)
+        nodes = Affine(self.frames.idx, SC, S @ self.frames.d)
         object.__setattr__(self, "_nodes", nodes)
         object.__setattr__(self, "_em", em)
         object.__setattr__(self, "_planes", tuple(planes))
