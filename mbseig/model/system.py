@@ -259,17 +259,21 @@ class Model:
         return self._constraint_hessian(q, lam, False)
 
     def _constraint_hessian(self, q, lam, dense):
+        blocks = self._hessian_blocks(q, lam)
+        if dense:
+            return _summed(self.n, self.n, self._layout[3], blocks)
+        return self._sparse(3, self.n, blocks)
+
+    def _hessian_blocks(self, q, lam):
+        """(idx, idx, λ_k ∇²Φ_k) of every constraint (its group's where it has one)."""
         off = self._layout[0]
         hs = [None] * len(self.constraints)
         for pos, group in self._groups[0]:  # the members' multipliers, one row each
             rows = off[pos][:, None] + np.arange(group.B.shape[1])
             for k, H in zip(pos.tolist(), group.hess(lam[rows]), strict=True):
                 hs[k] = H
-        blocks = [(c.idx, c.idx, c.hess(q, lam[off[k]:off[k + 1]]) if hs[k] is None else hs[k])
-                  for k, c in enumerate(self.constraints)]
-        if dense:
-            return _summed(self.n, self.n, self._layout[3], blocks)
-        return self._sparse(3, self.n, blocks)
+        return [(c.idx, c.idx, c.hess(q, lam[off[k]:off[k + 1]]) if hs[k] is None else hs[k])
+                for k, c in enumerate(self.constraints)]
 
     @property
     def dense_assembly(self) -> bool:
@@ -297,8 +301,8 @@ class Model:
         # evaluated under errstate "ignore": an overflow is judged by the results below
         with np.errstate(all="ignore"):
             if _finite(lambda: self._assembled(q, qd)):
-                # the sums are finite, so is every term (a non-finite term leaves its sum
-                # inf or NaN): no element to name, without evaluating each one alone
+                # every term is finite: no element to name, without evaluating each one
+                # alone (and without summing them)
                 return None
             for f in self.forces:
                 if isinstance(f, BatchForce):  # a batch: name the member
@@ -316,13 +320,23 @@ class Model:
         return None
 
     def _assembled(self, q, qd):
-        """What :meth:`nonfinite_element` checks element by element, assembled (the data of
-        the sparse sums)."""
-        K, C = self.force_jacobians(q, qd)
-        out = [self.generalized_force(q, qd), K.data, C.data, self.mass_matrix(q).data]
+        """What :meth:`nonfinite_element` checks element by element, evaluated as the model
+        evaluates it (batches, groups) but not summed: the force g and every element's K, C,
+        configuration-dependent mass, Φ, Φ_q and H(1) blocks."""
+        out = [self.generalized_force(q, qd)]
+        for KC in self._each(1, "jacobians", q, qd):
+            out += list(KC)
+        for f in self.forces:
+            if isinstance(f, BatchForce):
+                out += [t[2] for t in f.jacobian_coo(q, qd)]
+        if self.mass_elements:
+            elements = [e for e, _ in self.mass_elements]
+            if self._batched_forces:
+                self._prime(elements, "mass", q)
+            out += [e.mass(q) for e in elements]
         if self.constraints:
-            out += [self.phi(q), self.phi_q(q).data,
-                    self.constraint_hessian(q, np.ones(self.n_constraints)).data]
+            out += [self.phi(q), *self._each(0, "jac", q),
+                    *(H for _, _, H in self._hessian_blocks(q, np.ones(self.n_constraints)))]
         return out
 
     def constraint_scales(self) -> np.ndarray:

@@ -117,12 +117,17 @@ def _triads(model):
     return np.array(rows, np.intp), np.array(coords, np.intp)
 
 
+_FRAME_TRIAD = np.eye(12)[3:]  # the triad rows of a frame map on the frame's 12 coordinates
+
+
 def _selected(aff):
     """The nine coordinate indices of a frame map's triad rows (rows 3–11) where those rows
     select distinct coordinates with unit weight and no offset; None otherwise."""
     C, d = aff.C[3:], aff.d[3:]
     if C.shape[0] != 9 or np.any(d != 0):
         return None
+    if C.shape[1] == 12 and np.array_equal(C, _FRAME_TRIAD):  # a frame's own coordinates
+        return np.asarray(aff.idx, np.intp)[3:]
     nz = C != 0
     if not np.all(nz.sum(axis=1) == 1):
         return None
