@@ -265,3 +265,24 @@ def test_overhung_disk_stodola_green(tmp_path):
     for ref in extra:
         assert abs(_nearest(w, ref) / ref - 1) <= 1e-8
 
+
+
+def test_fine_mesh_lowest_modes_are_not_called_rigid_body(tmp_path):
+    """The oblique cantilever at 600 elements (3,600 DOF): its lowest four bending modes are
+    listed oscillatory, each within its own stated tolerance of (β_n L)² √(E I/(ρ A L⁴))
+    (Blevins table 8-1; the h⁴ discretization error at 600 elements is below 1e-11 relative,
+    from ≤ 4e-9 at 96 elements).  The zero-pair floor once listed the first two as rigid-body
+    at 0 Hz: its radius h = √(ε‖Q‖_F‖x‖²/xᵀMx) bounds ω² within h² (h = 21.7 rad/s here), so s
+    may be 0 only when |s| ≤ √safety·h (69 rad/s), not safety·h (217 rad/s) as it was compared
+    with |s| = 105 rad/s (mbseig.modal.bounds.zero_pair_floor)."""
+    text = OBLIQUE
+    m, _, md = _solve(write_case(tmp_path, text, "bar600.toml"), 600, 4)
+    p = m.parameters
+    E, rho, A, L = p["E"], p["rho"], p["A"], p["L"]
+    w = np.abs(md.eigenvalues.imag)
+    assert list(md.kind[:4]) == ["oscillatory"] * 4
+    for bl in CANTILEVER_BL:
+        for inertia in (p["Iz"], p["Iy"]):
+            ref = bl**2 * np.sqrt(E * inertia / (rho * A * L**4))
+            k = int(np.argmin(np.abs(w - ref)))
+            assert abs(w[k] - ref) <= md.tolerance[k]

@@ -232,7 +232,7 @@ def batch_tolerances(sol, M, P, Q, *, safety=10.0, stability_rtol=1e-12, stabili
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             h = np.sqrt(eta[rb] * nQ * xx / np.where(mx > 0, mx, 1.0))
         apply = cand[rb] & (mx != 0) & (px <= np.abs(sv[rb]) * mx) & np.isfinite(h) \
-            & (np.abs(sv[rb]) <= safety * h)
+            & (np.abs(sv[rb]) <= np.sqrt(safety) * h)
         err[rb] = np.where(apply, np.maximum(err[rb], h), err[rb])
         tol[rb] = np.where(apply, np.maximum(tol[rb], safety * h), tol[rb])
         rigid[rb] = rigid[rb] | apply

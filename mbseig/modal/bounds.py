@@ -340,8 +340,12 @@ def zero_pair_floor(b, sol, M, P, safety, nQ=None, gamma=1.0):
     an eigenvalue whose damping term is below its inertia term (|xᴴPx| ≤ |s||xᴴMx|, the ±√ω²
     structure), the error bound is raised to that Hölder radius,
     h = √(max(η, ε) ‖Q‖_F ‖x‖² / |xᴴMx|),  with the mode's own modal mass (a light body's spin
-    has a far larger h than the global √(ε‖Q‖/‖M‖)); s within safety·h of 0 is then rigid-body
-    (critical).  An eigenvalue beyond it keeps its verdict."""
+    has a far larger h than the global √(ε‖Q‖/‖M‖)).
+
+    ω² is then known within h² (safety·h² with the safety factor), so s = ±√(−ω²) may be 0 when
+    |s|² ≤ safety·h², i.e. |s| ≤ √safety·h (beyond h, s itself moves by h²/|s| < h): s within
+    √safety·h of 0 is rigid-body (critical), its bound h and tolerance safety·h.  An eigenvalue
+    beyond it keeps its verdict."""
     import dataclasses
 
     s = np.asarray(sol.eigenvalues)
@@ -360,6 +364,7 @@ def zero_pair_floor(b, sol, M, P, safety, nQ=None, gamma=1.0):
     if sol.vectors.shape[0] != Mm.shape[0]:
         return b
     forms = modal_forms(sol.vectors, cand, Mm, Pm)
+    reach = math.sqrt(safety)
     for j, k in enumerate(cand):
         mx, px, xx = forms[j]
         if mx == 0 or px > abs(s[k]) * mx:
@@ -368,7 +373,7 @@ def zero_pair_floor(b, sol, M, P, safety, nQ=None, gamma=1.0):
         if not math.isfinite(h):  # (a floor beyond the range of doubles decides nothing)
             continue
         s_k, h = s[k] * gamma, h * gamma
-        if abs(s_k) <= safety * h:
+        if abs(s_k) <= reach * h:
             err[k] = max(err[k], h)
             tol[k] = max(tol[k], safety * h)
             tol_re[k] = max(tol_re[k], safety * h)

@@ -54,6 +54,7 @@ def floor_zero_pairs(b, sol, M, P, safety):
     nQ = float(sol.norms[2])
     eta = np.maximum(sol.backward_error, EPS)
     err, tol, tol_re, rigid = b.err.copy(), b.tol.copy(), b.tol_re.copy(), b.rigid.copy()
+    reach = math.sqrt(safety)
     for k in cand:
         x = sol.vectors[:, k]
         mx = abs(np.vdot(x, M @ x))
@@ -63,7 +64,7 @@ def floor_zero_pairs(b, sol, M, P, safety):
         h = math.sqrt(float(eta[k]) * float(nQ) * float(np.vdot(x, x).real) / float(mx))
         if not math.isfinite(h):  # (a floor beyond the range of doubles decides nothing)
             continue
-        if abs(s[k]) <= safety * h:
+        if abs(s[k]) <= reach * h:
             err[k] = max(err[k], h)
             tol[k] = max(tol[k], safety * h)
             tol_re[k] = max(tol_re[k], safety * h)
