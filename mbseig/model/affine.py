@@ -116,4 +116,27 @@ def _stacked_in_order(terms):
             return None
         C[r:r + nr, c:c + nc] = a.C
         r, c = r + nr, c + nc
-    return Affine(idx, C, np.concatenate([a.d for _, a in terms]))
+    return Affine(idx, _identity_shared(C), np.concatenate([a.d for _, a in terms]))
+
+
+_EYES: dict = {}
+
+
+def identity_of(n):
+    """One read-only n × n identity, shared by every map whose matrix it is."""
+    eye = _EYES.get(n)
+    if eye is None:
+        eye = np.eye(n)
+        eye.setflags(write=False)
+        _EYES[n] = eye
+    return eye
+
+
+def _identity_shared(C):
+    """C itself, or where C is the identity the shared one of its size (:func:`identity_of`;
+    the stacked frames of a beam element: its two nodes' own coordinates)."""
+    n = C.shape[0]
+    if C.shape[1] != n or n > 64:
+        return C
+    eye = identity_of(n)
+    return eye if np.array_equal(C, eye) else C

@@ -77,7 +77,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import EquilibriumError
-from .affine import Affine
+from .affine import Affine, identity_of
 from .base import ConfigurationMass, Force
 from .beam3d_batch import group_of
 from .beam3d_local import BeamProperties3D, ElementMatrices, element_matrices
@@ -126,6 +126,22 @@ _S_KEPT = 16  # section frames whose S is kept (a model's beams: one frame each,
 _S_CACHE: dict = {}
 
 
+def _in_own_order(frames):
+    """The frames map with its coordinates reordered where it only selects them (a permutation
+    matrix: a node's coordinates allocated before the element's other node's), so that its
+    matrix is the shared identity (the same map, exactly: C q[idx] = q[idx[perm]])."""
+    C = frames.C
+    if C.shape != (24, 24) or C is identity_of(24):
+        return frames
+    nz = C != 0
+    if not (np.all(nz.sum(axis=1) == 1) and np.all(nz.sum(axis=0) == 1)):
+        return frames
+    perm = np.argmax(nz, axis=1)
+    if not np.all(C[np.arange(24), perm] == 1.0):
+        return frames
+    return Affine(np.asarray(frames.idx)[perm], identity_of(24), frames.d)
+
+
 def _node_map(R0, C):
     """S C of an element (the frames map C to the section axes): S made once per section
     frame R0 and kept (read-only); where C is the identity (the element's coordinates are its
@@ -139,7 +155,7 @@ def _node_map(R0, C):
         if len(_S_CACHE) >= _S_KEPT:
             _S_CACHE.pop(next(iter(_S_CACHE)))
         _S_CACHE[key] = S
-    if C.shape == (24, 24) and np.array_equal(C, _EYE24):
+    if C is identity_of(24) or (C.shape == (24, 24) and np.array_equal(C, _EYE24)):
         return S, S
     return S, S @ C
 
@@ -182,6 +198,9 @@ class Beam3DElement(Force, ConfigurationMass):
 
     def __post_init__(self):
         em, planes = _constants(self.props, float(self.l0))
+        frames = _in_own_order(self.frames)
+        if frames is not self.frames:
+            object.__setattr__(self, "frames", frames)
         S, SC = _node_map(self.R0, self.frames.C)
         nodes = Affine(self.frames.idx, SC, S @ self.frames.d)
         object.__setattr__(self, "_nodes", nodes)

@@ -241,7 +241,7 @@ def mass_q(TC, M):
 class Stack:
     """The constant data of nb member elements, stacked: z = C q[idx] + d with idx (nb, m) and
     C (nb, 24, m) padded to m = max(WIDTH, the widest member) (padding: coordinate 0, zero
-    columns); ``sizes``
+    columns; one read-only map broadcast to all where the members share it); ``sizes``
     the true widths; l0, EA, GJ (nb,), the bending planes' G and K_b (nb, 2, 2), the local mass
     M and gyroscopic G (nb, 12, 12) and the spins (nb,).  ``records`` are the members'
     :meth:`~mbseig.model.beam3d.Beam3DElement.kernel_record` dicts."""
@@ -252,22 +252,32 @@ class Stack:
         m = max(int(self.sizes.max()), WIDTH)  # one width: a member's sums do not depend on
         # the others (an element alone and in its batch give the same numbers)
         self.idx = np.zeros((nb, m), dtype=np.intp)
-        self.C = np.zeros((nb, 24, m))
+        C0 = records[0]["C"]
+        shared = C0.shape == (24, m) and all(r["C"] is C0 for r in records)
+        if shared:  # one map for all (a beam's section frame: beam3d._node_map): one copy
+            self.C = np.broadcast_to(C0, (nb, 24, m))
+            self.Ct = np.broadcast_to(np.ascontiguousarray(C0.T), (nb, m, 24))
+        else:
+            self.C = np.zeros((nb, 24, m))
         for k, r in enumerate(records):
             s = self.sizes[k]
             self.idx[k, :s] = r["idx"]
-            self.C[k, :, :s] = r["C"]
+            if not shared:
+                self.C[k, :, :s] = r["C"]
         self.d = np.stack([r["d"] for r in records])
-        self.Ct = np.ascontiguousarray(self.C.transpose(0, 2, 1))
+        if not shared:
+            self.Ct = np.ascontiguousarray(self.C.transpose(0, 2, 1))
         for key in ("l0", "EA", "GJ", "spin"):
             setattr(self, key, np.array([r[key] for r in records], dtype=float))
         for key in ("Gz", "Kbz", "Gy", "Kby", "M", "G"):
             setattr(self, key, np.stack([r[key] for r in records]))
 
     def z(self, v, offset=True):
-        z = np.einsum("npm,nm->np", self.C, v[self.idx])
+        # (matrix products member by member: the same numbers whether C is one map shared by
+        # the members or a stack, and whatever the batch)
+        z = (self.C @ v[self.idx][:, :, None])[:, :, 0]
         return z + self.d if offset else z
 
     def to_q(self, gz):
         """Cᵀ g_z per member (nb, m)."""
-        return np.einsum("nmp,np->nm", self.Ct, gz)
+        return (self.Ct @ gz[:, :, None])[:, :, 0]
