@@ -32,6 +32,8 @@ __all__ = ["KINDS", "BatchGroup", "group_of"]
 KINDS = {"force": True, "jacobians": False, "mass": False, "velocity_terms": True}
 #: stacks of member sets kept per group (a model's elements, and a few others)
 STACKS_KEPT = 4
+#: members evaluated together at most (their work arrays: about 20 kB a member each)
+CHUNK = 1024
 
 
 def group_of(props) -> BatchGroup:
@@ -114,7 +116,18 @@ class BatchGroup:
         return hit[1]
 
     def _run(self, kind, members, q, qd):
+        """``kind`` of the members, CHUNK members at a time through the one stack (a member's
+        numbers do not depend on its batch; the work arrays are a chunk's, not the beam's)."""
         st = self._stack(members)
+        if len(members) <= CHUNK:
+            return self._run_stack(kind, st, members, q, qd)
+        out = []
+        for a in range(0, len(members), CHUNK):
+            part = slice(a, a + CHUNK)
+            out += self._run_stack(kind, st.part(part), members[part], q, qd)
+        return out
+
+    def _run_stack(self, kind, st, members, q, qd):
         z = st.z(q)
         sizes = st.sizes
         if kind in ("mass", "velocity_terms"):  # (a collapsed member: not finite, as alone)

@@ -272,6 +272,13 @@ class Stack:
         for key in ("Gz", "Kbz", "Gy", "Kby", "M", "G"):
             setattr(self, key, np.stack([r[key] for r in records]))
 
+    def part(self, rows):
+        """The stack of the members ``rows`` (a slice): views of this one's arrays."""
+        got = object.__new__(Stack)
+        for key, value in vars(self).items():
+            setattr(got, key, value[rows])
+        return got
+
     def z(self, v, offset=True):
         # (matrix products member by member: the same numbers whether C is one map shared by
         # the members or a stack, and whatever the batch)

@@ -220,7 +220,11 @@ class Model:
         if dense:
             K, C = (_summed(self.n, self.n, self._layout[1], b) for b in (kb, cb))
         else:
-            K, C = (self._sparse(1, self.n, b) for b in (kb, cb))
+            K = self._sparse(1, self.n, kb)
+            # no damping anywhere (every block exactly zero: beams at rest, springs without
+            # dampers): an empty C rather than its pattern of stored zeros
+            C = (self._sparse(1, self.n, cb) if any(np.any(x) for _, _, x in cb)
+                 else sp.csr_matrix((self.n, self.n)))
         if kt:
             K = K + coo_sum(self.n, self.n, kt, dense=dense)
             C = C + coo_sum(self.n, self.n, ct, dense=dense)
@@ -323,21 +327,23 @@ class Model:
         """What :meth:`nonfinite_element` checks element by element, evaluated as the model
         evaluates it (batches, groups) but not summed: the force g and every element's K, C,
         configuration-dependent mass, Φ, Φ_q and H(1) blocks."""
-        out = [self.generalized_force(q, qd)]
+        # a generator: each kind's terms are checked and let go before the next kind is
+        # evaluated (a 10⁵-DOF beam model's K and C blocks alone are 160 MB)
+        yield self.generalized_force(q, qd)
         for KC in self._each(1, "jacobians", q, qd):
-            out += list(KC)
+            yield from KC
         for f in self.forces:
             if isinstance(f, BatchForce):
-                out += [t[2] for t in f.jacobian_coo(q, qd)]
+                yield from (t[2] for t in f.jacobian_coo(q, qd))
         if self.mass_elements:
             elements = [e for e, _ in self.mass_elements]
             if self._batched_forces:
                 self._prime(elements, "mass", q)
-            out += [e.mass(q) for e in elements]
+            yield from (e.mass(q) for e in elements)
         if self.constraints:
-            out += [self.phi(q), *self._each(0, "jac", q),
-                    *(H for _, _, H in self._hessian_blocks(q, np.ones(self.n_constraints)))]
-        return out
+            yield self.phi(q)
+            yield from self._each(0, "jac", q)
+            yield from (H for _, _, H in self._hessian_blocks(q, np.ones(self.n_constraints)))
 
     def constraint_scales(self) -> np.ndarray:
         if not self.constraints:
@@ -446,9 +452,9 @@ def _summed(n_rows, n_cols, keys, blocks, full=None):
 
 
 def _finite(evaluate) -> bool:
-    """Whether every array ``evaluate()`` returns is finite (a Python-float overflow is not)."""
+    """Whether every array ``evaluate()`` returns (or yields) is finite (a Python-float
+    overflow is not)."""
     try:
-        arrays = evaluate()
+        return all(bool(np.all(np.isfinite(a))) for a in evaluate())
     except (OverflowError, ZeroDivisionError, FloatingPointError):
         return False
-    return all(np.all(np.isfinite(a)) for a in arrays)
