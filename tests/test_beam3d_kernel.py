@@ -232,3 +232,39 @@ def test_assembled_model_equals_element_by_element(monkeypatch):
                         K.toarray(), C.toarray())
     for a, b in zip(out[True], out[False], strict=True):
         assert _rel(a, b) <= 1e-12
+
+
+def test_shared_maps_and_chunks_agree_exactly_with_each_member_alone(monkeypatch):
+    """A free beam (every element on its two nodes' own 24 coordinates): its members share one
+    node map, which the kernel stack broadcasts instead of copying, and a batch larger than
+    ``CHUNK`` is evaluated chunk by chunk through views of the one stack.  Each member's
+    numbers, together (in chunks of 2 here) and alone, bitwise equal, as for the stacked maps
+    above; and the map is shared (one array for all members)."""
+    from mbseig.model import beam3d_batch
+    from mbseig.model.beam3d_batch import BatchGroup
+    from mbseig.model.beam3d_kernel import Stack
+
+    props = _props("timoshenko")
+    R0 = section_frame(START, END, [0.0, 0.0, 1.0])
+    n_el = 5
+    pts = START + np.linspace(0.0, 1.0, n_el + 1)[:, None] * (END - START)
+    frames = [Affine(np.arange(12 * k, 12 * k + 12), np.eye(12), np.zeros(12))
+              for k in range(n_el + 1)]
+    q0 = np.concatenate([np.concatenate([p, np.eye(3).ravel()]) for p in pts])
+    length = np.linalg.norm(END - START) / n_el
+    els = [Beam3DElement(f"b element {k + 1}", combine([(1.0, frames[k]), (1.0, frames[k + 1])],
+                                                       stack=True),
+                         props, length, R0, 100.0 * k) for k in range(n_el)]
+    stack = Stack([e.kernel_record() for e in els])
+    assert stack.C.strides[0] == 0  # one map, broadcast
+    monkeypatch.setattr(beam3d_batch, "CHUNK", 2)
+    q, qd = _state(q0, np.random.default_rng(11))
+    for kind in ("force", "mass", "velocity_terms", "jacobians"):
+        together = BatchGroup().evaluate_all(kind, els, q, qd)
+        for e, t in zip(els, together, strict=True):
+            alone = BatchGroup().evaluate_all(kind, [e], q, qd)[0]
+            assert all(np.array_equal(a, b) for a, b in zip(np.atleast_1d(alone),
+                                                            np.atleast_1d(t), strict=True))
+    # and against the element's own formulas (the reference path), as the tests above
+    for e, g in zip(els, BatchGroup().evaluate_all("force", els, q, qd), strict=True):
+        assert _rel(g, e.force_reference(q, qd)) <= 1e-12

@@ -195,3 +195,20 @@ def test_shaft_equals_the_standard_fe_assembly(tmp_path):
     assert md.eigenvalues.size == ref["dof"]
     w = np.sort(md.omega_n)[:20]
     np.testing.assert_allclose(w, ref["omega"], rtol=1e-10)
+
+
+def test_dense_linearization_projects_on_the_sparse_local_basis(tmp_path):
+    """A model below the sparse threshold whose local basis was found sparse (beyond a small
+    model's one dense SVD): the dense linearization forms Nᵀ A N from the sparse Jacobians and
+    the sparse basis, and only then makes it dense, so its M, P, Q are exactly the sparse
+    linearization's (the same products; reference: ``linearize(sparse=True)``), and N is the
+    local basis itself."""
+    model = _shaft(tmp_path, 12, 4)
+    eq = mbseig.equilibrium(model)
+    dense = mbseig.linearize(model, eq)
+    sparse = mbseig.linearize(model, eq, sparse=True)
+    assert not sp.issparse(dense.M) and sp.issparse(sparse.M)
+    assert dense.tolerances["basis"] == "local" and dense.dof == sparse.dof
+    for a, b in ((dense.M, sparse.M), (dense.P, sparse.P), (dense.Q, sparse.Q)):
+        assert np.array_equal(a, b.toarray())
+    assert np.array_equal(dense.N, sparse.N.toarray())
