@@ -198,10 +198,16 @@ def test_an_element_alone_and_in_its_batch_agree_exactly():
     """A member's numbers do not depend on the batch it is evaluated in (one padded width,
     sums term by term): alone and among all members, bitwise equal, so that M(q₀) − M_ref of
     a model is exactly zero where M_ref was formed element by element."""
-    from mbseig.model.beam3d_batch import BatchGroup
 
     els, q0 = _beam(5, spins=[0.0, 300.0, 0.0, 0.0, 10.0])
     q, qd = _state(q0, np.random.default_rng(7))
+    _assert_alone_equals_together(els, q, qd)
+
+
+def _assert_alone_equals_together(els, q, qd):
+    """Every kind of every member, evaluated among all members and alone: bitwise equal."""
+    from mbseig.model.beam3d_batch import BatchGroup
+
     for kind in ("force", "mass", "velocity_terms", "jacobians"):
         together = BatchGroup().evaluate_all(kind, els, q, qd)
         for e, t in zip(els, together, strict=True):
@@ -259,12 +265,7 @@ def test_shared_maps_and_chunks_agree_exactly_with_each_member_alone(monkeypatch
     assert stack.C.strides[0] == 0  # one map, broadcast
     monkeypatch.setattr(beam3d_batch, "CHUNK", 2)
     q, qd = _state(q0, np.random.default_rng(11))
-    for kind in ("force", "mass", "velocity_terms", "jacobians"):
-        together = BatchGroup().evaluate_all(kind, els, q, qd)
-        for e, t in zip(els, together, strict=True):
-            alone = BatchGroup().evaluate_all(kind, [e], q, qd)[0]
-            assert all(np.array_equal(a, b) for a, b in zip(np.atleast_1d(alone),
-                                                            np.atleast_1d(t), strict=True))
+    _assert_alone_equals_together(els, q, qd)
     # and against the element's own formulas (the reference path), as the tests above
     for e, g in zip(els, BatchGroup().evaluate_all("force", els, q, qd), strict=True):
         assert _rel(g, e.force_reference(q, qd)) <= 1e-12
