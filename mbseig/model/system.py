@@ -163,6 +163,12 @@ class Model:
         if self._batched_forces:
             self._prime([e for e, _ in self.mass_elements], "mass", q)
         blocks = [(e.idx, e.idx, e.mass(q) - M_ref) for e, M_ref in self.mass_elements]
+        if not fixed and not any(np.any(v) for _, _, v in blocks):
+            # every configuration mass its reference (q at the build's positions: the rest of a
+            # beam model): mass + 0, exactly, without scattering the zeros (the sum stores none)
+            M = self.mass.copy()
+            M.eliminate_zeros()
+            return M
         vals = [np.asarray(v, dtype=float).ravel() for _, _, v in blocks]
         S, pos, U = self._layout.mass_plan()
         if S is None or sum(v.size for v in vals) != S.order.size:
