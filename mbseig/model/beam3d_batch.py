@@ -156,13 +156,27 @@ class BatchGroup:
             K = st.Ct @ kern.stiffness_z(z, Up, Upp, length, e, X, ex) @ st.C
             if spin:
                 C = st.spin[:, None, None] * (TC.transpose(0, 2, 1) @ st.G @ TC)
-            else:
-                C = np.zeros_like(K)
-            out = [(K[k, :s, :s], C[k, :s, :s]) for k, s in enumerate(sizes)]
+                out = [(K[k, :s, :s], C[k, :s, :s]) for k, s in enumerate(sizes)]
+            else:  # no spin: every member's C is one read-only block of zeros
+                Z = _zeros(K.shape[1])
+                out = [(K[k, :s, :s], Z[:s, :s]) for k, s in enumerate(sizes)]
         for k in np.flatnonzero(collapsed):
             out[k] = EquilibriumError("beam element collapsed to zero length",
                                       element=members[k].name)
         return out
+
+
+_ZEROS = {}
+
+
+def _zeros(m):
+    """One read-only m × m block of zeros (the damping of the members that do not spin)."""
+    Z = _ZEROS.get(m)
+    if Z is None:
+        Z = np.zeros((m, m))
+        Z.setflags(write=False)
+        _ZEROS[m] = Z
+    return Z
 
 
 # a placeholder configuration for a collapsed member (its result is its error)
