@@ -121,7 +121,6 @@ def frames_to_local(R0: np.ndarray) -> np.ndarray:
     return np.kron(np.eye(2), node)
 
 
-_EYE24 = np.eye(24)
 _S_KEPT = 16  # section frames whose S is kept (a model's beams: one frame each, mostly)
 _S_CACHE: dict = {}
 
@@ -155,7 +154,8 @@ def _node_map(R0, C):
         if len(_S_CACHE) >= _S_KEPT:
             _S_CACHE.pop(next(iter(_S_CACHE)))
         _S_CACHE[key] = S
-    if C is identity_of(24) or (C.shape == (24, 24) and np.array_equal(C, _EYE24)):
+    eye = identity_of(24)
+    if C is eye or (C.shape == (24, 24) and np.array_equal(C, eye)):
         return S, S
     return S, S @ C
 
