@@ -296,8 +296,15 @@ def _dense_local(local, rank_tol, names):
     if local.kept is not None:
         Z, r, _, sigma = continuous_null_basis(local.kept.toarray(), N.shape[1], rank_tol)
         N, rank = N @ Z, rank + r
-    unit = np.flatnonzero((np.abs(N) == 1.0).sum(axis=0) == 1)
-    rows = np.argmax(np.abs(N[:, unit]), axis=0) if unit.size else np.zeros(0, int)
+        unit = np.flatnonzero((np.abs(N) == 1.0).sum(axis=0) == 1)
+        rows = np.argmax(np.abs(N[:, unit]), axis=0) if unit.size else np.zeros(0, int)
+    else:  # the same columns found among the sparse basis's entries (a unit entry is the
+        # column's largest: its columns are unit vectors)
+        S = sp.csc_matrix(local.N)
+        ones = np.abs(S.data) == 1.0
+        col = np.repeat(np.arange(S.shape[1]), np.diff(S.indptr))
+        unit = np.flatnonzero(np.bincount(col[ones], minlength=S.shape[1]) == 1)
+        rows = S.indices[ones][np.isin(col[ones], unit)]
     return N, rank, tuple(names[i] for i in np.sort(rows)), sigma, Z
 
 

@@ -212,3 +212,10 @@ def test_dense_linearization_projects_on_the_sparse_local_basis(tmp_path):
     for a, b in ((dense.M, sparse.M), (dense.P, sparse.P), (dense.Q, sparse.Q)):
         assert np.array_equal(a, b.toarray())
     assert np.array_equal(dense.N, sparse.N.toarray())
+    # the coordinates N keeps as unit columns, found among the sparse basis's entries, are
+    # those of the dense N (a column with one entry of modulus 1)
+    N = dense.N
+    unit = np.flatnonzero((np.abs(N) == 1.0).sum(axis=0) == 1)
+    rows = np.sort(np.argmax(np.abs(N[:, unit]), axis=0))
+    assert dense.independent == tuple(model.coordinate_names[i] for i in rows)
+    assert len(dense.independent) > 0
