@@ -389,8 +389,6 @@ def bench_lean(log, *, repeats=3, quick=False, ross_python=None):
     return rows
 
 
-
-
 def report_lines(rows) -> list:
     """The Markdown section of the rows."""
     if not rows:
