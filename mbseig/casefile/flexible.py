@@ -228,6 +228,7 @@ def assemble(b, forces, constraints, mass_blocks, mass_elements, g_const, gravit
         record, shafts = _flexible3d().assemble(b, forces, constraints, mass_elements,
                                                 mass_blocks, g_const, gravity)
     for spec in (b.beam_specs if b.dim == 2 else ()):
+        b.mass_reference = q_init  # (every M_ref of a 2-D beam is evaluated here)
         record[spec.name] = _assemble_beam(b, spec, q_init, forces, constraints, mass_blocks,
                                            mass_elements, g_const, gravity)
     for spec in b.fe_specs:

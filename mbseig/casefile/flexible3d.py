@@ -267,6 +267,13 @@ def _node_frame(b, spec, k):
     return combine([(1.0, spec.pos[k]), (1.0, triad)], stack=True)
 
 
+def _frozen(a):
+    """A read-only copy of ``a``."""
+    a = np.array(a)
+    a.setflags(write=False)
+    return a
+
+
 def _masses(group, els, q0):
     """The elements' masses at q₀ in one batch (one alone where the batch gave its error)."""
     got = group.evaluate_all("mass", els, q0, None)
@@ -278,6 +285,7 @@ def assemble(b, forces, constraints, mass_elements, mass_blocks, g_const, gravit
     """Add the elements of every 3-D beam; return ({name: record}, [SpinningShaft])."""
     b.bind()
     q0 = np.array(b.q_init)
+    b.mass_reference = q0  # (every M_ref below is evaluated here)
     record, shafts = {}, []
     for spec in b.beam_specs:
         frames = [_node_frame(b, spec, k) for k in range(spec.n_elements + 1)]
@@ -300,6 +308,10 @@ def assemble(b, forces, constraints, mass_elements, mass_blocks, g_const, gravit
         # do not depend on its batch: mbseig.model.beam3d_batch)
         masses = f.formed("the beam element's mass matrix",
                           lambda els=els, p=spec.props: _masses(group_of(p), els, q0))
+        # equal masses kept once, read-only (the elements of a uniform mesh: a few distinct
+        # arrays for thousands of elements; a view would keep its whole batch alive)
+        distinct = {}
+        masses = [distinct.setdefault(M.tobytes(), _frozen(M)) for M in masses]
         for el, M_ref, (k, l0) in zip(els, masses, at, strict=True):
             forces.append(el)
             mass_elements.append((el, M_ref))

@@ -9,6 +9,7 @@ element kernels of :mod:`mbseig.model.elements` as sparse matrices.
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from functools import cached_property
 from itertools import groupby
@@ -45,7 +46,8 @@ class Model:
         effort, the free or locked length it set) on the model it returns as ``eq.model``.
     mass_elements : (element, M_ref) pairs for masses that depend on the configuration
         (co-rotational beams, ``element.mass(q)`` on ``element.idx``); ``mass`` holds them as
-        M_ref (at the builder's initial positions) and :meth:`mass_matrix` re-evaluates them.
+        M_ref (at the builder's initial positions) and :meth:`mass_matrix` re-evaluates them;
+        mass_reference : those positions (the q at which every M_ref was evaluated), or None.
     inputs, outputs : named :class:`~mbseig.model.signals.Input` / ``Output`` of the case's
         ``[[inputs]]`` and ``[[outputs]]``.  mass_parts : (name, rows, cols, block) per body and
         point mass: ``mass`` is their sum plus any batched or flexible masses.
@@ -74,6 +76,7 @@ class Model:
     drivers: tuple = ()  # inverse-statics records (mbseig.statics.inverse)
     commands: tuple = ()  # pending inverse-statics commands (resolved by mbseig.equilibrium)
     mass_elements: tuple = ()
+    mass_reference: np.ndarray = None  # the q of every M_ref (mass_matrix there: ``mass``)
     flexible: dict = field(default_factory=dict)
     inputs: tuple = ()
     outputs: tuple = ()
@@ -160,6 +163,13 @@ class Model:
         sums of ``mass + scatter(blocks)`` (no stored zeros; ``fixed``: one pattern at all q)."""
         if q is None or not self.mass_elements:
             return self.mass
+        if not fixed and self.mass_reference is not None \
+                and np.array_equal(q, self.mass_reference):
+            # at the positions where every M_ref was evaluated, M(q) is ``mass`` by definition
+            # (mass + Σ (M_e(q) − M_ref), each term zero), with no element evaluated
+            M = self.mass.copy()
+            M.eliminate_zeros()  # (the sum stores none)
+            return M
         if self._batched_forces:
             self._prime([e for e, _ in self.mass_elements], "mass", q)
         blocks = [(e.idx, e.idx, e.mass(q) - M_ref) for e, M_ref in self.mass_elements]
@@ -210,7 +220,32 @@ class Model:
         """(K, C) = (−∂g/∂q, −∂g/∂q̇) as CSR matrices (dense arrays when ``dense``)."""
         if dense and qd is None:
             return self._kept(("K", q.tobytes()), lambda: self._force_jacobians(q, None, True))
-        return self._force_jacobians(q, qd, dense)
+        scope = self.__dict__.get("_kept_sparse")
+        if scope is None or qd is not None or dense:
+            return self._force_jacobians(q, qd, dense)
+        key = q.tobytes()
+        if scope.get("key") != key:  # (one q at a time: the memory of one K and C)
+            scope.clear()
+            KC = self._force_jacobians(q, None, False)
+            for A in KC:
+                A.data.setflags(write=False)  # shared by every caller in the scope
+            scope.update(key=key, KC=KC)
+        return scope["KC"]
+
+    @contextmanager
+    def keeping_jacobians(self):
+        """Within: the sparse (K, C) at q̇ = 0 of the last q asked is kept (read-only) and served
+        again at that q, so that the input check, the static solve and the linearization of one
+        point assemble them once (they ask at q₀: a beam model's equilibrium is its build
+        positions); on leaving, it is let go.  Nested scopes share the outermost one."""
+        if "_kept_sparse" in self.__dict__:
+            yield
+            return
+        self.__dict__["_kept_sparse"] = {}
+        try:
+            yield
+        finally:
+            self.__dict__.pop("_kept_sparse", None)
 
     def _force_jacobians(self, q, qd, dense):
         qd = np.zeros(self.n) if qd is None else qd
@@ -332,15 +367,21 @@ class Model:
     def _assembled(self, q, qd):
         """What :meth:`nonfinite_element` checks element by element, evaluated as the model
         evaluates it (batches, groups) but not summed: the force g and every element's K, C,
-        configuration-dependent mass, Φ, Φ_q and H(1) blocks."""
+        configuration-dependent mass, Φ, Φ_q and H(1) blocks.  Within
+        :meth:`keeping_jacobians` (q̇ = 0), K and C are their sums instead, which the solve then
+        reuses: a sum is finite only where every term is (IEEE arithmetic carries an inf or a
+        NaN through every addition), and a sparse sum drops no stored term."""
         # a generator: each kind's terms are checked and let go before the next kind is
         # evaluated (a 10⁵-DOF beam model's K and C blocks alone are 160 MB)
         yield self.generalized_force(q, qd)
-        for KC in self._each(1, "jacobians", q, qd):
-            yield from KC
-        for f in self.forces:
-            if isinstance(f, BatchForce):
-                yield from (t[2] for t in f.jacobian_coo(q, qd))
+        if "_kept_sparse" in self.__dict__ and not np.any(qd):
+            yield from (A.data for A in self.force_jacobians(q))
+        else:
+            for KC in self._each(1, "jacobians", q, qd):
+                yield from KC
+            for f in self.forces:
+                if isinstance(f, BatchForce):
+                    yield from (t[2] for t in f.jacobian_coo(q, qd))
         if self.mass_elements:
             elements = [e for e, _ in self.mass_elements]
             if self._batched_forces:

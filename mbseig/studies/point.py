@@ -13,6 +13,7 @@ or a listing of NaNs.
 from __future__ import annotations
 
 import math
+from contextlib import nullcontext
 from dataclasses import dataclass
 
 import numpy as np
@@ -86,9 +87,12 @@ def equilibrium_stage(model) -> Equilibrium:
 
 
 def linear_stage(model, *, constraint_stiffness=True):
-    """(equilibrium, linear model) with the boundary checks of both stages."""
-    eq = equilibrium_stage(model)
-    return eq, linearize(model, eq, constraint_stiffness=constraint_stiffness)
+    """(equilibrium, linear model) with the boundary checks of both stages (a model's sparse
+    K and C at q₀ assembled once for the check, the solve and the linearization:
+    :meth:`~mbseig.model.system.Model.keeping_jacobians`)."""
+    with model.keeping_jacobians() if isinstance(model, Model) else nullcontext():
+        eq = equilibrium_stage(model)
+        return eq, linearize(model, eq, constraint_stiffness=constraint_stiffness)
 
 
 def eigen_stage(lin: LinearModel, *, solver="auto", modes_options=None) -> Modes:

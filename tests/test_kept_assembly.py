@@ -1,0 +1,127 @@
+"""What one analysis point assembles once and keeps (issue "Flexible models as lean as an FE
+code"): the sparse K and C at q₀ within :meth:`Model.keeping_jacobians`, the mass at the
+positions where the beams' masses were evaluated, the beams' equal element masses stored once,
+and a constant mass without stored zeros.  Every reference is the assembly the shortcut
+replaces, evaluated here independently; tolerance: bitwise (the same sums in the same order,
+or an exact zero added), so these hold under any kernel or fail under all."""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from conftest import CASES
+
+from mbseig.casefile import load_case
+from mbseig.linear import linearize
+from mbseig.numerics import scatter
+from mbseig.statics import equilibrium
+from mbseig.studies.point import linear_stage
+
+SHAFT = """
+schema_version = 1
+dimension = 3
+[[points]]
+name = "a"
+position = [0.0, 0.0, 0.0]
+[[points]]
+name = "b"
+position = [2.0, 0.0, 0.0]
+[[beams]]
+name = "shaft"
+points = ["a", "b"]
+E = 2.1e11
+G = 8.1e10
+rho = 7800.0
+section = { shape = "circle", d = 0.05 }
+elements = 16
+ends = ["free", "free"]
+stations = { s0 = 0.0, s1 = 1.0, s2 = 2.0 }
+""" + "".join(f"""
+[[joints]]
+name = "support {k}"
+type = "universal"
+bodies = ["ground", "shaft.s{k}"]
+at = [{k}.0, 0.0, 0.0]
+axes = [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+""" for k in range(3))
+
+
+@pytest.fixture(scope="module")
+def shaft(tmp_path_factory):
+    path = tmp_path_factory.mktemp("kept") / "shaft.toml"
+    path.write_text(SHAFT)
+    return load_case(path)
+
+
+def _same(A, B):
+    A, B = sp.csr_matrix(A), sp.csr_matrix(B)
+    return (A.shape == B.shape and np.array_equal(A.indptr, B.indptr)
+            and np.array_equal(A.indices, B.indices) and np.array_equal(A.data, B.data))
+
+
+def test_kept_jacobians_are_served_again_only_within_the_scope(shaft):
+    q = shaft.q_init
+    K0, C0 = shaft.force_jacobians(q)
+    assert shaft.force_jacobians(q)[0] is not K0  # no scope: assembled at each call
+    with shaft.keeping_jacobians():
+        K1, C1 = shaft.force_jacobians(q)
+        assert shaft.force_jacobians(q)[0] is K1
+        assert _same(K1, K0) and _same(C1, C0)
+        with pytest.raises(ValueError):  # shared by every caller: read-only
+            K1.data[0] = 1.0
+        with shaft.keeping_jacobians():  # a nested scope shares the outer one
+            assert shaft.force_jacobians(q)[0] is K1
+        assert shaft.force_jacobians(q)[0] is K1
+        q2 = q.copy()
+        q2[0] += 1e-3
+        K2, _ = shaft.force_jacobians(q2)  # another q: assembled (and now the one kept)
+        assert K2 is not K1 and _same(K2, shaft._force_jacobians(q2, None, False)[0])
+        K3, _ = shaft.force_jacobians(q2, np.zeros(shaft.n))  # a q̇ given: never kept
+        assert K3 is not K2
+    assert "_kept_sparse" not in shaft.__dict__
+    assert shaft.force_jacobians(q)[0] is not K1
+
+
+def test_one_point_within_the_scope_equals_the_stages_apart(shaft):
+    """linear_stage (the check, the solve and the linearization on one kept K) gives the
+    linear model of the stages run apart, bitwise."""
+    eq, lin = linear_stage(shaft)
+    lin0 = linearize(shaft, equilibrium(shaft))
+    for a, b in ((lin.M, lin0.M), (lin.P, lin0.P), (lin.Q, lin0.Q)):
+        assert _same(a, b)
+
+
+def test_the_check_in_the_scope_still_names_a_nonfinite_force(shaft):
+    """Within the scope the check reads the sums of K and C; a NaN in one element's terms makes
+    its sum NaN, and the element is then named as outside the scope."""
+    q = shaft.q_init.copy()
+    el = shaft.forces[3]
+    q[el.idx[0]] = np.nan
+    outside = shaft.nonfinite_element(q)
+    with shaft.keeping_jacobians():
+        inside = shaft.nonfinite_element(q)
+    assert outside is not None and inside == outside
+
+
+@pytest.mark.parametrize("case", ["cantilever_3d_oblique.toml", "four_bar_flexible.toml"])
+def test_mass_at_its_reference_is_the_constant_mass(case):
+    """At ``mass_reference`` M(q) is ``mass`` without evaluating an element; it equals the sum
+    the general path forms (mass + scatter of M_e(q) − M_ref), and the general path still
+    runs one step away."""
+    model = load_case(CASES / case)
+    assert model.mass_elements and np.array_equal(model.mass_reference, model.q_init)
+    for q in (model.mass_reference, model.q_init + 1e-4):
+        blocks = [(e.idx, e.idx, e.mass(q) - M_ref) for e, M_ref in model.mass_elements]
+        ref = (model.mass + scatter(model.n, model.n, blocks)).tocsr()
+        ref.eliminate_zeros()
+        assert _same(model.mass_matrix(q), ref)
+
+
+def test_equal_element_masses_are_stored_once(shaft):
+    """A uniform beam's element masses at the reference: each the element's own mass there
+    (bitwise), read-only, equal ones one array; the constant mass stores no zeros."""
+    refs = [M for _, M in shaft.mass_elements]
+    for e, M in shaft.mass_elements:
+        assert np.array_equal(M, e.mass(shaft.mass_reference)) and not M.flags.writeable
+    assert len({id(M) for M in refs}) < len(refs)
+    assert len({id(M) for M in refs}) == len({M.tobytes() for M in refs})
+    assert shaft.mass.nnz == np.count_nonzero(shaft.mass.data)
