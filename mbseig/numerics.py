@@ -84,9 +84,10 @@ DENSE_ASSEMBLY = 300  # coordinates + constraints up to which the statics and th
 # the SVD, mbseig.statics.linalg.SMALL = 300 unknowns) anyway
 
 
-def scatter(n_rows, n_cols, blocks, *, dense=False):
+def scatter(n_rows, n_cols, blocks, *, dense=False, nonzero=False):
     """Sum of dense local blocks (row indices, column indices, values) into a CSR matrix, or a
-    dense array when ``dense`` (duplicates summed in both)."""
+    dense array when ``dense`` (duplicates summed in both); ``nonzero``: of the blocks' nonzero
+    entries only (a sum that stores no structural zero, formed without them)."""
     if dense:
         keys, vals = [], []
         for r, c, v in blocks:
@@ -107,6 +108,10 @@ def scatter(n_rows, n_cols, blocks, *, dense=False):
         # row-major (i, j) pairs of the block, as meshgrid(r, c, indexing="ij") gives them
         triplets.append((np.repeat(r, c.size), np.tile(c, r.size),
                          np.asarray(v, dtype=float).ravel()))
+    if nonzero and triplets:
+        r, c, v = (np.concatenate(x) for x in zip(*triplets, strict=True))
+        keep = v != 0
+        triplets = [(r[keep], c[keep], v[keep])]
     return coo_sum(n_rows, n_cols, triplets)
 
 

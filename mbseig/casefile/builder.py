@@ -211,9 +211,11 @@ class Builder(ElementReaders):
             self._force(Fields(item, label, names), forces, g_const)
             self._remember(item, "force", forces, before, label)
 
-        mass = scatter(self.n, self.n, mass_blocks) if mass_blocks else None
-        if mass is not None:  # the blocks' structural zeros not stored (a 3-D beam's mass in
-            mass.eliminate_zeros()  # natural coordinates: 84 % of its entries)
+        # the blocks' structural zeros neither summed nor stored (a 3-D beam's mass in natural
+        # coordinates: 84 % of its entries), nor a sum that cancels to zero
+        mass = scatter(self.n, self.n, mass_blocks, nonzero=True) if mass_blocks else None
+        if mass is not None:
+            mass.eliminate_zeros()
         rows, vals = batch.mass_coo()
         if rows.size:
             extra = sp.csr_matrix((vals, (rows, rows)), shape=(self.n, self.n))

@@ -267,6 +267,20 @@ def _node_frame(b, spec, k):
     return combine([(1.0, spec.pos[k]), (1.0, triad)], stack=True)
 
 
+def _elements(spec, frames):
+    """([Beam3DElement], [(k, l0)]) of the beam's elements that have coordinates."""
+    els, at = [], []
+    for k in range(spec.n_elements):
+        l0 = float(spec.arcs[k + 1] - spec.arcs[k])
+        w = combine([(1.0, frames[k]), (1.0, frames[k + 1])], stack=True)
+        el = Beam3DElement(f"{spec.label} element {k + 1}", w, spec.props, l0, spec.R0,
+                           spec.spin)
+        if el.idx.size:
+            els.append(el)
+            at.append((k, l0))
+    return els, at
+
+
 def _frozen(a):
     """A read-only copy of ``a``."""
     a = np.array(a)
@@ -294,16 +308,10 @@ def assemble(b, forces, constraints, mass_elements, mass_blocks, g_const, gravit
                 constraints.append(triad_constraint(f"{spec.label} node {k} (rigid triad)",
                                                     frames[k]))
         f = Fields({}, spec.label, {})
-        els, at = [], []
-        for k in range(spec.n_elements):
-            l0 = float(spec.arcs[k + 1] - spec.arcs[k])
-            w = combine([(1.0, frames[k]), (1.0, frames[k + 1])], stack=True)
-            el = f.formed("the beam element's matrices", lambda s=spec, k=k, w=w, l0=l0:
-                          Beam3DElement(f"{s.label} element {k + 1}", w, s.props, l0, s.R0,
-                                        s.spin))
-            if el.idx.size:
-                els.append(el)
-                at.append((k, l0))
+        # (one guarded computation for all the beam's elements: its error names the beam, as
+        # each element's would)
+        els, at = f.formed("the beam element's matrices",
+                           lambda spec=spec, frames=frames: _elements(spec, frames))
         # the masses at the reference, all elements of the beam in one batch (a member's numbers
         # do not depend on its batch: mbseig.model.beam3d_batch)
         masses = f.formed("the beam element's mass matrix",

@@ -20,6 +20,7 @@ translation of that length), and name the largest.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -34,10 +35,11 @@ MIN_SHARE = 0.05  # a dominant coordinate moves at least 5 % of the largest (as 
 
 @dataclass(frozen=True, eq=False)
 class DisplayMap:
-    """``names`` of the displayed rows, ``T`` (rows × n, CSR) from δq to them, ``weight`` per
-    row (the length scale on rotations, 1 elsewhere) for comparing their sizes."""
+    """``names`` of the displayed rows (a sequence), ``T`` (rows × n, CSR) from δq to them,
+    ``weight`` per row (the length scale on rotations, 1 elsewhere) for comparing their
+    sizes."""
 
-    names: tuple
+    names: Sequence
     T: sp.csr_matrix
     weight: np.ndarray
 
@@ -66,17 +68,18 @@ def display_map(model, q) -> DisplayMap:
         cols.extend(idx)
         vals.extend(coef)
 
+    labels = _Labels(fr, model)
     for key in fr.frames:
-        label = fr.frame_label(model, key)
+        label = key  # (a row's name is (frame key, suffix) until read: _Names)
         members = fr.frames[key]
         for kind, head in sorted(members):
             if kind == "p":
                 for a, i in sorted(fr.points[head].items()):
-                    row(f"{label} {a}", [i], [1.0], 1.0)
+                    row((label, f" {a}"), [i], [1.0], 1.0)
                     used[i] = True
             elif kind == "a":
                 i = fr.angles[head]
-                row(f"{label} θ", [i], [1.0], scale)
+                row((label, " θ"), [i], [1.0], scale)
                 used[i] = True
         triad = {head.rpartition(".")[2]: fr.vectors[head] for kind, head in members if kind == "v"}
         if set(triad) == {"u", "v", "w"} and all(len(t) == 3 for t in triad.values()):
@@ -86,13 +89,54 @@ def display_map(model, q) -> DisplayMap:
                 for t in triad.values():
                     idx += [t[c], t[b]]
                     coef += [0.5 * q[t[b]], -0.5 * q[t[c]]]
-                row(f"{label} θ{a}", idx, coef, scale)
+                row((label, f" θ{a}"), idx, coef, scale)
             for t in triad.values():
                 used[list(t.values())] = True
     for i in np.flatnonzero(~used):  # the rest under their own names
         row(str(model.coordinate_names[i]), [int(i)], [1.0], 1.0)
     T = sp.csr_matrix((vals, (rows, cols)), shape=(len(names), n))
-    return DisplayMap(tuple(names), T, np.asarray(weight))
+    return DisplayMap(labels.names(names), T, np.asarray(weight))
+
+
+class _Labels:
+    """The frames' labels (:meth:`CoordinateFrames.frame_label`), each made when a name that
+    uses it is first read: a listing reads the few rows its modes move most, and a beam model
+    has thousands of nodes."""
+
+    def __init__(self, fr, model):
+        self._fr, self._model, self._known = fr, model, {}
+
+    def label(self, key):
+        got = self._known.get(key)
+        if got is None:
+            got = self._known[key] = self._fr.frame_label(self._model, key)
+        return got
+
+    def names(self, parts):
+        return _Names(self, tuple(parts))
+
+
+class _Names(Sequence):
+    """The display map's row names: (frame key, suffix) parts named on first read."""
+
+    def __init__(self, labels, parts):
+        self._labels, self._parts = labels, parts
+
+    def __len__(self):
+        return len(self._parts)
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return tuple(self[k] for k in range(*i.indices(len(self))))
+        part = self._parts[i]
+        if isinstance(part, str):
+            return part
+        return self._labels.label(part[0]) + part[1]
+
+    def __eq__(self, other):
+        return isinstance(other, Sequence) and tuple(self) == tuple(other)
+
+    __hash__ = None
 
 
 def dominant(display: DisplayMap, full, count=3):

@@ -116,9 +116,17 @@ class Model:
         if sum(v.size for v in vals) != rows.size or not rows.size:
             return scatter(n_rows, self.n, blocks)
         v = np.concatenate(vals)
-        if v.size > FAST_CSR:  # (coo_sum's own path for so many, without copying the indices)
-            return sp.coo_matrix((v, (rows, cols)), shape=(n_rows, self.n)).tocsr()
-        return self._layout.pairs(which, n_rows).csr(v)
+        if v.size <= FAST_CSR:
+            return self._layout.pairs(which, n_rows).csr(v)
+        # (coo_sum's own path for so many, without copying the indices)
+        del vals
+        if isinstance(blocks, list):  # the blocks let go before the sum is formed (a beam
+            blocks.clear()  # batch's arrays: the size of the triplets again, at the peak)
+        A = sp.coo_matrix((v, (rows, cols)), shape=(n_rows, self.n)).tocsr()
+        if A.data.size > A.nnz:  # scipy keeps the triplets' length after summing duplicates
+            A = sp.csr_matrix((A.data[:A.nnz].copy(), A.indices[:A.nnz].copy(), A.indptr),
+                              shape=A.shape)
+        return A
 
     @cached_property
     def _groups(self):
@@ -258,6 +266,7 @@ class Model:
                 continue
             for b, x in zip((kb, cb), next(single), strict=True):
                 b.append((f.idx, f.idx, x))
+        del single  # (its list held every block: kb and cb are now their only holders)
         if dense:
             K, C = (_summed(self.n, self.n, self._layout[1], b) for b in (kb, cb))
         else:
@@ -367,7 +376,7 @@ class Model:
     def _assembled(self, q, qd):
         """What :meth:`nonfinite_element` checks element by element, evaluated as the model
         evaluates it (batches, groups) but not summed: the force g and every element's K, C,
-        configuration-dependent mass, Φ, Φ_q and H(1) blocks.  Within
+        Φ, Φ_q and H(1) blocks, and M(q) summed.  Within
         :meth:`keeping_jacobians` (q̇ = 0), K and C are their sums instead, which the solve then
         reuses: a sum is finite only where every term is (IEEE arithmetic carries an inf or a
         NaN through every addition), and a sparse sum drops no stored term."""
@@ -382,11 +391,8 @@ class Model:
             for f in self.forces:
                 if isinstance(f, BatchForce):
                     yield from (t[2] for t in f.jacobian_coo(q, qd))
-        if self.mass_elements:
-            elements = [e for e, _ in self.mass_elements]
-            if self._batched_forces:
-                self._prime(elements, "mass", q)
-            yield from (e.mass(q) for e in elements)
+        if self.mass_elements:  # M(q) = mass + Σ (M_e(q) − M_ref), summed as the solve sums it
+            yield self.mass_matrix(q).data  # (at the mass reference: ``mass``, unevaluated)
         if self.constraints:
             yield self.phi(q)
             yield from self._each(0, "jac", q)
@@ -412,13 +418,18 @@ class _Layout:
 
     def pairs(self, which, n_rows=None):
         """(rows, columns) of entry ``which``'s triplets, as scatter forms them from the blocks
-        (the sparse sums; int32 where scipy takes them so); their :class:`_Sum` if n_rows."""
+        (the sparse sums; int32 where scipy takes them so); their :class:`_Sum` if n_rows.
+        Kept up to FAST_CSR triplets; more are made at each use (a 10⁴-DOF beam model's K:
+        8 MB of indices that every later stage would carry, for 7 ms of work per assembly)."""
         m, key = self.model, ("pairs" if n_rows is None else "sum", which)
-        if key not in self.kept:
+        got = self.kept.get(key)
+        if got is None:
             kind = np.int32 if max(m.n, m.n_constraints) < 2**31 - 1 else np.int64
-            self.kept[key] = (_block_pairs(self._blocks(which), kind) if n_rows is None
-                              else _Sum(n_rows, m.n, *self.pairs(which)))
-        return self.kept[key]
+            got = (_block_pairs(self._blocks(which), kind) if n_rows is None
+                   else _Sum(n_rows, m.n, *self.pairs(which)))
+            if n_rows is not None or got[0].size <= FAST_CSR:
+                self.kept[key] = got
+        return got
 
     def mass_plan(self):
         """(S, positions of ``mass``'s and of S's entries in U, U): the _Sum S of the mass
