@@ -17,7 +17,7 @@ from itertools import groupby
 import numpy as np
 import scipy.sparse as sp
 
-from ..numerics import DENSE_ASSEMBLY, FAST_CSR, coo_sum, scatter
+from ..numerics import DENSE_ASSEMBLY, FAST_CSR, coo_sum, nonzero_sum, scatter
 from .base import BatchForce, Force
 from .batched import kernel_groups
 from .cache import KeptValues
@@ -110,23 +110,22 @@ class Model:
 
     def _sparse(self, which, n_rows, blocks):
         """The sparse sum of the blocks as :func:`mbseig.numerics.scatter` forms it (the same
-        triplets, order and sums: ``self._layout.pairs``)."""
+        triplets, order and sums: ``self._layout.pairs``).  Past FAST_CSR triplets, the forces'
+        K and C (``which`` 1) are summed from their nonzero entries (:func:`nonzero_sum`: the
+        same values without stored zeros; the list of blocks is emptied as it is read), and the
+        constraints' Φ_q and H keep their patterns (the time-domain check refills Φ_q's)."""
+        size = sum(np.size(v) for _, _, v in blocks)
+        if which == 1 and size > FAST_CSR:
+            return nonzero_sum(n_rows, self.n, blocks)
         rows, cols = self._layout.pairs(which)
         vals = [np.asarray(v, dtype=float).ravel() for _, _, v in blocks]
-        if sum(v.size for v in vals) != rows.size or not rows.size:
+        if size != rows.size or not rows.size:
             return scatter(n_rows, self.n, blocks)
         v = np.concatenate(vals)
         if v.size <= FAST_CSR:
             return self._layout.pairs(which, n_rows).csr(v)
         # (coo_sum's own path for so many, without copying the indices)
-        del vals
-        if isinstance(blocks, list):  # the blocks let go before the sum is formed (a beam
-            blocks.clear()  # batch's arrays: the size of the triplets again, at the peak)
-        A = sp.coo_matrix((v, (rows, cols)), shape=(n_rows, self.n)).tocsr()
-        if A.data.size > A.nnz:  # scipy keeps the triplets' length after summing duplicates
-            A = sp.csr_matrix((A.data[:A.nnz].copy(), A.indices[:A.nnz].copy(), A.indptr),
-                              shape=A.shape)
-        return A
+        return sp.coo_matrix((v, (rows, cols)), shape=(n_rows, self.n)).tocsr()
 
     @cached_property
     def _groups(self):
