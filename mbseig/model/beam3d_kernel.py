@@ -239,6 +239,30 @@ def mass_q(TC, M):
 
 
 # ---------------------------------------------------------------------------------------------
+class _Gathered:
+    """A stacked field of :class:`Stack` kept as its distinct arrays and each member's index
+    among them, the stack (nb, …) made when read: the members of a uniform beam share a few
+    element matrices (one per element length), and a chunk gathers only its own rows."""
+
+    def __set_name__(self, owner, name):
+        self.slot = "_" + name
+
+    def __get__(self, st, owner=None):
+        values, ids = st.__dict__[self.slot]
+        return values[ids]
+
+
+def _distinct(arrays):
+    """(the distinct arrays stacked, each one's index among them), distinct by identity."""
+    first, ids = {}, np.empty(len(arrays), dtype=np.intp)
+    for k, a in enumerate(arrays):
+        ids[k] = first.setdefault(id(a), len(first))
+    seen = {}
+    for a in arrays:
+        seen.setdefault(id(a), a)
+    return np.stack(list(seen.values())), ids
+
+
 class Stack:
     """The constant data of nb member elements, stacked: z = C q[idx] + d with idx (nb, m) and
     C (nb, 24, m) padded to m = max(WIDTH, the widest member) (padding: coordinate 0, zero
@@ -246,6 +270,8 @@ class Stack:
     the true widths; l0, EA, GJ (nb,), the bending planes' G and K_b (nb, 2, 2), the local mass
     M and gyroscopic G (nb, 12, 12) and the spins (nb,).  ``records`` are the members'
     :meth:`~mbseig.model.beam3d.Beam3DElement.kernel_record` dicts."""
+
+    Gz, Kbz, Gy, Kby, M, G = (_Gathered() for _ in range(6))
 
     def __init__(self, records):
         nb = len(records)
@@ -271,13 +297,16 @@ class Stack:
         for key in ("l0", "EA", "GJ", "spin"):
             setattr(self, key, np.array([r[key] for r in records], dtype=float))
         for key in ("Gz", "Kbz", "Gy", "Kby", "M", "G"):
-            setattr(self, key, np.stack([r[key] for r in records]))
+            self.__dict__["_" + key] = _distinct([r[key] for r in records])
 
     def part(self, rows):
         """The stack of the members ``rows`` (a slice): views of this one's arrays."""
         got = object.__new__(Stack)
         for key, value in vars(self).items():
-            setattr(got, key, value[rows])
+            if isinstance(value, tuple):  # a gathered field: its distinct arrays and indices
+                got.__dict__[key] = (value[0], value[1][rows])
+            else:
+                setattr(got, key, value[rows])
         return got
 
     def z(self, v, offset=True):

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .affine import Affine, combine
+from .affine import Affine, combine, identity_of
 
 __all__ = [
     "FRAME_SIZE",
@@ -61,8 +61,9 @@ def frame_of(origin: Affine, triad_idx) -> Affine:
             and o[2] < triad_idx[0] and np.all(np.diff(triad_idx) > 0)
             and np.array_equal(origin.C, _EYE3)):
         # the common frame (free origin allocated before its sorted triad): what combine forms,
-        # the identity on the concatenated indices, without its general-purpose work
-        return Affine(np.concatenate([o, triad_idx]), np.eye(FRAME_SIZE),
+        # the identity on the concatenated indices (one read-only identity shared by all such
+        # frames: a beam of 10⁵ nodes), without its general-purpose work
+        return Affine(np.concatenate([o, triad_idx]), identity_of(FRAME_SIZE),
                       np.concatenate([origin.d, np.zeros(9)]))
     return combine([(1.0, origin), (1.0, Affine.select(triad_idx))], stack=True)
 
