@@ -245,7 +245,9 @@ def test_shared_maps_and_chunks_agree_exactly_with_each_member_alone(monkeypatch
     node map, which the kernel stack broadcasts instead of copying, and a batch larger than
     ``CHUNK`` is evaluated chunk by chunk through views of the one stack.  Each member's
     numbers, together (in chunks of 2 here) and alone, bitwise equal, as for the stacked maps
-    above; and the map is shared (one array for all members)."""
+    above; and the map is shared (one array for all members).  Two reference lengths (every
+    other element prestrained by 10 %): the stack keeps the two element mass matrices once
+    each and gathers every member's own."""
     from mbseig.model import beam3d_batch
     from mbseig.model.beam3d_batch import BatchGroup
     from mbseig.model.beam3d_kernel import Stack
@@ -260,9 +262,15 @@ def test_shared_maps_and_chunks_agree_exactly_with_each_member_alone(monkeypatch
     length = np.linalg.norm(END - START) / n_el
     els = [Beam3DElement(f"b element {k + 1}", combine([(1.0, frames[k]), (1.0, frames[k + 1])],
                                                        stack=True),
-                         props, length, R0, 100.0 * k) for k in range(n_el)]
+                         props, length * (1.0 + 0.1 * (k % 2)), R0, 100.0 * k)
+           for k in range(n_el)]
     stack = Stack([e.kernel_record() for e in els])
     assert stack.C.strides[0] == 0  # one map, broadcast
+    distinct = {e.kernel_record()["M"].tobytes() for e in els}
+    assert len(distinct) == 2 and stack.__dict__["_M"][0].shape[0] <= len(els)
+    assert all(np.array_equal(stack.M[k], e.kernel_record()["M"]) for k, e in enumerate(els))
+    assert all(np.array_equal(stack.part(slice(1, 4)).M[k], els[1 + k].kernel_record()["M"])
+               for k in range(3))
     monkeypatch.setattr(beam3d_batch, "CHUNK", 2)
     q, qd = _state(q0, np.random.default_rng(11))
     _assert_alone_equals_together(els, q, qd)
