@@ -108,6 +108,9 @@ def _stacked_in_order(terms):
     idx = np.concatenate([a.idx for _, a in terms]).astype(np.intp, copy=False)
     if idx.size > 1 and not np.all(idx[1:] > idx[:-1]):
         return None
+    d = np.concatenate([a.d for _, a in terms])
+    if idx.size <= 64 and all(a.C is _EYES.get(a.idx.size) for _, a in terms):
+        return Affine(idx, identity_of(idx.size), d)  # (shared identities: the shared one)
     rows = sum(a.C.shape[0] for _, a in terms)
     C, r, c = np.zeros((rows, idx.size)), 0, 0
     for _, a in terms:
@@ -116,7 +119,7 @@ def _stacked_in_order(terms):
             return None
         C[r:r + nr, c:c + nc] = a.C
         r, c = r + nr, c + nc
-    return Affine(idx, _identity_shared(C), np.concatenate([a.d for _, a in terms]))
+    return Affine(idx, _identity_shared(C), d)
 
 
 _EYES: dict = {}
