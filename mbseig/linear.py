@@ -240,9 +240,12 @@ def _linearize(model, eq, rank_tol, constraint_stiffness, sparse, reference=None
             rank=eq.rank, n_constraints=model.n_constraints,
             constraint_stiffness=constraint_stiffness, tolerances=tol, constraint_jacobian=G,
             eliminated=eliminated, display=Displayed(model, q0))
-    G = model.phi_q(q0, dense=True)
+    given = basis is not None and reference is None
+    # Φ_q dense where the null basis is found from it; else only the signals read it (and make
+    # it dense when they need its multipliers): a 10³-DOF beam model's is 18 MB dense
+    G = model.phi_q(q0, dense=local is None and not given)
     Z = None
-    if basis is not None and reference is None:
+    if given:
         N, rank, independent, sigma = basis
     elif local is not None:
         N, rank, independent, sigma, Z = _dense_local(local, rank_tol, model.coordinate_names)

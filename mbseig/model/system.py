@@ -111,11 +111,11 @@ class Model:
     def _sparse(self, which, n_rows, blocks):
         """The sparse sum of the blocks as :func:`mbseig.numerics.scatter` forms it (the same
         triplets, order and sums: ``self._layout.pairs``).  Past FAST_CSR triplets, the forces'
-        K and C (``which`` 1) are summed from their nonzero entries (:func:`nonzero_sum`: the
-        same values without stored zeros; the list of blocks is emptied as it is read), and the
-        constraints' Φ_q and H keep their patterns (the time-domain check refills Φ_q's)."""
+        K and C (``which`` 1) and the constraint Hessian H (3) are summed from their nonzero
+        entries (:func:`nonzero_sum`: the same values without stored zeros; a list of blocks is
+        emptied as it is read), and Φ_q keeps its pattern (the time-domain check refills it)."""
         size = sum(np.size(v) for _, _, v in blocks)
-        if which == 1 and size > FAST_CSR:
+        if which in (1, 3) and size > FAST_CSR:
             return nonzero_sum(n_rows, self.n, blocks)
         rows, cols = self._layout.pairs(which)
         vals = [np.asarray(v, dtype=float).ravel() for _, _, v in blocks]
