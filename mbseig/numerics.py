@@ -17,6 +17,7 @@ import contextlib
 import math
 import re
 import warnings
+from itertools import groupby
 
 import numpy as np
 import scipy.linalg as sla
@@ -130,15 +131,18 @@ def nonzero_sum(n_rows, n_cols, blocks):
         if isinstance(blocks, list):
             blocks[a:a + SUM_CHUNK] = [None] * len(chunk)
         rs, cs, vs = [], [], []
-        for r, c, v in chunk:
-            r = np.asarray(r).ravel().astype(kind, copy=False)
-            c = np.asarray(c).ravel().astype(kind, copy=False)
-            v = np.asarray(v, dtype=float).ravel()
-            if v.size != r.size * c.size:
-                raise ValueError(f"a {v.size}-entry block on {r.size} rows and {c.size} columns")
-            rs.append(np.repeat(r, c.size))  # row-major (i, j), as the block's values
-            cs.append(np.tile(c, r.size))
-            vs.append(v)
+        for (a, b), run in groupby(((np.asarray(r).ravel(), np.asarray(c).ravel(), v)
+                                    for r, c, v in chunk), key=lambda t: (t[0].size, t[1].size)):
+            R, C, V = zip(*run, strict=True)
+            V = [np.asarray(v, dtype=float).ravel() for v in V]
+            if any(v.size != a * b for v in V):
+                raise ValueError(f"a block of other than {a} × {b} entries on {a} rows and "
+                                 f"{b} columns")
+            R, C = np.array(R, dtype=kind), np.array(C, dtype=kind)  # (blocks, a), (blocks, b)
+            shape = (R.shape[0], a, b)  # row-major (i, j) of each block, as its values
+            rs.append(np.broadcast_to(R[:, :, None], shape).ravel())
+            cs.append(np.broadcast_to(C[:, None, :], shape).ravel())
+            vs.extend(V)
         del chunk
         if vs:
             v = np.concatenate(vs)
