@@ -20,7 +20,8 @@ code"), section "lean", against the issue's goals:
   34-digit ones (mpmath) of the assembled matrices (the FE body's with the tip's mass and
   inertia added at its node), and LAPACK's ``dsygvd`` (eigenvalues and vectors, the driver
   mbseig's eigh path calls) on the same assembled matrices; goal: mbseig's largest error within
-  2× LAPACK's.
+  2× LAPACK's, as medians over :data:`FE_DRAWS` draws of the input's own rounding (both errors
+  are rounding of a κ ≈ 1e9 problem: a single draw's ratio is a coin toss between 0.02 and 13).
 """
 
 from __future__ import annotations
@@ -278,6 +279,12 @@ def _rotor_rows(repeats, log, ross_python):
 
 FE_MODELS = ((6, 2.0), (8, 0.5), (10, 2.0), (12, 5.0))  # (elements of the bar, tip mass [kg])
 TIP_INERTIA = (0.01, 0.02, 0.03)
+#: draws of each FE model: as exported, then with every entry of K moved by its own rounding
+#: (relative 2e-16 N(0, 1), symmetric).  Both errors are rounding of a problem with κ ≈ 1e9, and
+#: one draw's ratio of them ranged 0.02–13 over such draws (measured at 3ba5cb0): the row
+#: compares the medians of the draws, and shows the as-exported draw beside them.
+FE_DRAWS = 8
+FE_JITTER = 2e-16
 
 
 def _fe_rows(log):
@@ -298,37 +305,51 @@ def _fe_rows(log):
         tmp = Path(tmp)
         for nel, m_tip in FE_MODELS:
             (tmp / "free.toml").write_text(_FREE_BAR.format(nel=nel))
-            export_fe_body(mbseig.load_case(tmp / "free.toml"), ["A", "B"], tmp / "bar.npz")
+            export_fe_body(mbseig.load_case(tmp / "free.toml"), ["A", "B"], tmp / "bar0.npz")
+            exported = dict(np.load(tmp / "bar0.npz"))
             (tmp / "fe.toml").write_text(_FE_CASE.format(m=m_tip, inertia=list(TIP_INERTIA)))
-            a = mbseig.analyze(tmp / "fe.toml")
-            w_mb = np.sort(a.modes.omega_n)
-            d = np.load(tmp / "bar.npz")
-            M, K = d["M"].copy(), d["K"].copy()
-            M[6:9, 6:9] += m_tip * np.eye(3)
-            M[9:12, 9:12] += np.diag(TIP_INERTIA)
-            keep = np.arange(6, M.shape[0])  # A clamped
-            M, K = M[np.ix_(keep, keep)], K[np.ix_(keep, keep)]
-            L = mp.cholesky(mp.matrix(M.tolist()))
-            Li = mp.inverse(L)
-            C = Li * mp.matrix(K.tolist()) * Li.T
-            ref = np.sort([float(mp.sqrt(x)) for x in mp.eigsy((C + C.T) / 2,
-                                                              eigvals_only=True)])
-            w, _, info = sla.lapack.dsygvd(0.5 * (K + K.T), 0.5 * (M + M.T), itype=1,
-                                           jobz="V", uplo="L")
-            w_la = np.sqrt(np.sort(w))
-            e_mb, e_la = np.abs(w_mb / ref - 1), np.abs(w_la / ref - 1)
+            draws = []
+            for seed in range(FE_DRAWS):
+                K0 = exported["K"]
+                if seed:
+                    E = np.random.default_rng(seed).standard_normal(K0.shape)
+                    K0 = K0 * (1.0 + FE_JITTER * 0.5 * (E + E.T))
+                np.savez(tmp / "bar.npz", **{**exported, "K": K0})
+                a = mbseig.analyze(tmp / "fe.toml")
+                draws.append(_fe_errors(mp, sla, np.sort(a.modes.omega_n), exported["M"], K0,
+                                        m_tip))
+            e_mb, e_la = (np.array([d[k] for d in draws]) for k in (0, 1))
+            med_mb, med_la = float(np.median(e_mb)), float(np.median(e_la))
             rows.append({"section": "lean", "method": "FE body with a tip body",
-                         "n": int(M.shape[0]), "elements": nel, "tip_mass": m_tip,
-                         "time": float("nan"), "error": float(e_mb.max()),
-                         "lapack_error": float(e_la.max()), "lowest_error": float(e_mb[0]),
-                         "lapack_lowest_error": float(e_la[0]),
-                         "ratio": float(e_mb.max() / e_la.max()),
-                         "goal": "largest error ≤ 2× LAPACK's",
-                         "met": bool(e_mb.max() <= 2 * e_la.max()),
+                         "n": int(exported["M"].shape[0] - 6), "elements": nel,
+                         "tip_mass": m_tip, "time": float("nan"), "draws": FE_DRAWS,
+                         "error": med_mb, "lapack_error": med_la, "ratio": med_mb / med_la,
+                         "exported_error": float(e_mb[0]),
+                         "exported_lapack_error": float(e_la[0]),
+                         "draw_ratios": [float(x) for x in e_mb / e_la],
+                         "goal": "median largest error ≤ 2× LAPACK's",
+                         "met": bool(med_mb <= 2 * med_la),
                          "basis": a.linear.tolerances.get("basis", "global")})
-            log(f"lean FE body {nel} el, tip {m_tip} kg ({M.shape[0]} DOF): largest error "
-                f"mbseig {e_mb.max():.1e}, LAPACK {e_la.max():.1e}")
+            log(f"lean FE body {nel} el, tip {m_tip} kg ({rows[-1]['n']} DOF): median largest "
+                f"error over {FE_DRAWS} draws mbseig {med_mb:.1e}, LAPACK {med_la:.1e}; as "
+                f"exported {e_mb[0]:.1e} and {e_la[0]:.1e}")
     return rows
+
+
+def _fe_errors(mp, sla, w_mb, M, K, m_tip):
+    """(mbseig's, LAPACK's) largest relative error of the clamped FE body with its tip body,
+    against the 34-digit eigenvalues of the same matrices (mpmath)."""
+    M = M.copy()
+    M[6:9, 6:9] += m_tip * np.eye(3)
+    M[9:12, 9:12] += np.diag(TIP_INERTIA)
+    keep = np.arange(6, M.shape[0])  # A clamped
+    M, K = M[np.ix_(keep, keep)], K[np.ix_(keep, keep)]
+    Li = mp.inverse(mp.cholesky(mp.matrix(M.tolist())))
+    C = Li * mp.matrix(K.tolist()) * Li.T
+    ref = np.sort([float(mp.sqrt(x)) for x in mp.eigsy((C + C.T) / 2, eigvals_only=True)])
+    w, _, _ = sla.lapack.dsygvd(0.5 * (K + K.T), 0.5 * (M + M.T), itype=1, jobz="V", uplo="L")
+    w_la = np.sqrt(np.sort(w))
+    return float(np.max(np.abs(w_mb / ref - 1))), float(np.max(np.abs(w_la / ref - 1)))
 
 
 _FREE_BAR = """
@@ -417,9 +438,11 @@ def report_lines(rows) -> list:
                      f"speed | {ross} | {ratio} | {r['reuse']}; critical speeds "
                      f"{r['critical_speeds']} rad/s | {r['goal']} | {met} |")
         else:
+            spread = "{:.2f}–{:.2f}".format(min(r["draw_ratios"]), max(r["draw_ratios"]))
             L.append(f"| FE body, {r['elements']} elements, tip {r['tip_mass']} kg | {r['n']} "
-                     f"DOF | largest error {r['error']:.1e} (lowest {r['lowest_error']:.1e}) | "
-                     f"LAPACK dsygvd {r['lapack_error']:.1e} (lowest "
-                     f"{r['lapack_lowest_error']:.1e}) | {r['ratio']:.2f}× | 34-digit "
-                     f"reference (mpmath); basis {r['basis']} | {r['goal']} | {met} |")
+                     f"DOF | median largest error {r['error']:.1e} ({r['draws']} draws; as "
+                     f"exported {r['exported_error']:.1e}) | LAPACK dsygvd "
+                     f"{r['lapack_error']:.1e} (as exported {r['exported_lapack_error']:.1e}) | "
+                     f"{r['ratio']:.2f}× | a draw's ratio {spread}; 34-digit reference (mpmath); "
+                     f"basis {r['basis']} | {r['goal']} | {met} |")
     return L
