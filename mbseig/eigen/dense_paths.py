@@ -248,6 +248,46 @@ def _geev_pairs(A, left):
     return mu, vectors(vr), (vectors(vl) if left else None), pos, partner
 
 
+def _ggev(A, B, left):
+    """(w, W, Z) of ``scipy.linalg.eig(A, B, left=left, right=True, homogeneous_eigvals=True)``
+    (W None without ``left``), the same numbers: LAPACK ``ggev`` with the workspace of its own
+    query, the conjugate pairs' complex vectors formed as scipy forms them, and each vector
+    divided by its BLAS ``nrm2``, called directly (scipy's per-column norm, with its finiteness
+    check, took 0.6 ms of a 15 ms Campbell speed on 84 columns)."""
+    ggev, = sla.get_lapack_funcs(("ggev",), (A, B))
+    lwork = ggev(A, B, lwork=-1)[-2][0].real.astype(np.int_)
+    if ggev.typecode in "cz":  # a complex pencil: complex eigenvalues and vectors as they are
+        alpha, beta, vl, vr, _, info = ggev(A, B, int(left), 1, lwork, 0, 0)
+    else:
+        alphar, alphai, beta, vl, vr, _, info = ggev(A, B, int(left), 1, lwork, 0, 0)
+        alpha = alphar + 1j * alphai
+    if info < 0:
+        raise SolverError(f"LAPACK ggev: illegal value in argument {-info}")
+    if info > 0:  # (scipy's message; _lapack makes it the one SolverError)
+        raise np.linalg.LinAlgError("generalized eig algorithm (ggev) did not converge "
+                                    f"(LAPACK info={info})")
+    w = np.vstack((alpha, beta))
+    vectors = [vr, vl] if left else [vr]
+    if ggev.typecode not in "cz" and not np.all(w.imag == 0.0):  # pairs: column i + 1 holds
+        # the imaginary part of column i's
+        pairs = np.flatnonzero(alpha.imag > 0)  # (scipy's rule for homogeneous eigenvalues)
+        for k, V in enumerate(vectors):
+            Z = np.array(V, dtype=complex)
+            if np.any(np.diff(pairs) == 1):  # (not LAPACK's documented layout: scipy's loop)
+                for i in pairs:
+                    Z.imag[:, i] = V[:, i + 1]
+                    np.conj(Z[:, i], Z[:, i + 1])
+            else:
+                Z.imag[:, pairs] = V[:, pairs + 1]
+                Z[:, pairs + 1] = np.conj(Z[:, pairs])
+            vectors[k] = Z
+    for V in vectors:
+        nrm2 = sla.get_blas_funcs("nrm2", dtype=V.dtype, ilp64="preferred")
+        for i in range(V.shape[1]):
+            V[:, i] /= nrm2(V[:, i])
+    return (w, vectors[1], vectors[0]) if left else (w, None, vectors[0])
+
+
 def _with_partners(sol, s, pos, partner):
     """``sol`` of the measured eigenvalues extended to all of them: eigenvalue i is s[i], its
     vectors and measures those of column pos[i], conjugated where ``partner``."""
@@ -289,9 +329,7 @@ def solve_qz(M, P, Q, opts, name, reason, norms):
     B = np.block([[Id, np.zeros((n, n))], [np.zeros((n, n)), Ms]])
     _require_finite(A, "the scaled companion pencil")
     _require_finite(B, "the scaled companion pencil")
-    out = _lapack(sla.eig, A, B, left=opts["left"], right=True, homogeneous_eigvals=True,
-                  check_finite=False)
-    w, W, Z = (out[0], out[1], out[2]) if opts["left"] else (out[0], None, out[1])
+    w, W, Z = _lapack(_ggev, A, B, opts["left"])
     alpha, beta = w
     inf_tol = opts.get("infinite_tol", 100 * n * EPS)
     scale_ab = np.hypot(np.abs(alpha), np.abs(beta))
