@@ -167,10 +167,12 @@ class NewtonMatrix:
         self.kind = "svd"
         self.lu = None
         if N > SMALL:
-            As = sp.diags(self.d) @ self.A @ sp.diags(self.d)
+            # (D A D made CSC at once: the CSR product let go before SuperLU copies and factors
+            # it, a copy of the whole Newton matrix less at the peak)
+            As = (sp.diags(self.d) @ self.A @ sp.diags(self.d)).tocsc()
             with np.errstate(all="ignore"):
                 try:
-                    self.lu = spla.splu(As.tocsc())
+                    self.lu = spla.splu(As)
                     self.kind = "lu"
                 except RuntimeError:
                     self.lu = None
