@@ -90,7 +90,7 @@ def scatter(n_rows, n_cols, blocks, *, dense=False, nonzero=False):
     dense array when ``dense`` (duplicates summed in both); ``nonzero``: of the blocks' nonzero
     entries only (:func:`nonzero_sum`)."""
     if nonzero and not dense:
-        return nonzero_sum(n_rows, n_cols, blocks)
+        return nonzero_sum(n_rows, n_cols, list(blocks))  # (the caller's list left as it is)
     if dense:
         keys, vals = [], []
         for r, c, v in blocks:
@@ -118,9 +118,11 @@ SUM_CHUNK = 1024  # blocks read at a time by nonzero_sum
 
 
 def nonzero_sum(n_rows, n_cols, blocks):
-    """The CSR sum of the blocks' nonzero entries: the values of :func:`scatter`'s sum without
-    its stored zeros (a structural zero adds nothing; the nonzero terms of an entry keep their
-    order), read ``SUM_CHUNK`` blocks at a time.  A list of blocks is emptied as it is read
+    """The CSR sum of the blocks' nonzero entries: the terms of :func:`scatter`'s sum without
+    its zeros (a structural zero adds nothing), in block order, and no stored zero; an entry of
+    three or more terms may differ from scatter's in its last bits where either sum passes
+    FAST_CSR triplets (scipy does not fix the order in which it adds duplicates).  Read
+    ``SUM_CHUNK`` blocks at a time.  A list of blocks is emptied as it is read
     (each block let go once its nonzeros are taken), so that the peak holds one chunk of the
     blocks and the nonzero triplets, not every block and every triplet: a 3-D beam's K, C and
     mass in natural coordinates at rest (a straight beam along an axis) are 85-95 % zeros."""

@@ -112,8 +112,8 @@ class Model:
         """The sparse sum of the blocks as :func:`mbseig.numerics.scatter` forms it (the same
         triplets, order and sums: ``self._layout.pairs``).  Past FAST_CSR triplets, the forces'
         K and C (``which`` 1) and the constraint Hessian H (3) are summed from their nonzero
-        entries (:func:`nonzero_sum`: the same values without stored zeros; a list of blocks is
-        emptied as it is read), and Φ_q keeps its pattern (the time-domain check refills it)."""
+        entries (:func:`nonzero_sum`: the same terms, no stored zeros; a list of blocks is emptied
+        as it is read), and Φ_q keeps its pattern (the time-domain check refills it)."""
         size = sum(np.size(v) for _, _, v in blocks)
         if which in (1, 3) and size > FAST_CSR:
             return nonzero_sum(n_rows, self.n, blocks)
