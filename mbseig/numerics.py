@@ -117,6 +117,22 @@ def scatter(n_rows, n_cols, blocks, *, dense=False, nonzero=False):
 SUM_CHUNK = 1024  # blocks read at a time by nonzero_sum
 
 
+def equilibration(A):
+    """d with d_i = 1/√max_j |A_ij| (1 for empty rows), for the symmetric scaling D A D (dense
+    or sparse A)."""
+    if not sp.issparse(A):
+        mx = np.max(np.abs(A), axis=1, initial=0.0)
+        mx[~(mx > 0)] = 1.0
+        return 1.0 / np.sqrt(mx)
+    A = sp.csr_matrix(A)
+    mx = np.zeros(A.shape[0])
+    nz = np.diff(A.indptr) > 0
+    if A.nnz:
+        mx[nz] = np.maximum.reduceat(np.abs(A.data), A.indptr[:-1][nz])
+    mx[mx <= 0] = 1.0
+    return 1.0 / np.sqrt(mx)
+
+
 def nonzero_sum(n_rows, n_cols, blocks):
     """The CSR sum of the blocks' nonzero entries: the terms of :func:`scatter`'s sum without
     its zeros (a structural zero adds nothing), in block order, and no stored zero; an entry of
@@ -133,15 +149,15 @@ def nonzero_sum(n_rows, n_cols, blocks):
         if isinstance(blocks, list):
             blocks[a:a + SUM_CHUNK] = [None] * len(chunk)
         rs, cs, vs = [], [], []
-        for (a, b), run in groupby(((np.asarray(r).ravel(), np.asarray(c).ravel(), v)
-                                    for r, c, v in chunk), key=lambda t: (t[0].size, t[1].size)):
+        for (nr, nc), run in groupby(((np.asarray(r).ravel(), np.asarray(c).ravel(), v)
+                                      for r, c, v in chunk), key=lambda t: (t[0].size, t[1].size)):
             R, C, V = zip(*run, strict=True)
             V = [np.asarray(v, dtype=float).ravel() for v in V]
-            if any(v.size != a * b for v in V):
-                raise ValueError(f"a block of other than {a} × {b} entries on {a} rows and "
-                                 f"{b} columns")
-            R, C = np.array(R, dtype=kind), np.array(C, dtype=kind)  # (blocks, a), (blocks, b)
-            shape = (R.shape[0], a, b)  # row-major (i, j) of each block, as its values
+            if any(v.size != nr * nc for v in V):
+                raise ValueError(f"a block on {nr} rows and {nc} columns without "
+                                 f"{nr * nc} values")
+            R, C = np.array(R, dtype=kind), np.array(C, dtype=kind)  # (blocks, nr), (blocks, nc)
+            shape = (R.shape[0], nr, nc)  # row-major (i, j) of each block, as its values
             rs.append(np.broadcast_to(R[:, :, None], shape).ravel())
             cs.append(np.broadcast_to(C[:, None, :], shape).ravel())
             vs.extend(V)

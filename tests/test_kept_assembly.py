@@ -10,39 +10,14 @@ import pytest
 import scipy.sparse as sp
 from conftest import CASES
 
+from mbseig.bench.lean_rows import shaft_case
 from mbseig.casefile import load_case
 from mbseig.linear import linearize
 from mbseig.numerics import nonzero_sum, scatter
 from mbseig.statics import equilibrium
 from mbseig.studies.point import linear_stage
 
-SHAFT = """
-schema_version = 1
-dimension = 3
-[[points]]
-name = "a"
-position = [0.0, 0.0, 0.0]
-[[points]]
-name = "b"
-position = [2.0, 0.0, 0.0]
-[[beams]]
-name = "shaft"
-points = ["a", "b"]
-E = 2.1e11
-G = 8.1e10
-rho = 7800.0
-section = { shape = "circle", d = 0.05 }
-elements = 16
-ends = ["free", "free"]
-stations = { s0 = 0.0, s1 = 1.0, s2 = 2.0 }
-""" + "".join(f"""
-[[joints]]
-name = "support {k}"
-type = "universal"
-bodies = ["ground", "shaft.s{k}"]
-at = [{k}.0, 0.0, 0.0]
-axes = [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
-""" for k in range(3))
+SHAFT = shaft_case(2, per=8)  # 2 spans of 1 m on universal joints, 16 elements
 
 
 @pytest.fixture(scope="module")

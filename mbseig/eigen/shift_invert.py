@@ -11,7 +11,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import SolverError
-from ..numerics import LazyModule
+from ..numerics import LazyModule, equilibration
 from .measures import (
     EPS,
     fro,
@@ -73,10 +73,8 @@ def _scaled_condition(A, lu, b):
     rotations in milliradians has ‖A‖ ‖A⁻¹‖ 10⁶× its own in radians), the singularity of A at
     an eigenvalue does."""
     A = sp.csr_matrix(A)
-    big = np.zeros(A.shape[0])
+    d = equilibration(A)  # (the statics' Newton matrix is scaled so too)
     rows = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
-    np.maximum.at(big, rows, np.abs(A.data))
-    d = np.where(big > 0, 1.0 / np.sqrt(np.where(big > 0, big, 1.0)), 1.0)
     with np.errstate(over="ignore", invalid="ignore"):
         y = lu.solve((b / d).astype(lu.U.dtype)) / d  # one solve: ‖S⁻¹‖ from below
         norm_s = float(np.linalg.norm(A.data * d[rows] * d[A.indices]))

@@ -254,13 +254,14 @@ class _Gathered:
 
 def _distinct(arrays):
     """(the distinct arrays stacked, each one's index among them), distinct by identity."""
-    first, ids = {}, np.empty(len(arrays), dtype=np.intp)
+    index, kept, ids = {}, [], np.empty(len(arrays), dtype=np.intp)
     for k, a in enumerate(arrays):
-        ids[k] = first.setdefault(id(a), len(first))
-    seen = {}
-    for a in arrays:
-        seen.setdefault(id(a), a)
-    return np.stack(list(seen.values())), ids
+        j = index.get(id(a))
+        if j is None:
+            j = index[id(a)] = len(kept)
+            kept.append(a)
+        ids[k] = j
+    return np.stack(kept), ids
 
 
 class Stack:

@@ -68,18 +68,17 @@ def display_map(model, q) -> DisplayMap:
         cols.extend(idx)
         vals.extend(coef)
 
-    labels = _Labels(fr, model)
+    labels = _Labels(fr, model)  # (a row's name is (frame key, suffix) until read: _Names)
     for key in fr.frames:
-        label = key  # (a row's name is (frame key, suffix) until read: _Names)
         members = fr.frames[key]
         for kind, head in sorted(members):
             if kind == "p":
                 for a, i in sorted(fr.points[head].items()):
-                    row((label, f" {a}"), [i], [1.0], 1.0)
+                    row((key, f" {a}"), [i], [1.0], 1.0)
                     used[i] = True
             elif kind == "a":
                 i = fr.angles[head]
-                row((label, " θ"), [i], [1.0], scale)
+                row((key, " θ"), [i], [1.0], scale)
                 used[i] = True
         triad = {head.rpartition(".")[2]: fr.vectors[head] for kind, head in members if kind == "v"}
         if set(triad) == {"u", "v", "w"} and all(len(t) == 3 for t in triad.values()):
@@ -89,7 +88,7 @@ def display_map(model, q) -> DisplayMap:
                 for t in triad.values():
                     idx += [t[c], t[b]]
                     coef += [0.5 * q[t[b]], -0.5 * q[t[c]]]
-                row((label, f" θ{a}"), idx, coef, scale)
+                row((key, f" θ{a}"), idx, coef, scale)
             for t in triad.values():
                 used[list(t.values())] = True
     for i in np.flatnonzero(~used):  # the rest under their own names

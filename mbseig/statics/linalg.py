@@ -33,6 +33,7 @@ from ..numerics import (
     constraint_rank,
     coo_sum,
     dense,
+    equilibration,
     rank_of,
     saddle,
 )
@@ -137,21 +138,6 @@ def augmented(model, q, lam):
     return A, Phi_q
 
 
-def _equilibrate(A):
-    """d with d_i = 1/√max_j |A_ij| (1 for empty rows), for the scaling D A D."""
-    if not sp.issparse(A):
-        mx = np.max(np.abs(A), axis=1, initial=0.0)
-        mx[~(mx > 0)] = 1.0
-        return 1.0 / np.sqrt(mx)
-    A = sp.csr_matrix(A)
-    mx = np.zeros(A.shape[0])
-    nz = np.diff(A.indptr) > 0
-    if A.nnz:
-        mx[nz] = np.maximum.reduceat(np.abs(A.data), A.indptr[:-1][nz])
-    mx[mx <= 0] = 1.0
-    return 1.0 / np.sqrt(mx)
-
-
 class NewtonMatrix:
     """A factorized Newton matrix: ``solve(b)`` returns (x, e) with x the (minimum-norm)
     solution of A x = b and e = b − A x (zero for an LU factor: A is then nonsingular)."""
@@ -163,7 +149,7 @@ class NewtonMatrix:
         if N > SMALL or sp.issparse(A):  # (a small dense A stays dense: decomposed by the SVD)
             A = A if isinstance(A, sp.csr_matrix) else sp.csr_matrix(A)
         self.A = A
-        self.d = _equilibrate(self.A)
+        self.d = equilibration(self.A)
         self.kind = "svd"
         self.lu = None
         if N > SMALL:
