@@ -222,29 +222,48 @@ def _identity(N):
             and np.count_nonzero(N) == N.shape[0] and bool(np.all(N.diagonal() == 1.0)))
 
 
+#: entries of the full-coordinate shapes normalized and searched at once (a block of modes):
+#: the temporaries of a block (|x|, its transpose) stay a few MB on a model of 10⁵ coordinates
+SHAPE_BLOCK = 1 << 20
+
+
 def mode_shapes(X, N, coordinate_names, n_dominant):
     """Shapes in full coordinates (largest component 1) and the dominant coordinates of each
-    mode, over all modes at once (the per-mode arithmetic of one column at a time)."""
+    mode, over a block of modes at once (the per-mode arithmetic of one column at a time; the
+    shapes divided in place, block by block, so that a large model holds one copy of them)."""
     full = X if N is None or _identity(N) else N @ X
     n_full, k = full.shape
     names = (list(coordinate_names) if coordinate_names is not None
              else [f"q{k + 1}" for k in range(n_full)])
     if k == 0 or n_full == 0:
         return np.zeros_like(full), [[] for _ in range(k)]
+    shapes = full.copy() if full is X else full
+    picks = min(n_dominant, n_full)
+    step = max(1, SHAPE_BLOCK // n_full)
+    dominant = []
+    for c0 in range(0, k, step):
+        tops, mags = _normalized(shapes[:, c0:c0 + step], n_dominant, picks)
+        dominant += [[(names[i], m) for i, m in zip(t, tm, strict=True) if m >= 0.05]
+                     for t, tm in zip(tops, mags, strict=True)]
+    return shapes, dominant
+
+
+def _normalized(block, n_dominant, picks):
+    """Divides each column of ``block`` (a view of the shapes) by its largest entry in place
+    (a zero column stays as it is); returns each column's ``picks`` largest |entries| as
+    (indices, sizes), in the order of a stable sort by −|x| (equal ones by index)."""
+    n_full, k = block.shape
     cols = np.arange(k)
-    j = np.argmax(np.abs(full), axis=0)
-    piv = full[j, cols]
+    j = np.argmax(np.abs(block), axis=0)
+    piv = block[j, cols]
     nz = piv != 0
     if np.all(nz):
-        shapes = full / piv
-    else:  # a zero column stays as it is
-        shapes = full.copy()
-        shapes[:, nz] = full[:, nz] / piv[nz]
-    mag = np.abs(shapes)
-    # the n_dominant largest |entries| of each mode in the order of a stable sort by −|x|
-    # (equal ones by index): one argmax per rank over all modes, the found entry then masked
+        block /= piv
+    else:
+        block[:, nz] /= piv[nz]
+    mag = np.abs(block)
+    # one argmax per rank over the block's modes, the found entry then masked
     rows = np.array(mag.T, order="C")
-    picks = min(n_dominant, n_full)
     top = np.empty((picks, k), dtype=np.intp)
     for t in range(picks):
         top[t] = np.argmax(rows, axis=1)
@@ -257,7 +276,4 @@ def mode_shapes(X, N, coordinate_names, n_dominant):
             m = mag[:, c]
             cand = np.argpartition(-m, n_dominant)[:n_dominant]
             top[:, c] = cand[np.lexsort((cand, -m[cand]))]
-    topmag = np.take_along_axis(mag, top, 0).T.tolist()
-    dominant = [[(names[i], m) for i, m in zip(t, tm, strict=True) if m >= 0.05]
-                for t, tm in zip(top.T.tolist(), topmag, strict=True)]
-    return shapes, dominant
+    return top.T.tolist(), np.take_along_axis(mag, top, 0).T.tolist()
