@@ -197,9 +197,15 @@ def kernel_groups(elements) -> list:
 
 def _stacked(arrays):
     """One array of equal arrays (shared: the array itself, flagged by a leading None axis)
-    or of the members' arrays (views of one array are used as they lie)."""
+    or of the members' arrays (views of one array are used as they lie).  Equal means the
+    same object or the same bytes (the joints of a multi-span shaft: 686 equal 4×24×24
+    matrices, each its own array)."""
     first = arrays[0]
     if all(a is first for a in arrays):
+        return first[None]
+    raw = first.tobytes()
+    if all(a.shape == first.shape and a.dtype == first.dtype and a.tobytes() == raw
+           for a in arrays):
         return first[None]
     base = first.base
     if (base is not None and base.shape == (len(arrays), *first.shape)
@@ -219,7 +225,9 @@ class QuadraticGroup:
     def __init__(self, members):
         maps = [m.rows for m in members]
         self.idx = np.stack([r.aff.idx for r in maps])
-        self.C = np.stack([r.aff.C for r in maps])
+        # one matrix shared by every member (the frames' read-only identity: a beam of 10⁵
+        # nodes) is kept once, a leading axis of 1 that einsum and matmul broadcast
+        self.C = _stacked([r.aff.C for r in maps])
         self.d = np.stack([r.aff.d for r in maps])
         self.B, self.b, self.c = (_stacked([getattr(r, k) for r in maps]) for k in "Bbc")
         n_z, n_q = self.C.shape[1:]
