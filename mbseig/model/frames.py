@@ -12,12 +12,52 @@ its index (an end node without a station: by the beam's end point, ``BEAM at P``
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping
 
 import numpy as np
 
 __all__ = ["CoordinateFrames", "rotate"]
 
 _NODE = re.compile(r"^(?P<beam>.+)\.n(?P<k>\d+)$")
+
+
+class _Axes(Mapping):
+    """axis ("x", "y", "z") → coordinate index of one point or unit vector, for the axes it
+    has: a mapping without a dict's size (a beam model of 10⁵ DOF has 68,000 of them;
+    a dict of three costs 184 bytes, this 48).  Iterated in the order x, y, z."""
+
+    __slots__ = ("x", "y", "z")
+
+    def __init__(self):
+        self.x = self.y = self.z = -1
+
+    def _at(self, a):
+        return self.x if a == "x" else self.y if a == "y" else self.z if a == "z" else -1
+
+    def __getitem__(self, a):
+        i = self._at(a)
+        if i < 0:
+            raise KeyError(a)
+        return i
+
+    def __iter__(self):
+        return (a for a in "xyz" if self._at(a) >= 0)
+
+    def __len__(self):
+        return (self.x >= 0) + (self.y >= 0) + (self.z >= 0)
+
+    def __repr__(self):
+        return repr(dict(self))
+
+
+_XYZ = ("x", "y", "z")
+
+
+def _axes(table, head):
+    got = table.get(head)
+    if got is None:
+        got = table[head] = _Axes()
+    return got
 
 
 class CoordinateFrames:
@@ -31,10 +71,10 @@ class CoordinateFrames:
         for i, (nm, kind) in enumerate(zip(model.coordinate_names, model.coordinate_kinds,
                                              strict=True)):
             head, _, axis = nm.rpartition(".")
-            if kind == "length" and axis in "xyz":
-                self.points.setdefault(head, {})[axis] = i
-            elif kind == "direction" and axis in "xyz":
-                self.vectors.setdefault(head, {})[axis] = i
+            if kind == "length" and axis in _XYZ:
+                setattr(_axes(self.points, head), axis, i)
+            elif kind == "direction" and axis in _XYZ:
+                setattr(_axes(self.vectors, head), axis, i)
             elif kind == "angle":
                 self.angles[head] = i
         frames = {}

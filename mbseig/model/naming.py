@@ -31,6 +31,7 @@ from .frames import CoordinateFrames
 __all__ = ["DisplayMap", "display_map", "dominant"]
 
 MIN_SHARE = 0.05  # a dominant coordinate moves at least 5 % of the largest (as the listing)
+DOMINANT_BLOCK = 1 << 18  # displayed entries of a block of modes ranked at once (2 MB)
 
 
 @dataclass(frozen=True, eq=False)
@@ -56,45 +57,65 @@ def display_map(model, q) -> DisplayMap:
         names = tuple(model.coordinate_names)
         return DisplayMap(names, sp.identity(n, format="csr"), np.ones(n))
     fr = CoordinateFrames(model)
-    rows, cols, vals, names, weight = [], [], [], [], []
-    used = np.zeros(n, bool)
+    names, weight = [], []  # per row: (frame key, suffix) or a name; its weight
+    one_row, one_col = [], []  # rows of one coordinate (a point's axis, an angle, the rest)
+    triad_row, triad_idx = [], []  # a triad's first row (θx; θy, θz follow), its u, v, w x y z
     scale = float(getattr(model, "length_scale", 1.0) or 1.0)
-
-    def row(name, idx, coef, w):
-        r = len(names)
-        names.append(name)
-        weight.append(w)
-        rows.extend([r] * len(idx))
-        cols.extend(idx)
-        vals.extend(coef)
-
     labels = _Labels(fr, model)  # (a row's name is (frame key, suffix) until read: _Names)
     for key in fr.frames:
         members = fr.frames[key]
         for kind, head in sorted(members):
             if kind == "p":
                 for a, i in sorted(fr.points[head].items()):
-                    row((key, f" {a}"), [i], [1.0], 1.0)
-                    used[i] = True
+                    one_row.append(len(names))
+                    one_col.append(i)
+                    names.append((key, _AXIS[a]))
+                    weight.append(1.0)
             elif kind == "a":
-                i = fr.angles[head]
-                row((key, " θ"), [i], [1.0], scale)
-                used[i] = True
+                one_row.append(len(names))
+                one_col.append(fr.angles[head])
+                names.append((key, " θ"))
+                weight.append(scale)
         triad = {head.rpartition(".")[2]: fr.vectors[head] for kind, head in members if kind == "v"}
         if set(triad) == {"u", "v", "w"} and all(len(t) == 3 for t in triad.values()):
-            # δθ = ½ Σ e × δe: component a of e × δe is e_b δe_c − e_c δe_b
-            for a, b, c in (("x", "y", "z"), ("y", "z", "x"), ("z", "x", "y")):
-                idx, coef = [], []
-                for t in triad.values():
-                    idx += [t[c], t[b]]
-                    coef += [0.5 * q[t[b]], -0.5 * q[t[c]]]
-                row((key, f" θ{a}"), idx, coef, scale)
-            for t in triad.values():
-                used[list(t.values())] = True
+            triad_row.append(len(names))
+            triad_idx.extend(triad[e][a] for e in "uvw" for a in "xyz")
+            names.extend((key, sfx) for sfx in _ROTATION)
+            weight.extend((scale, scale, scale))
+    used = np.zeros(n, bool)
+    used[np.asarray(one_col, np.intp)] = True
+    used[np.asarray(triad_idx, np.intp)] = True
     for i in np.flatnonzero(~used):  # the rest under their own names
-        row(str(model.coordinate_names[i]), [int(i)], [1.0], 1.0)
-    T = sp.csr_matrix((vals, (rows, cols)), shape=(len(names), n))
+        one_row.append(len(names))
+        one_col.append(int(i))
+        names.append(str(model.coordinate_names[i]))
+        weight.append(1.0)
+    rows, cols, vals = _triad_rows(np.asarray(triad_row, np.intp),
+                                   np.asarray(triad_idx, np.intp).reshape(-1, 3, 3), q)
+    T = sp.csr_matrix((np.concatenate([np.ones(len(one_row)), vals]),
+                       (np.concatenate([np.asarray(one_row, np.intp), rows]),
+                        np.concatenate([np.asarray(one_col, np.intp), cols]))),
+                      shape=(len(names), n))
     return DisplayMap(labels.names(names), T, np.asarray(weight))
+
+
+_AXIS = {"x": " x", "y": " y", "z": " z"}  # (one string per suffix, shared by the rows)
+_ROTATION = (" θx", " θy", " θz")
+
+
+def _triad_rows(first, idx, q):
+    """(rows, cols, values) of the rotation rows of every triad at once: δθ = ½ Σ e × δe over
+    e = u, v, w, whose component a is ½ Σ (e_b δe_c − e_c δe_b) ((a, b, c) cyclic).  ``first``:
+    each triad's θx row; ``idx`` (k × 3 × 3): the coordinates of its u, v, w by x, y, z."""
+    if not first.size:
+        return np.zeros(0, np.intp), np.zeros(0, np.intp), np.zeros(0)
+    rows, cols, vals = [], [], []
+    for a, (b, c) in enumerate(((1, 2), (2, 0), (0, 1))):
+        ib, ic = idx[:, :, b], idx[:, :, c]  # (k, 3): per vector
+        rows.append(np.repeat(first + a, 6))
+        cols.append(np.stack([ic, ib], axis=2).reshape(-1))
+        vals.append(np.stack([0.5 * q[ib], -0.5 * q[ic]], axis=2).reshape(-1))
+    return np.concatenate(rows), np.concatenate(cols), np.concatenate(vals)
 
 
 class _Labels:
@@ -141,14 +162,17 @@ class _Names(Sequence):
 def dominant(display: DisplayMap, full, count=3):
     """Per column of ``full`` (full-coordinate mode shapes): the ``count`` displayed rows that
     move most, as [(name, size relative to the largest)], those of at least ``MIN_SHARE``."""
-    D = np.abs(display.apply(full)) * display.weight[:, None]
     out = []
-    for col in D.T:
-        top = float(col.max(initial=0.0))
-        if top == 0.0 or not np.isfinite(top):
-            out.append([])
-            continue
-        order = np.argsort(-col, kind="stable")[:count]
-        out.append([(display.names[i], float(col[i] / top)) for i in order
-                    if col[i] >= MIN_SHARE * top])
+    step = max(1, DOMINANT_BLOCK // max(display.T.shape[0], 1))
+    for c0 in range(0, full.shape[1], step):  # (a block of modes at a time: a model of 10⁵
+        D = np.abs(display.apply(full[:, c0:c0 + step]))  # coordinates holds no copy of all)
+        D *= display.weight[:, None]
+        for col in D.T:
+            top = float(col.max(initial=0.0))
+            if top == 0.0 or not np.isfinite(top):
+                out.append([])
+                continue
+            order = np.argsort(-col, kind="stable")[:count]
+            out.append([(display.names[i], float(col[i] / top)) for i in order
+                        if col[i] >= MIN_SHARE * top])
     return out
