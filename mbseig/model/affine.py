@@ -13,6 +13,7 @@ their Jacobians are exact chain rules through the constant matrix C.
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -123,6 +124,20 @@ def _stacked_in_order(terms):
 
 
 _EYES: dict = {}
+_CONSTANTS = weakref.WeakValueDictionary()  # shared_constant's arrays, by their bytes
+
+
+def shared_constant(A):
+    """A read-only array with A's bytes, one per distinct value among those alive: equal
+    constant matrices of many elements (the 686 joints of a multi-span shaft, 18 KB each)
+    kept once.  ``A`` must be the caller's own fresh array (it is made read-only)."""
+    A = np.ascontiguousarray(A)
+    key = (A.shape, A.dtype.str, A.tobytes())
+    got = _CONSTANTS.get(key)
+    if got is None:
+        A.setflags(write=False)
+        _CONSTANTS[key] = got = A
+    return got
 
 
 def identity_of(n):

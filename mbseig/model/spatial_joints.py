@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .affine import Affine, combine
+from .affine import Affine, combine, shared_constant
 from .base import Constraint
 from .driver import AngleDriver
 from .elements import angle_derivatives
@@ -109,7 +109,9 @@ class Rows:
         return self
 
     def build(self) -> QuadraticMap:
-        return QuadraticMap(self.aff, np.array(self.B), np.array(self.b), np.array(self.c))
+        # (equal quadratics of many joints stored once: affine.shared_constant)
+        return QuadraticMap(self.aff, shared_constant(np.array(self.B)), np.array(self.b),
+                            np.array(self.c))
 
 
 def frame_wrench(z_frame, f_frame, point_local):
