@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .affine import Affine, combine, identity_of
+from .affine import Affine, combine, identity_of, shared_constant
 
 __all__ = [
     "FRAME_SIZE",
@@ -101,6 +101,10 @@ def vector_matrix(local) -> np.ndarray:
 
 
 def _mapped(frame: Affine, T: np.ndarray) -> Affine:
+    if frame.C is identity_of(FRAME_SIZE):
+        # a frame on its own coordinates (a beam node): T · I is T, kept once for all the
+        # points at one local position (T + 0: its zeros unsigned; no value changes)
+        return Affine(frame.idx, shared_constant(T + 0.0), T @ frame.d)
     return Affine(frame.idx, T @ frame.C, T @ frame.d)
 
 
