@@ -224,7 +224,7 @@ def _identity(N):
 
 #: entries of the full-coordinate shapes normalized and searched at once (a block of modes):
 #: the temporaries of a block (|x|, its transpose) stay a few MB on a model of 10⁵ coordinates
-SHAPE_BLOCK = 1 << 20
+SHAPE_BLOCK = 1 << 18
 
 
 def mode_shapes(X, N, coordinate_names, n_dominant):
