@@ -14,6 +14,7 @@ from ..eigen import SOLVERS
 from ..errors import CaseError, MbseigError
 from ..statics.reactions import reaction_forces
 from ..studies import analyze, modes_json
+from ..studies.mesh_rounding import mesh_rounding
 from .common import (
     add_case_arguments,
     case_kwargs,
@@ -106,6 +107,9 @@ def _print_flexible(a):
         print(line)
         for w in r.get("warnings", ()):
             print(f"  warning: {w}")
+    rounding = mesh_rounding(a.model, a.linear, a.modes) if bodies else None
+    if rounding is not None and not rounding.resolved:
+        print(rounding.line())
     if ref is not None:
         what = f"lowest {ref.modes}" if ref.modes else ""
         if ref.f_max:

@@ -26,6 +26,7 @@ from ..modal import Modes, modes
 from ..model import Model
 from ..numerics import DOUBLE_RANGE, jsonable, require_finite, watched
 from ..statics import Equilibrium, equilibrium
+from .mesh_rounding import mesh_rounding
 
 __all__ = ["Analysis", "analyze_model", "as_spec", "modes_json", "equilibrium_stage",
            "linear_stage", "eigen_stage", "MODEL_CAUSE", "EIGEN_CAUSE"]
@@ -163,6 +164,9 @@ def modes_json(a: Analysis) -> dict:
     flexible = (model.flexible or {}).get("bodies")
     if flexible:  # extension: theory, slenderness and mesh of each beam / FE body
         out["flexible_bodies"] = {nm: dict(r) for nm, r in flexible.items()}
+        rounding = mesh_rounding(model, lin, md)
+        if rounding is not None:  # extension: the digits the mesh keeps against rounding
+            out["mesh_rounding"] = rounding.record()
     if a.refinement is not None:
         out["refinement"] = a.refinement.as_dict()
     rows = getattr(lin, "angle_rows", None)
