@@ -22,6 +22,11 @@ from the case's positions:
    forces, so that a stiff member strained by a linearized rotation does not reject a good step.
    Where the tangent stiffness has no restoring force along an unbalanced load (a pendulum
    started horizontal: λ = 0, K = 0), the step also moves along that force by the trust radius.
+   A model above ``SMALL`` unknowns with frames (beams, spatial bodies) solves that augmented
+   system on its local basis (:class:`LocalNewtonMatrix`: the node and body triads eliminated by
+   their tangent space, the joints component by component), factorizing Nᵀ(K + H)N of the FE
+   size and Φ_q Φ_qᵀ instead of the augmented matrix; the same correction, to rounding.  The
+   corrector of a homotopy step (below) still solves the augmented matrix.
 3. When that fails: continuation in the loads from the unloaded state
    (:mod:`~mbseig.statics.loads`); both are put together by
    :func:`mbseig.statics.solve.solve_statics`.
@@ -63,7 +68,7 @@ from .position import STATIONARY, constraint_residual, position_solve
 spla = LazyModule("scipy.sparse.linalg")  # the particular solution's factor: at first use
 
 __all__ = ["Settings", "Stall", "Solution", "newton", "static_multipliers", "force_scale",
-           "settings_for", "CRITERION"]
+           "settings_for", "CRITERION", "LocalNewtonMatrix", "local_newton"]
 
 CRITERION = ("max_k |Φ_k|/scale_k ≤ tol; Newton correction max(|Δq_i|/ℓ_i, |Δd_b|/L_b) ≤ xtol "
              "(ℓ: length scale for point coordinates, 1 rad for angles; d_b: rigid lengths); "
@@ -270,24 +275,55 @@ def _converged_by_lu(A, rhs, q, lam, n, s, cscale_model, pit):
     return None
 
 
-def basis_correction(model, q, lam, rhs, s):
-    """The Newton correction of the augmented system at (q, λ) for the right-hand side ``rhs``
-    (:func:`_rhs`), found on the local basis N of a model with frames
-    (:mod:`mbseig.model.tangent`) instead: (Δq, the unbalanced force's size / force_scale,
-    the reduced :class:`NewtonMatrix`), or None where that basis does not give it (no frames,
-    dependent constraints, rows left to a bordered pencil, dense evaluations, a value that is
-    not finite, a singular reduced matrix: a free motion, whose least step is the augmented
-    matrix's to give in the model's metric).
+class LocalNewtonMatrix:
+    """The augmented Newton matrix [[A, Φ_qᵀ], [Φ_q, 0]] at q (A = K + H(λ)) of a large model
+    with frames, solved on its local basis N (:mod:`mbseig.model.tangent`) instead of factorized
+    whole: the interface of :class:`~mbseig.statics.linalg.NewtonMatrix` (``solve``, ``motion``,
+    ``cond``), made by :func:`local_newton`.
 
     Where Φ_q has full row rank and N spans its null space, the solution of
-    [[A, Φ_qᵀ], [Φ_q, 0]] [Δq; Δλ] = [r₁; r₂] (A = K + H) is Δq = Δq_p + N y with Φ_q Δq_p = r₂
-    (any particular solution: another one differs by a motion in span N, which y takes back)
-    and Nᵀ A N y = Nᵀ (r₁ − A Δq_p), since Nᵀ Φ_qᵀ = 0.  Δq_p = Φ_qᵀ w, Φ_q Φ_qᵀ w = r₂ (sparse
-    LU; no factor at all when r₂ = 0).  The matrices factorized have the FE size and
-    Φ_q's rows, not the augmented size: a beam model of 10⁵ DOF factorizes 100,012 unknowns
-    instead of 305,524 (the augmented SuperLU: 120 MB)."""
-    base = model.model if isinstance(model, Memo) else model
+    [[A, Φ_qᵀ], [Φ_q, 0]] [Δq; Δλ] = [r₁; r₂] is Δq = Δq_p + N y with Φ_q Δq_p = r₂ (any
+    particular solution: another one differs by a motion in span N, which y takes back) and
+    Nᵀ A N y = Nᵀ (r₁ − A Δq_p), since Nᵀ Φ_qᵀ = 0; then Φ_qᵀ Δλ = r₁ − A Δq, whose right-hand
+    side lies in the range of Φ_qᵀ (Nᵀ of it is zero), so Δλ = (Φ_q Φ_qᵀ)⁻¹ Φ_q (r₁ − A Δq).
+    Δq_p = Φ_qᵀ (Φ_q Φ_qᵀ)⁻¹ r₂.  The matrices factorized are Nᵀ A N (the FE size) and Φ_q Φ_qᵀ
+    (Φ_q's rows), not the augmented matrix: a beam model of 10⁵ DOF factorizes 100,012 and
+    105,500 unknowns instead of 305,524 (the augmented SuperLU: 120 MB)."""
+
+    kind = "local"
+
+    def __init__(self, N, A, Phi_q, reduced, rows):
+        self.N, self.A, self.Phi_q = N, A, Phi_q
+        self.reduced, self.rows = reduced, rows  # NewtonMatrix of NᵀAN; SuperLU of Φ_qΦ_qᵀ
+        self.n = A.shape[0]
+        self.cond = reduced.cond
+        self.rank = self.n + Phi_q.shape[0]
+
+    def solve(self, b):
+        n = self.n
+        r1, r2 = b[:n], b[n:]
+        with np.errstate(all="ignore"):
+            dq_p = self.Phi_q.T @ self.rows.solve(r2) if np.any(r2) else np.zeros(n)
+            y, e = self.reduced.solve(self.N.T @ (r1 - self.A @ dq_p))
+            dq = dq_p + self.N @ y
+            dlam = self.rows.solve(self.Phi_q @ (r1 - self.A @ dq))
+        return np.concatenate([dq, dlam]), np.concatenate([self.N @ e, np.zeros(r2.size)])
+
+    def motion(self, b):
+        """No motion without restoring force: the reduced matrix is nonsingular."""
+        return np.zeros_like(b)
+
+
+def local_newton(model, q, lam, s):
+    """The :class:`LocalNewtonMatrix` at (q, λ) of a model above ``SMALL`` unknowns with frames,
+    or None where the local basis does not give the augmented solve (no frames, dependent
+    constraints, rows left to a bordered pencil, dense evaluations, a value that is not finite,
+    a singular Φ_q Φ_qᵀ or reduced matrix: a free motion, whose least step in the model's
+    metric is the augmented matrix's to give)."""
     m, n = model.n_constraints, model.n
+    if n + m <= SMALL:
+        return None
+    base = model.model if isinstance(model, Memo) else model
     if not isinstance(base, Model) or triad_coordinates(base)[0].shape[0] == 0:
         return None
     local = local_basis(base, q, s.rank_tol)
@@ -295,55 +331,24 @@ def basis_correction(model, q, lam, rhs, s):
         return None
     K, _ = model.force_jacobians(q)
     A = K + model.constraint_hessian(q, lam) if m else K
-    if not sp.issparse(A) or not (np.all(np.isfinite(A.data)) and np.all(np.isfinite(rhs))):
+    if not sp.issparse(A) or not np.all(np.isfinite(A.data)):
         return None
-    Phi_q, r1, r2 = model.phi_q(q), rhs[:n], rhs[n:]
-    dq_p = np.zeros(n)
-    if np.any(r2):
-        with np.errstate(all="ignore"):
-            try:
-                w = spla.splu(sp.csc_matrix(Phi_q @ Phi_q.T)).solve(r2)
-            except RuntimeError:  # (Φ_q Φ_qᵀ singular: left to the augmented matrix)
-                return None
-        dq_p = Phi_q.T @ w
-    N = local.N
-    try:
-        NM = NewtonMatrix((N.T @ (A @ N)).tocsr(), what="reduced Newton matrix", lu_first=True)
-    except EquilibriumError:
-        return None
-    if NM.rank < N.shape[1]:  # (a free motion: its metric is the augmented matrix's to give)
-        return None
+    A = A.tocsr()
+    Phi_q = model.phi_q(q)
     with np.errstate(all="ignore"):
         try:
-            y, e = NM.solve(N.T @ (r1 - A @ dq_p))
-        except EquilibriumError:
+            rows = spla.splu(sp.csc_matrix(Phi_q @ Phi_q.T))
+        except RuntimeError:  # (Φ_q Φ_qᵀ singular: left to the augmented matrix)
             return None
-        dq = dq_p + N @ y
-        free = float(np.max(np.abs(N @ e), initial=0.0)) / s.force_scale
-    if not (np.all(np.isfinite(dq)) and np.isfinite(free)):
+    N = local.N
+    try:
+        reduced = NewtonMatrix((N.T @ (A @ N)).tocsr(), what="reduced Newton matrix",
+                               lu_first=True)
+    except EquilibriumError:
         return None
-    return dq, free, NM
-
-
-def _converged_on_basis(model, q, lam, rhs, s, cscale, pit):
-    """The Solution at the start q of a large model with frames (above ``SMALL`` unknowns)
-    when it has converged already, judged on :func:`basis_correction` (the augmented matrix
-    and its SuperLU are then never formed), else None.  As for :func:`_converged_by_lu`, the
-    correction differs from the augmented LU's by cond·ε of itself, so within ``LU_MARGIN``
-    of the tolerances the augmented test passes too; everywhere else Newton goes on as before
-    (on the augmented matrix)."""
-    if model.n + model.n_constraints <= SMALL:
+    if reduced.rank < N.shape[1]:
         return None
-    if constraint_residual(model, q, cscale)[1] > s.tol:
-        return None
-    got = basis_correction(model, q, lam, rhs, s)
-    if got is None:
-        return None
-    dq, free, NM = got
-    corr = s.scales.size(dq)
-    if corr <= LU_MARGIN * s.xtol and free <= LU_MARGIN * s.tol:
-        return Solution(q, lam, 0, corr, free, pit, cond=NM.cond)
-    return None
+    return LocalNewtonMatrix(N, A, Phi_q, reduced, rows)
 
 
 def newton(model, q, s: Settings, *, max_iter=None, prove=True) -> Solution:
@@ -371,19 +376,17 @@ def newton(model, q, s: Settings, *, max_iter=None, prove=True) -> Solution:
     free_streak, free_last = 0, np.inf
     while True:
         rhs = _rhs(model, q, lam, s)
-        if it == 0:  # already converged? (the usual start: the case's positions, a neighbour's)
-            done = _converged_on_basis(model, q, lam, rhs, s, cscale, pit)
-            if done is not None:
-                return done
-        A, _ = augmented(model, q, lam)
-        if it == 0:
-            done = _converged_by_lu(A, rhs, q, lam, n, s, (model, cscale), pit)
-            if done is not None:
-                return done
-        try:
-            NM = NewtonMatrix(A, weights=s.scales.weights(A.shape[0]))
-        except EquilibriumError as exc:
-            raise Stall(exc.message, q=q, lam=lam, iterations=it) from None
+        NM = local_newton(model, q, lam, s)  # (a large model with frames: no augmented matrix)
+        if NM is None:
+            A, _ = augmented(model, q, lam)
+            if it == 0:  # converged already? (the usual start: the case's positions)
+                done = _converged_by_lu(A, rhs, q, lam, n, s, (model, cscale), pit)
+                if done is not None:
+                    return done
+            try:
+                NM = NewtonMatrix(A, weights=s.scales.weights(A.shape[0]))
+            except EquilibriumError as exc:
+                raise Stall(exc.message, q=q, lam=lam, iterations=it) from None
         x, corr, free, e_q = _measure(NM, rhs, n, s)
         cr = constraint_residual(model, q, cscale)[1]
         if not np.isfinite(corr):
