@@ -124,3 +124,27 @@ def test_nonzero_sum_has_scatters_values_without_its_zeros():
     assert np.all(got.data != 0) and got.nnz == np.count_nonzero(ref.toarray())
     bound = 2 * np.maximum(count - 1, 0) * np.finfo(float).eps * terms
     assert np.all(np.abs(got.toarray() - ref.toarray()) <= bound)
+
+
+def test_finite_judges_small_arrays_in_chunks_as_one_by_one():
+    """_finite over thousands of small blocks (a beam model's) with one NaN, one inf or a
+    Python-float overflow anywhere: False, as a check of each alone; all finite: True."""
+    from mbseig.model.system import _FINITE_CHUNK, _finite
+
+    rng = np.random.default_rng(0)
+    blocks = [rng.standard_normal((6, 12)) for _ in range(3000)]  # 216,000 entries: 4 chunks
+    assert _finite(lambda: iter(blocks))
+    for bad in (np.nan, np.inf, -np.inf):
+        for where in (0, 1500, 2999):
+            spoilt = [b.copy() for b in blocks]
+            spoilt[where][3, 7] = bad
+            assert not _finite(lambda s=spoilt: iter(s))
+    big = np.ones(_FINITE_CHUNK + 1)
+    big[-1] = np.nan
+    assert not _finite(lambda: iter([np.ones(3), big]))
+
+    def overflow():
+        yield np.ones(2)
+        yield 10.0 ** 400  # a Python float power: OverflowError
+
+    assert not _finite(overflow)

@@ -508,10 +508,27 @@ def _summed(n_rows, n_cols, keys, blocks, full=None):
     return np.bincount(keys, weights=w, minlength=n_rows * n_cols).reshape(n_rows, n_cols)
 
 
+_FINITE_CHUNK = 1 << 16  # entries of small arrays judged at once by _finite
+
+
 def _finite(evaluate) -> bool:
     """Whether every array ``evaluate()`` returns (or yields) is finite (a Python-float
-    overflow is not)."""
+    overflow is not).  Small arrays (an element's blocks: a beam model yields thousands) are
+    judged a chunk at a time, concatenated, instead of one call each."""
     try:
-        return all(bool(np.all(np.isfinite(a))) for a in evaluate())
+        chunk, size = [], 0
+        for a in evaluate():
+            a = np.asarray(a)
+            if a.size >= _FINITE_CHUNK:
+                if not np.all(np.isfinite(a)):
+                    return False
+                continue
+            chunk.append(a.ravel())
+            size += a.size
+            if size >= _FINITE_CHUNK:
+                if not np.all(np.isfinite(np.concatenate(chunk))):
+                    return False
+                chunk, size = [], 0
+        return not chunk or bool(np.all(np.isfinite(np.concatenate(chunk))))
     except (OverflowError, ZeroDivisionError, FloatingPointError):
         return False
