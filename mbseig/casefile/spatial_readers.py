@@ -31,7 +31,7 @@ from ..model.spatial_joints import (
     joint_rows,
 )
 from .batch import repeated_fields
-from .fields import REQUIRED, Fields
+from .fields import REQUIRED, TIME, Fields, uses_time
 
 UNIT_TOL = 1e-9  # |‖axis‖ − 1| allowed, and the tolerance of perpendicular / coincident axes
 FORCE_TYPES = ("spring", "damper", "spring_damper", "force", "torque", "torsional", "bushing",
@@ -90,7 +90,8 @@ class SpatialElementReaders:
             axes = ()
         f.done()
         frames = (self.frame(f, b1), self.frame(f, b2))
-        locals_ = (self.local(b1, at), self.local(b2, at))
+        locals_ = (self.local(b1, self._material(f, b1, b2, at)),
+                   self.local(b2, self._material(f, b2, b1, at)))
         rows = joint_rows(kind, frames, locals_, axes, self.length_scale)
         on = (FRAME_SIZE, locals_[1], b2) if b2 != "ground" else (0, locals_[0], b1)
         self._coincident_axes(f, kind, b1, b2, at, axes)
@@ -99,6 +100,26 @@ class SpatialElementReaders:
             self._station(b, f.label, frame_point(fr, loc))
         if name is not None:
             self.spatial_joints[name] = (kind, b1, b2, at, axes[0] if axes else None, f.label)
+
+    def _material(self, f, body, other, at):
+        """Where the joint sits on ``body``: ``at``, except in a periodic case whose ``at``
+        moves with t (DESIGN §8, "Periodic motions"), read as a pivot driven on the ground: the
+        ground's point follows at(t), the body's is the material point at the reference
+        position at(0) (a joint that moved along the body with its pivot would drive nothing).
+        Between two bodies a moving ``at`` has no such reading and is refused, as is a moving
+        axis."""
+        if not (self.periodic and uses_time(f.t.get("at"))):
+            for key in ("axis", "axes", "normal"):
+                if self.periodic and uses_time(f.t.get(key)):
+                    raise f.error(f"{key} uses t: a joint's axis cannot move with time (drive "
+                                  f"a body with an angle_driver instead)")
+            return at
+        if "ground" not in (body, other):
+            raise f.error("at uses t, but a joint between two bodies cannot move along both "
+                          "(drive a point with t and join the bodies to it)")
+        if body == "ground":
+            return at
+        return Fields({"at": f.t["at"]}, f.label, {**f.names, TIME: 0.0}).vec("at", 3)
 
     def _coincident_axes(self, f, kind, b1, b2, at, axes):
         """Two revolute or cylindrical joints between the same bodies must share their axis."""
