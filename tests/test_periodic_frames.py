@@ -57,6 +57,24 @@ def test_spatial_pendulum_on_a_shaken_pivot_is_the_mathieu_equation():
         assert np.min(np.abs(ref - mu)) <= b + 1e-10
 
 
+def test_a_fixed_joint_on_the_moving_path_is_the_same_pendulum(tmp_path):
+    """The link's point held on the pivot's path by a `fixed` joint (point, position with t)
+    instead of the spherical joint: the same physics by another constraint, the same swing
+    multipliers within the two stated bounds."""
+    path = tmp_path / "fixed.toml"
+    path.write_text(CASE.read_text().replace(
+        'type = "spherical"\nbodies = ["ground", "link"]\nat = [0.0, 0.0, "A*cos(w*t)"]',
+        'type = "fixed"\npoint = "P"\nposition = [0.0, 0.0, "A*cos(w*t)"]'))
+    a, b = (periodic_analysis(read_case(p)).floquet for p in (CASE, path))
+    for fl in (a, b):
+        assert np.sum(np.abs(np.abs(fl.multipliers) - 1) > 1e-3) == 4
+    sa, sb = (np.sort_complex(fl.multipliers[np.abs(np.abs(fl.multipliers) - 1) > 1e-3])
+              for fl in (a, b))
+    ba = a.error_bounds[np.abs(np.abs(a.multipliers) - 1) > 1e-3].max()
+    bb = b.error_bounds[np.abs(np.abs(b.multipliers) - 1) > 1e-3].max()
+    assert np.all(np.abs(sa - sb) <= ba + bb)
+
+
 def _refused(tmp_path, capsys, text, *needles):
     path = tmp_path / "case.toml"
     path.write_text(text)
@@ -74,7 +92,7 @@ def test_a_body_on_a_moving_basic_point_is_refused(tmp_path, capsys):
     text = CASE.read_text().replace('position = [0.0, 0.0, "A"]',
                                     'position = [0.0, 0.0, "A*cos(w*t)"]\nfixed = true')
     text = text[:text.index("[[joints]]")]
-    _refused(tmp_path, capsys, text, "mass matrix changes with time", "joint")
+    _refused(tmp_path, capsys, text, "mass matrix changes with time", "fixed joint")
 
 
 def test_a_joint_moving_between_two_bodies_or_turning_is_refused(tmp_path, capsys):
@@ -94,7 +112,7 @@ at = [0.0, 0.0, 2.0]
 [[joints]]""", 1)
     _refused(tmp_path, capsys, base.replace('bodies = ["link", "ground"]',
                                              'bodies = ["link", "other"]'),
-             "joints[1] 'pivot'", "between two bodies")
+             "joints[1] 'pivot'", "between two bodies", "fixed joint")
     turning = CASE.read_text().replace('type = "spherical"', 'type = "revolute"').replace(
         'at = [0.0, 0.0, "A*cos(w*t)"]',
         'at = [0.0, 0.0, "A"]\naxis = ["cos(w*t)", "sin(w*t)", 0.0]')

@@ -115,8 +115,9 @@ class SpatialElementReaders:
                                   f"a body with an angle_driver instead)")
             return at
         if "ground" not in (body, other):
-            raise f.error("at uses t, but a joint between two bodies cannot move along both "
-                          "(drive a point with t and join the bodies to it)")
+            raise f.error("at uses t, but a joint between two bodies has no ground to drive "
+                          "it: hold a body's point on the moving position with a fixed joint "
+                          "(point, position with t) instead")
         if body == "ground":
             return at
         return Fields({"at": f.t["at"]}, f.label, {**f.names, TIME: 0.0}).vec("at", 3)

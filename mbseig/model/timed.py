@@ -319,8 +319,8 @@ def sample_time(build_at, period, *, samples=16, check=3):
         if base.mass.shape != other.mass.shape or _differs(base.mass.toarray(),
                                                            other.mass.toarray()):
             raise CaseError("the mass matrix changes with time (t in a mass or a body, or a "
-                            "body's geometry taken from a point moved with t: join the body to "
-                            "the moving point by a joint instead)", element="motion")
+                            "body's geometry taken from a point moved with t: hold the body's "
+                            "point on that path with a fixed joint instead)", element="motion")
     candidates = [("g_const",)] if _differs(base.g_const, probe.g_const) else []
     for kind in ("constraints", "forces"):
         for k, el in enumerate(getattr(base, kind)):

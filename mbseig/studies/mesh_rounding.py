@@ -1,5 +1,5 @@
 """How many digits a beam mesh keeps against the rounding of its assembled matrices
-(docs/beams3d.md, "A mesh finer than double precision resolves").
+(docs/beams3d.md, "Not yet").
 
 The stiffness of a beam mesh has cond ∝ elements⁴: refined far enough, the rounding of its
 assembled matrices, not the element, limits the lowest frequencies.  For a computed mode
