@@ -134,3 +134,17 @@ vector = [0.0, 0.0, "0.3*cos(w*t)"]
     a = periodic_analysis(read_case(path))
     assert a.floquet.verdict == "unstable"
     assert np.all(np.isfinite(a.floquet.error_bounds))
+
+
+def test_frozen_time_of_the_spatial_pendulum_reads_critical():
+    """At every frozen instant the swing has s = ±i √(k (g − A w² cos wt)), imaginary since
+    A w² = 4.05 < g, and the free spin a double s = 0 (closed form): the frozen-time verdict is
+    critical and its largest real part reads 0.  It read "unstable" from a real part of 3.6e-8,
+    the rounding of the spin's zero pair, under a fixed tolerance of 1e-9 max |s|; each
+    eigenvalue is now judged against its own bound (mbseig.modes, DESIGN §6)."""
+    from mbseig.studies.periodic_listing import frozen_summary
+
+    out = frozen_summary(periodic_analysis(read_case(CASE)))
+    assert out["verdict"] == "critical" and out["max_real_part"] == 0.0
+    slowest = math.sqrt(K * (G - A * W**2))  # the smallest swing |s| over the period
+    assert out["instants"] == 64 and 0.0 < out["bound"] < 1e-3 * slowest  # (the spin's pair)

@@ -65,8 +65,8 @@ class PeriodicReport:
     #: per multiplier, the bound of its exponent s = ln(μ)/T propagated from the multiplier's
     #: (first order: |δs| ≤ b/(|μ| T)), for the zero rule
     exponent_bounds: tuple = ()
-    #: the zero bound of the frozen-time eigenvalues: the tolerance of their would-be verdict
-    #: (1e-9 max(1, max |λ|), :func:`mbseig.studies.periodic.frozen_summary`)
+    #: the zero bound of the frozen-time eigenvalues: the largest of their own bounds, which
+    #: made their would-be verdict (:func:`mbseig.studies.periodic_listing.frozen_summary`)
     frozen_bound: float = 0.0
 
 
@@ -113,7 +113,7 @@ def periodic_report_data(spec, *, config=None, run_check=True, studies=True) -> 
     T = float(fl["period"])
     ebounds = tuple(float(b) / (abs(complex(*m)) * T) if abs(complex(*m)) > 0 else math.inf
                     for m, b in zip(fl["multipliers"], fl["error_bounds"], strict=True))
-    fbound = 1e-9 * max(1.0, float(np.abs(lam).max()) if lam.size else 1.0)
+    frozen = frozen_summary(a)
     return PeriodicReport(spec.name, str(spec.data.get("title", "")),
                           getattr(model, "description", "") or "", config, a, fl,
-                          frozen_summary(a), times, lam, chk, runs, ebounds, fbound)
+                          frozen, times, lam, chk, runs, ebounds, frozen["bound"])
