@@ -100,6 +100,9 @@ NOT_NUMERIC_TESTS = {
     "test_animate.py": {"test_report_embeds_one_animation_per_mode": "one animation a mode",
                         "test_cli_writes_a_looping_gif_of_one_period": "the file's frames, loop"},
     "test_library.py": {"test_unreachable_scheduler_one_line_exit_2": "a refusal"},
+    "test_periodic_frames.py": {
+        "test_a_body_on_a_moving_basic_point_is_refused": "a one-line refusal",
+        "test_a_joint_moving_between_two_bodies_or_turning_is_refused": "one-line refusals"},
     "test_plots.py": {"test_plots_do_not_switch_the_backend": "matplotlib's backend",
                       "test_pole_map_grid_and_legend_outside": "layout",
                       "test_decade_scale": "the axis' ticks"},

@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from conftest import CASES
 from scipy.integrate import solve_ivp
 from scipy.special import mathieu_a, mathieu_b
@@ -19,6 +20,12 @@ from mbseig.studies.periodic import periodic_analysis
 CASE = CASES / "spatial_pendulum_shaken_pivot.toml"
 M, C, J, G, A, W = 1.0, 0.5, 0.02, 9.81, 0.05, 9.0  # the case's parameters
 K = M * C / (J + M * C**2)  # m c / J_O
+
+
+@pytest.fixture(scope="module")
+def analysis():
+    """The bundled case's periodic analysis (one for the tests that read it)."""
+    return periodic_analysis(read_case(CASE))
 
 
 def _mathieu_multipliers():
@@ -34,7 +41,7 @@ def _mathieu_multipliers():
     return np.linalg.eigvals(sol.y[:, -1].reshape(2, 2))
 
 
-def test_spatial_pendulum_on_a_shaken_pivot_is_the_mathieu_equation():
+def test_spatial_pendulum_on_a_shaken_pivot_is_the_mathieu_equation(analysis):
     """Two swing planes, each the same Mathieu equation, inside its principal tongue (the
     case's stated boundaries are scipy's characteristic values, 1e-9); the spin about the
     link's axis free.  The four swing multipliers equal the reference pair within mbseig's
@@ -46,7 +53,7 @@ def test_spatial_pendulum_on_a_shaken_pivot_is_the_mathieu_equation():
     np.testing.assert_allclose(exp["flip_boundaries"],
                                [2 * math.sqrt(K * G / mathieu_a(1, q)),
                                 2 * math.sqrt(K * G / mathieu_b(1, q))], rtol=1e-9)
-    fl = periodic_analysis(read_case(CASE)).floquet
+    fl = analysis.floquet
     ref = _mathieu_multipliers()
     assert fl.verdict == exp["verdict"] == "unstable"
     assert np.all(np.isreal(ref)) and min(ref.real) < -1
@@ -57,7 +64,7 @@ def test_spatial_pendulum_on_a_shaken_pivot_is_the_mathieu_equation():
         assert np.min(np.abs(ref - mu)) <= b + 1e-10
 
 
-def test_a_fixed_joint_on_the_moving_path_is_the_same_pendulum(tmp_path):
+def test_a_fixed_joint_on_the_moving_path_is_the_same_pendulum(tmp_path, analysis):
     """The link's point held on the pivot's path by a `fixed` joint (point, position with t)
     instead of the spherical joint: the same physics by another constraint, the same swing
     multipliers within the two stated bounds."""
@@ -65,7 +72,7 @@ def test_a_fixed_joint_on_the_moving_path_is_the_same_pendulum(tmp_path):
     path.write_text(CASE.read_text().replace(
         'type = "spherical"\nbodies = ["ground", "link"]\nat = [0.0, 0.0, "A*cos(w*t)"]',
         'type = "fixed"\npoint = "P"\nposition = [0.0, 0.0, "A*cos(w*t)"]'))
-    a, b = (periodic_analysis(read_case(p)).floquet for p in (CASE, path))
+    a, b = analysis.floquet, periodic_analysis(read_case(path)).floquet
     for fl in (a, b):
         assert np.sum(np.abs(np.abs(fl.multipliers) - 1) > 1e-3) == 4
     sa, sb = (np.sort_complex(fl.multipliers[np.abs(np.abs(fl.multipliers) - 1) > 1e-3])
@@ -136,7 +143,7 @@ vector = [0.0, 0.0, "0.3*cos(w*t)"]
     assert np.all(np.isfinite(a.floquet.error_bounds))
 
 
-def test_frozen_time_of_the_spatial_pendulum_reads_critical():
+def test_frozen_time_of_the_spatial_pendulum_reads_critical(analysis):
     """At every frozen instant the swing has s = ±i √(k (g − A w² cos wt)), imaginary since
     A w² = 4.05 < g, and the free spin a double s = 0 (closed form): the frozen-time verdict is
     critical and its largest real part reads 0.  It read "unstable" from a real part of 3.6e-8,
@@ -144,7 +151,7 @@ def test_frozen_time_of_the_spatial_pendulum_reads_critical():
     eigenvalue is now judged against its own bound (mbseig.modes, DESIGN §6)."""
     from mbseig.studies.periodic_listing import frozen_summary
 
-    out = frozen_summary(periodic_analysis(read_case(CASE)))
+    out = frozen_summary(analysis)
     assert out["verdict"] == "critical" and out["max_real_part"] == 0.0
     slowest = math.sqrt(K * (G - A * W**2))  # the smallest swing |s| over the period
     assert out["instants"] == 64 and 0.0 < out["bound"] < 1e-3 * slowest  # (the spin's pair)
