@@ -20,11 +20,14 @@ each component of ½ ∂(q̇ᵀ M_e q̇)/∂q_j by a central difference along q_
 max(|q_j|, length scale): truncation error ~1e-12 of h, which is itself of second order in the
 perturbation).  The augmented system is then solved sparse (SuperLU: one thread, no BLAS
 contention).  Such models carry axial modes orders of magnitude stiffer than the bending modes
-that are checked, so :func:`simulate` integrates them with Radau IIA (order 5, implicit) when
-DOP853 is asked (an explicit method would need steps below the axial period;
-``Simulation.method`` records the one used), in the tangent coordinates of their constraints
-(:mod:`mbseig.check.tangent`: why the full state fails there is measured in its docstring), with
-the exact Jacobian at the equilibrium as Newton matrix.
+that are checked, so where DOP853 is asked :func:`simulate` integrates them in the tangent
+coordinates of their constraints (:mod:`mbseig.check.tangent`: why the full state fails there
+is measured in its docstring) with the exponential Adams integrator
+(:mod:`mbseig.check.exponential`: the linearization at the equilibrium integrated exactly, only
+the nonlinear remainder stepped), or with Radau IIA (order 5, implicit, the exact Jacobian at the
+equilibrium as Newton matrix) where that Jacobian has no well-conditioned eigenvector basis or
+Radau is asked (an explicit method would need steps below the axial period;
+``Simulation.method`` records the one used, and why where the exponential one did not apply).
 """
 
 from __future__ import annotations
@@ -44,7 +47,7 @@ from .augmented import AugmentedPattern
 __all__ = ["INTEGRATORS", "ForwardDynamics", "Simulation", "simulate"]
 
 #: integrators offered through ``method=`` (scipy.integrate.solve_ivp names)
-INTEGRATORS = ("DOP853", "Radau", "BDF")
+INTEGRATORS = ("DOP853", "Radau", "BDF", "exponential")
 #: relative central-difference step of the mass derivatives (module docstring)
 MASS_STEP = 1e-6
 #: stiff models: absolute tolerances at least this many noise levels per sample interval,
@@ -309,7 +312,8 @@ def simulate(dynamics: ForwardDynamics, u0, v0, t_eval, *, segment_samples: int,
     """Integrate from (u0, v0) through the sample times ``t_eval`` (t_eval[0] = 0), projecting
     onto the constraints every ``segment_samples`` samples.
 
-    A model with a configuration-dependent mass (``dynamics.stiff``) runs Radau where DOP853 is
+    A model with a configuration-dependent mass (``dynamics.stiff``) runs the exponential
+    integrator (Radau where it does not apply, and for redundant constraints) where DOP853 is
     asked, at a relative tolerance of at least ``STIFF_RTOL`` that also bounds the absolute
     ones relative to the perturbation, in the tangent coordinates of its constraints
     (:class:`~mbseig.check.tangent.TangentCoordinates`, ``tangent`` if given, built otherwise;
@@ -328,9 +332,14 @@ def simulate(dynamics: ForwardDynamics, u0, v0, t_eval, *, segment_samples: int,
                         element="method")
     n = dynamics.n
     extra = {}
-    if getattr(dynamics, "stiff", False):
-        if method == "DOP853":
-            method = "Radau"  # stiff axial modes (module docstring)
+    stiff = getattr(dynamics, "stiff", False)
+    if method == "exponential" and not (stiff and not dynamics.redundant):
+        raise CaseError("the exponential integrator runs in the tangent coordinates of a stiff "
+                        "model (a configuration-dependent mass, independent constraints); this "
+                        "model is not one: use DOP853, Radau or BDF", element="method")
+    if stiff:
+        if method == "DOP853":  # stiff axial modes (module docstring)
+            method = "Radau" if dynamics.redundant else "exponential"
         rtol = max(rtol, STIFF_RTOL)
         amp = max(float(np.max(np.abs(u0), initial=0.0)), atol_position / rtol)
         speed = atol_velocity / atol_position if atol_position > 0 else 1.0

@@ -312,10 +312,18 @@ def check_modes(model, eq, lin, modes, *, indices=None, amplitude: float = 1e-4,
                     "recheck_amplification": recheck_amplification,
                     "defective_amplification": defective_amplification,
                     "projection_tol": dyn.projection_tol, "length_scale": length},
-        integrator="Radau" if dyn.stiff and method == "DOP853" else method,
+        integrator=_integrator(dyn, method, opts["tangent"]),
         elapsed=time.perf_counter() - t_start, reactions=reactions,
         constraint_stiffness=bool(getattr(lin, "constraint_stiffness", True)),
         actuators=tuple(dict(r) for r in getattr(model, "drivers", ()) or ()))
+
+
+def _integrator(dyn, method, tangent):
+    """The integrator the runs took: a stiff model's tangent runs record theirs (the
+    exponential one, or Radau where it does not apply, with the reason)."""
+    if tangent is not None and tangent.used:
+        return "; ".join(sorted(tangent.used))
+    return "Radau" if dyn.stiff and method == "DOP853" else method
 
 
 def _tangent(dyn, redundant, model):

@@ -34,9 +34,12 @@ stalls at absolute tolerances of 1e-10 of the perturbation; ``STIFF_RTOL`` = 1e-
 
 The state is integrated in the undamped modes of the model's own reduced linearization
 (x = X w; ``basis``), the modes above ``cut`` unresolved (absolute tolerance ``FAST_ATOL`` × the
-perturbation): see :func:`mbseig.check.dynamics.simulate`.  Radau (or BDF) is driven step by step
-to beyond the last sample and read by its dense output, so no step is ever cut to a sliver at
-the end of the run.
+perturbation): see :func:`mbseig.check.dynamics.simulate`.  The default integrator is the
+exponential Adams one (:mod:`mbseig.check.exponential`) on the Jacobian at q₀ in these modal
+coordinates, velocities in units of their mode's ω (so that J's eigenvectors are judged for
+what they are, not for the units); where they are not well conditioned (a nearly defective J)
+Radau runs and the result says why.  Radau (or BDF) is driven step by step to beyond the last
+sample and read by its dense output, so no step is ever cut to a sliver at the end of the run.
 """
 
 from __future__ import annotations
@@ -46,6 +49,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from ..errors import CaseError, SimulationError
+from .exponential import ExponentialAdams, ExponentialUnusable
 
 __all__ = ["TangentCoordinates"]
 
@@ -75,6 +79,7 @@ class TangentCoordinates:
         self.k = self.N.shape[1]
         self.Mr, self.Kr, self.Cr = self._reduced_linear()
         self._basis = self._lu_q0 = None
+        self.used = set()  # the integrators the runs took (one, unless one fell back)
 
     # -- the model's own linearization in x --------------------------------------------------
     def _reduced_linear(self):
@@ -157,10 +162,23 @@ class TangentCoordinates:
             size = float(np.max(np.abs(step), initial=0.0))
             if size <= 1e-16 * scale or size >= last:
                 return v
-            if size > CHORD_RATE * last:
+            # a slow step far above rounding: Newton's matrix (near rounding the steps stall
+            # whatever the matrix, and the next test ends the loop)
+            if size > CHORD_RATE * last and size > 1e-12 * scale:
                 lu = sla.lu_factor(Jq @ R)
             last = size
         return v
+
+    @staticmethod
+    def _exponential(fun, jac, w0, t_eval, rtol, atol, dt, units):
+        """w at t_eval by :class:`~mbseig.check.exponential.ExponentialAdams` from the
+        Jacobian at q₀, first step two sample intervals."""
+        integrator = ExponentialAdams(fun, jac, rtol=rtol, atol=atol, scale=units)
+        try:
+            return integrator.run(w0, t_eval, 2.0 * dt)
+        except ArithmeticError as exc:
+            raise SimulationError(f"integration failed: {exc}",
+                                  element="time-domain check") from None
 
     def rhs(self, t, y):
         """(ẋ, ẍ) at (x, ẋ) = y."""
@@ -177,8 +195,8 @@ class TangentCoordinates:
         from scipy.integrate import BDF, OdeSolution, Radau
 
         solvers = {"Radau": Radau, "BDF": BDF}
-        if method not in solvers:
-            raise CaseError(f"a stiff model runs an implicit integrator (Radau or BDF), not "
+        if method not in solvers and method != "exponential":
+            raise CaseError(f"a stiff model runs the exponential integrator, Radau or BDF, not "
                             f"{method!r}", element="method")
         k, dyn = self.k, self.dyn
         if self._basis is None:
@@ -209,17 +227,28 @@ class TangentCoordinates:
         atol[k:][fast] = fast_atol * amp * omega[fast]
         nfev0 = dyn.nfev
         T = float(t_eval[-1])
-        solver = solvers[method](fun, 0.0, w0, 2.0 * T + 1.0, rtol=rtol, atol=atol,
-                                 jac=Wi @ self.jacobian() @ W)
-        ts, pieces = [0.0], []
-        while solver.t < T:
-            msg = solver.step()
-            if solver.status == "failed":
-                raise SimulationError(f"integration failed at t = {solver.t:.6g}: {msg}",
-                                      element="time-domain check")
-            ts.append(solver.t)
-            pieces.append(solver.dense_output())
-        Y = W @ OdeSolution(ts, pieces)(np.asarray(t_eval, float))
+        jac = Wi @ self.jacobian() @ W
+        used = method
+        if method == "exponential":
+            try:
+                units = np.concatenate([np.ones(k), np.where(omega > 0, omega, 1.0)])
+                Y = self._exponential(fun, jac, w0, t_eval, rtol, atol, dt, units)
+            except ExponentialUnusable as exc:
+                used = f"Radau (the exponential integrator does not apply: {exc})"
+                method = "Radau"
+        if method != "exponential":
+            solver = solvers[method](fun, 0.0, w0, 2.0 * T + 1.0, rtol=rtol, atol=atol, jac=jac)
+            ts, pieces = [0.0], []
+            while solver.t < T:
+                msg = solver.step()
+                if solver.status == "failed":
+                    raise SimulationError(f"integration failed at t = {solver.t:.6g}: {msg}",
+                                          element="time-domain check")
+                ts.append(solver.t)
+                pieces.append(solver.dense_output())
+            Y = OdeSolution(ts, pieces)(np.asarray(t_eval, float))
+        self.used.add(used)
+        Y = W @ Y
         Y[:, 0] = W @ w0
         U, V = np.empty((dyn.n, Y.shape[1])), np.empty((dyn.n, Y.shape[1]))
         drift = vdrift = proj = 0.0
@@ -229,7 +258,7 @@ class TangentCoordinates:
             if dyn.m:
                 vdrift = max(vdrift, float(np.max(np.abs(dyn.model.phi_q(dyn.q0 + U[:, j])
                                                          @ V[:, j]))))
-        return {"u": U, "v": V, "method": method, "rtol": rtol, "atol_position": atol_position,
+        return {"u": U, "v": V, "method": used, "rtol": rtol, "atol_position": atol_position,
                 "atol_velocity": atol_velocity, "n_segments": 1, "nfev": dyn.nfev - nfev0,
                 "constraint_drift": drift, "velocity_drift": vdrift, "max_projection": proj,
                 "max_velocity_projection": 0.0, "fast_modes": int(fast.sum())}

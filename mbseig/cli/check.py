@@ -56,7 +56,9 @@ def register(sub):
     p.add_argument("--zero-delta-tol", type=float, default=1e-5, metavar="Z",
                    help="an undamped mode passes when |measured delta| <= Z |s| (default 1e-5)")
     p.add_argument("--method", default="DOP853", choices=list(INTEGRATORS),
-                   help="integrator (default DOP853: explicit, no numerical damping)")
+                   help="integrator (default DOP853: explicit, no numerical damping; a model "
+                        "with beams runs the exponential integrator in its place, or Radau "
+                        "where that does not apply)")
     p.add_argument("--ode-rtol", type=float, default=1e-10, metavar="R",
                    help="integrator relative tolerance (default 1e-10)")
     p.add_argument("--solver", default="auto", choices=["auto", *dense_solvers()],
