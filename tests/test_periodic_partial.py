@@ -1,6 +1,8 @@
-"""The partial (Arnoldi) Floquet method of ``mbseig modes --n-modes K`` on a periodic case,
-against the full monodromy of the same case (independent method: every multiplier from the
-dense monodromy matrix), on cases/column_pulsating_load.toml (3 DOF, 6 multipliers)."""
+"""The K largest Floquet multipliers of ``mbseig modes --n-modes K`` on a periodic case: the
+partial (Arnoldi) method (``--floquet partial``) against the full monodromy of the same case
+(independent method: every multiplier from the dense monodromy matrix), on
+cases/column_pulsating_load.toml (3 DOF, 6 multipliers), and the default answer from the full
+monodromy."""
 
 from conftest import CASES
 
@@ -30,6 +32,39 @@ def test_partial_method_matches_full_monodromy(capsys):
     assert abs(mu_p - mu_f) <= part["error_bounds"][0] + full["error_bounds"][0]
     assert part["error_bounds"][0] < 1e-6
     assert out["modes"][0]["stability"] == "unstable"
-    assert main(["modes", str(CASE), "--n-modes", "5"]) == 2
+    assert main(["modes", str(CASE), "--n-modes", "5", "--floquet", "partial"]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "--n-modes must be between 1 and" in err
+
+
+def test_n_modes_takes_the_largest_from_the_full_monodromy(capsys):
+    """``--n-modes K`` (``--floquet auto``) answers from the full monodromy, faster at every
+    size measured (docs/periodic.md): its listing is the full analysis's K multipliers of
+    largest modulus (the same computation: equal to the last bit), a complex one completed by
+    its conjugate, with the full analysis's verdict and bounds, and ``selected`` saying how many
+    of how many and why; K up to every multiplier is accepted (no ARPACK limit there)."""
+    import json
+
+    from mbseig.studies.periodic import periodic_analysis
+
+    full = periodic_analysis(read_case(CASE)).floquet.to_dict()
+    for k, listed in ((1, 1), (2, 3), (6, 6)):  # 2: the pair at |mu| = 1 comes whole
+        assert main(["modes", str(CASE), "--n-modes", str(k), "--json"]) == 0
+        out = json.loads(capsys.readouterr().out)
+        fl = out["floquet"]
+        assert fl["selected"]["count"] == listed and fl["selected"]["of"] == 6
+        assert "faster than the partial" in fl["selected"]["method"]
+        assert fl["multipliers"] == full["multipliers"][:listed]
+        assert fl["error_bounds"] == full["error_bounds"][:listed]
+        assert out["verdict"] == full["verdict"] == "unstable"
+
+
+def test_floquet_option_refused_where_it_means_nothing(capsys):
+    """``--floquet`` without ``--n-modes``, or on a case at rest: one line naming the file and
+    the command line, exit 2 (never ignored)."""
+    for case, argv in ((CASE, ["--floquet", "partial"]),
+                       (CASES / "pendulum.toml", ["--n-modes", "1", "--floquet", "full"])):
+        assert main(["modes", str(case), *argv]) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and err.startswith(f"mbseig: {case}: command line:")
+        assert "--floquet" in err

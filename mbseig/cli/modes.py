@@ -34,6 +34,10 @@ def register(sub):
     p.add_argument("--n-modes", type=int, default=None, metavar="K",
                    help="only the K modes nearest the target (sparse shift-invert path, "
                         "large models)")
+    p.add_argument("--floquet", choices=("auto", "full", "partial"), default="auto",
+                   help="a periodic case with --n-modes K: the K largest |mu| from the full "
+                        "monodromy (auto, full: faster at every size measured) or by the "
+                        "partial (Arnoldi) method")
     p.add_argument("--target-hz", type=float, default=None, metavar="F",
                    help="with --n-modes: the modes whose natural frequency omega_n/2pi = "
                         "|s|/2pi is nearest F Hz (default 0: the lowest)")
@@ -134,7 +138,15 @@ def _design(args, spec, a):
     return sens, energy
 
 
+def _no_floquet(args, spec, what):
+    """--floquet chooses how a periodic case answers --n-modes: refused elsewhere."""
+    if getattr(args, "floquet", "auto") != "auto":
+        raise CaseError(f"--floquet applies to a periodic case with --n-modes K, not to {what}",
+                        element="command line", file=spec.source)
+
+
 def run_rest(args, spec) -> int:
+    _no_floquet(args, spec, "a case at rest")
     a = analyze(spec, solver=args.solver, modes_options=_partial_options(args) or None,
                 refine=_refine_request(args), **case_kwargs(args))
     sens, energy = _design(args, spec, a)
@@ -194,6 +206,7 @@ _STATIC_ONLY = ("n_modes", "target_hz", "band_hz", "refine_modes", "refine_fmax"
 def run_steady(args, spec) -> int:
     from ..studies.steady_modes import analyze_steady, steady_json
 
+    _no_floquet(args, spec, "a steady motion")
     for opt in _STATIC_ONLY:
         if getattr(args, opt, None) is not None:
             raise CaseError(f"--{opt.replace('_', '-')} does not apply to a steady motion "
@@ -257,27 +270,39 @@ def motion_direction(d) -> str:
 # motion, the Floquet multipliers with their error bounds and the verdict; the frozen-time
 # eigenvalues are listed beside them as what a frozen-time analysis would (wrongly) conclude.
 #
-# ``--n-modes K``: the K multipliers of largest modulus by the partial method (Arnoldi on the
-# monodromy operator, :mod:`mbseig.studies.periodic_partial`), without forming the monodromy
-# matrix; the frozen-time summary is left out (it needs every eigenvalue at 64 instants).
-def _run_partial(args, spec) -> int:
-    from ..studies.periodic_listing import partial_json
-    from ..studies.periodic_partial import periodic_partial
+# ``--n-modes K``: the K multipliers of largest modulus.  ``--floquet auto`` (the default) and
+# ``full`` take them from the full monodromy (faster at every size measured:
+# :data:`mbseig.studies.periodic_listing.FULL_FOR_LARGEST`); ``partial`` runs Arnoldi on the
+# monodromy operator (:mod:`mbseig.studies.periodic_partial`) without forming the monodromy
+# matrix.  The frozen-time summary is left out (it needs every eigenvalue at 64 instants).
+def _run_largest(args, spec) -> int:
+    from ..studies.periodic_listing import largest_json, partial_json
 
     if args.band_hz is not None or args.target_hz is not None:
         raise CaseError("--target-hz and --band-hz select eigenvalues of a static case; a "
                         "periodic case takes --n-modes K (the K largest |mu|)",
                         element="command line", file=spec.source)
-    kw = case_kwargs(args)
-    p = periodic_partial(spec, k=args.n_modes, config=kw["config"], params=kw["params"])
-    out = partial_json(p)
+    if args.floquet == "partial":
+        from ..studies.periodic_partial import periodic_partial
+
+        kw = case_kwargs(args)
+        p = periodic_partial(spec, k=args.n_modes, config=kw["config"], params=kw["params"])
+        out = partial_json(p)
+        of = out["floquet"]["partial"]["of"]
+    else:
+        from ..studies.periodic import periodic_analysis
+
+        out = largest_json(analyzed(args, spec, periodic_analysis), args.n_modes)
+        of = out["floquet"]["selected"]["of"]
     if args.json:
         return print_json(out)
     fl = out["floquet"]
     print(f"case {out['case']}: periodic, T = {fl['period']:.6g} s, {out['n_coordinates']} "
           f"coordinates, {out['n_constraints']} constraints, {out['dof']} DOF")
     print(f"solver: {out['solver']}")
-    print(f"the {len(fl['multipliers'])} largest of {fl['partial']['of']} multipliers:")
+    if "selected" in fl:
+        print(f"method: {fl['selected']['method']}")
+    print(f"the {len(fl['multipliers'])} largest of {of} multipliers:")
     _table(fl)
     return 0
 
@@ -302,7 +327,11 @@ def run_periodic(args, spec) -> int:
         if args.n_modes < 1:
             raise CaseError(f"--n-modes must be a positive integer, got {args.n_modes}",
                             element="command line", file=spec.source)
-        return _run_partial(args, spec)
+        return _run_largest(args, spec)
+    if getattr(args, "floquet", "auto") != "auto":
+        raise CaseError("--floquet chooses how --n-modes K is answered (the K largest |mu|); "
+                        "without --n-modes every multiplier comes from the full monodromy",
+                        element="command line", file=spec.source)
     from ..studies.periodic import periodic_analysis
     from ..studies.periodic_listing import periodic_json
 
