@@ -125,3 +125,33 @@ def test_a_defective_j_is_refused():
     with pytest.raises(ExponentialUnusable, match="nearly defective"):
         ExponentialAdams(lambda t, y: J @ y, J, rtol=1e-6, atol=np.ones(2))
 
+
+
+def test_a_run_over_its_budget_gives_way(reference):
+    """More right-hand sides a sample than the budget (the remainder varying faster than the
+    sampling: fast modes ringing into the checked one) stops the run with ExponentialUnusable,
+    which the check answers with Radau (next test)."""
+    t, _ = reference
+    ea = ExponentialAdams(f, jacobian(), rtol=1e-10, atol=np.full(4, 1e-12), scale=UNITS)
+    with pytest.raises(ExponentialUnusable, match="faster than the sampling"):
+        ea.run(Y0, t, 2 * (t[1] - t[0]), budget=0.05)
+
+
+def test_check_falls_back_to_radau_and_says_why(monkeypatch):
+    """The 2-element oblique cantilever's mode 1 with a budget no run can keep: the check runs
+    Radau, passes (ω within 1e-5 of the prediction, as with either integrator in
+    tests/test_check_beams3d.py) and its integrator names the reason."""
+    from conftest import CASES
+
+    import mbseig.check.tangent as tangent
+    from mbseig.check.modes import check_modes
+    from mbseig.studies import analyze
+
+    monkeypatch.setattr(tangent, "EXPONENTIAL_BUDGET", 1e-3)
+    a = analyze(CASES / "cantilever_3d_oblique.toml", params={"n": 2})
+    res = check_modes(a.model, a.eq, a.linear, a.modes, indices=[1], periods=1.0,
+                      ode_rtol=1e-4)
+    m = res.modes[0]
+    assert res.passed and res.integrator.startswith("Radau (the exponential integrator does "
+                                                    "not apply: the remainder varies faster")
+    assert abs(m.measured_omega / m.predicted_omega - 1) < 1e-5

@@ -188,9 +188,12 @@ class ExponentialAdams:
         return zs, [o[0] for o in out], [o[1] for o in out], nodes, [F0] + [o[0] for o in out]
 
     # -- the run -----------------------------------------------------------------------------
-    def run(self, y0, t_eval, h0, *, fixed_step=False):
+    def run(self, y0, t_eval, h0, *, fixed_step=False, budget=None):
         """y at the times t_eval (t_eval[0] = 0, increasing), starting with the step h0;
-        ``fixed_step``: keep h0, no error control (to measure the order)."""
+        ``fixed_step``: keep h0, no error control (to measure the order).  ``budget``: the most
+        right-hand sides a sample (counted from the start, with one period's worth of samples
+        as allowance); beyond it the run stops with :class:`ExponentialUnusable` (the step
+        follows a fast motion of the remainder, which an L-stable method would damp)."""
         t_eval = np.asarray(t_eval, float)
         d = self.V.shape[0]
         Y = np.empty((d, t_eval.size))
@@ -204,7 +207,15 @@ class ExponentialAdams:
         p = ORDER
         pred_nodes = [-i for i in range(p)]
         corr_nodes = [1] + pred_nodes[:-1]
+        def over():
+            return budget is not None and self.nfev > budget * (nxt + 40)
+
         while nxt < t_eval.size:
+            if over():
+                raise ExponentialUnusable(
+                    f"the remainder varies faster than the sampling ({self.nfev} right-hand "
+                    f"sides by sample {nxt} of {t_eval.size - 1}, budget {budget} a sample): "
+                    "fast modes ring into the checked one")
             self.restarts += 1
             got = self._restart(t, z, Fz, h)
             if got is None:
@@ -224,7 +235,7 @@ class ExponentialAdams:
             t, z = t + p * h, self.real(z_end)
             hist = Fs[::-1]  # F_n, F_{n-1}, …
             good = 0
-            while nxt < t_eval.size:
+            while nxt < t_eval.size and not over():
                 zp = self._at(z, hist, h, pred_nodes, 1.0)
                 Fp, yp = self.F(t + h, zp)
                 Fc = [Fp] + hist[:-1]
@@ -250,7 +261,8 @@ class ExponentialAdams:
                     h, Fz = 2.0 * h, Fn
                     break
             else:
-                break
+                if not over():
+                    break  # every sample filled
         return Y
 
     def _halve(self, h, halvings):
