@@ -37,8 +37,9 @@ The state is integrated in the undamped modes of the model's own reduced lineari
 perturbation): see :func:`mbseig.check.dynamics.simulate`.  The default integrator is the
 exponential Adams one (:mod:`mbseig.check.exponential`) on the Jacobian at q₀ in these modal
 coordinates, velocities in units of their mode's ω (so that J's eigenvectors are judged for
-what they are, not for the units); where they are not well conditioned (a nearly defective J)
-Radau runs and the result says why.  Radau (or BDF) is driven step by step to beyond the last
+what they are, not for the units); where they are not well conditioned (a nearly defective J),
+or where a run needs more than ``EXPONENTIAL_BUDGET`` right-hand sides a sample (undamped fast
+modes ringing into the checked one), Radau runs and the result says why.  Radau (or BDF) is driven step by step to beyond the last
 sample and read by its dense output, so no step is ever cut to a sliver at the end of the run.
 """
 
