@@ -10,7 +10,12 @@ import pytest
 from scipy.integrate import IntegrationWarning, quad, solve_ivp
 from scipy.linalg import expm
 
-from mbseig.check.exponential import ExponentialAdams, ExponentialUnusable, phi_functions
+from mbseig.check.exponential import (
+    ORDER,
+    ExponentialAdams,
+    ExponentialUnusable,
+    phi_functions,
+)
 
 W_SLOW, W_FAST = 1.0, 1e2  # a slow mode and a stiff one (h ω = 30 at the steps taken)
 A0 = 0.1
@@ -69,11 +74,10 @@ def test_phi_functions_equal_their_integral(x):
             assert abs(P[k] - ref) <= 2e-12 * abs(ref), (k, P[k], ref)
 
 
-def test_order_five_at_fixed_steps(reference):
-    """At a fixed step (no control) the error at the end of 20 periods falls as h^5 (the
-    order of the predictor; the corrector's is 5 as well): halving h from T/16 to T/32 and to
-    T/64 divides it by 2^5 = 32 within a factor 2 (the asymptotic range is reached from T/16
-    on; measured ratios 41 and 31)."""
+def test_order_at_fixed_steps(reference):
+    """At a fixed step (no control) the error at the end of 20 periods falls as h^ORDER (6: the
+    order of predictor and corrector): halving h from T/16 to T/32 and to T/64 divides it by
+    2^6 = 64 within a factor 2 (measured ratios 98 and 50)."""
     t, Y = reference
     errs = []
     for per_period in (16, 32, 64):
@@ -81,8 +85,9 @@ def test_order_five_at_fixed_steps(reference):
         ea = ExponentialAdams(f, jacobian(), rtol=1.0, atol=np.ones(4), scale=UNITS)
         out = ea.run(Y0, t, h, fixed_step=True)
         errs.append(np.max(np.abs(out[0] - Y[0])))
+    assert ORDER == 6
     for a, b in zip(errs, errs[1:], strict=False):
-        assert 16 <= a / b <= 64, errs
+        assert 2.0 ** ORDER / 2 <= a / b <= 2.0 ** ORDER * 2, errs
 
 
 @pytest.mark.parametrize("k_slow", [W_SLOW**2, 1.02 * W_SLOW**2])
@@ -105,7 +110,7 @@ def test_solves_f_whatever_j_it_starts_from(reference, k_slow):
 
 def test_fewer_evaluations_than_radau(reference):
     """On this stiff system at rtol 1e-6 the exponential run needs fewer right-hand sides than
-    Radau at the same tolerances (measured: about 1,000 against 6,000) and is as accurate to
+    Radau at the same tolerances (measured: 554 against 6,259) and is as accurate to
     within the tolerance (both within 1e-4 of the amplitude: 100 rtol over 800 samples)."""
     t, Y = reference
     atol = np.full(4, 1e-7)

@@ -39,8 +39,9 @@ exponential Adams one (:mod:`mbseig.check.exponential`) on the Jacobian at q₀ 
 coordinates, velocities in units of their mode's ω (so that J's eigenvectors are judged for
 what they are, not for the units); where they are not well conditioned (a nearly defective J),
 or where a run needs more than ``EXPONENTIAL_BUDGET`` right-hand sides a sample (undamped fast
-modes ringing into the checked one), Radau runs and the result says why.  Radau (or BDF) is driven step by step to beyond the last
-sample and read by its dense output, so no step is ever cut to a sliver at the end of the run.
+modes ringing into the checked one), Radau runs and the result says why.  Radau (or BDF) is
+driven step by step to beyond the last sample and read by its dense output, so no step is ever
+cut to a sliver at the end of the run.
 """
 
 from __future__ import annotations
@@ -176,10 +177,10 @@ class TangentCoordinates:
         return v
 
     @staticmethod
-    def _exponential(fun, jac, w0, t_eval, rtol, atol, dt, units):
+    def _exponential(fun, jac, w0, t_eval, rtol, atol, dt, units, loose):
         """w at t_eval by :class:`~mbseig.check.exponential.ExponentialAdams` from the
         Jacobian at q₀, first step two sample intervals."""
-        integrator = ExponentialAdams(fun, jac, rtol=rtol, atol=atol, scale=units)
+        integrator = ExponentialAdams(fun, jac, rtol=rtol, atol=atol, scale=units, loose=loose)
         try:
             return integrator.run(w0, t_eval, 2.0 * dt, budget=EXPONENTIAL_BUDGET)
         except ArithmeticError as exc:
@@ -238,7 +239,8 @@ class TangentCoordinates:
         if method == "exponential":
             try:
                 units = np.concatenate([np.ones(k), np.where(omega > 0, omega, 1.0)])
-                Y = self._exponential(fun, jac, w0, t_eval, rtol, atol, dt, units)
+                loose = np.concatenate([fast, fast])
+                Y = self._exponential(fun, jac, w0, t_eval, rtol, atol, dt, units, loose)
             except ExponentialUnusable as exc:
                 used = f"Radau (the exponential integrator does not apply: {exc})"
                 method = "Radau"
