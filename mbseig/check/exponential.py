@@ -113,7 +113,7 @@ class ExponentialAdams:
     which J's eigenvectors are judged: an oscillator's pair (1, ±iω) is parallel in the raw
     state for large ω, orthogonal in units of ω."""
 
-    def __init__(self, fun, J, *, rtol, atol, scale=None, pec=True, loose=None):
+    def __init__(self, fun, J, *, rtol, atol, scale=None, loose=None):
         S = np.ones(len(J)) if scale is None else np.asarray(scale, float)
         lam, V = np.linalg.eig(np.asarray(J, float) * S[None, :] / S[:, None])
         V = V / np.linalg.norm(V, axis=0)
@@ -126,8 +126,6 @@ class ExponentialAdams:
         self.rtol, self.atol = float(rtol), np.asarray(atol, float)
         self.loose = (np.zeros(len(J), bool) if loose is None
                       else np.asarray(loose, bool).reshape(len(J)))
-        self.cond = float(cond)
-        self.pec = bool(pec)
         self.nfev = 0
         self._weights = {}
         self.rejected = self.restarts = self.steps = 0
@@ -176,11 +174,10 @@ class ExponentialAdams:
         return float(np.sqrt(max(held, loose)))
 
     # -- restart: ORDER steps at once ------------------------------------------------------
-    def _restart(self, t0, z0, F0, h):
-        """(z_1 … z_p, F_1 … F_p, y_1 … y_p) at t0 + h … t0 + p h by fixed-point collocation on
-        the nodes 0 … p; None when the iteration does not contract."""
+    def _restart(self, t0, z0, F0, h, nodes):
+        """(F at the ``nodes`` 0 … p, y at the last) over t0 … t0 + p h by fixed-point
+        collocation; None when the iteration does not contract."""
         p = ORDER
-        nodes = list(range(p + 1))
         Fs = [F0] * (p + 1)
         zs = None
         last = np.inf
@@ -203,7 +200,7 @@ class ExponentialAdams:
         else:
             return None
         out = [self.F(t0 + j * h, z) for j, z in zip(range(1, p + 1), zs, strict=True)]
-        return zs, [o[0] for o in out], [o[1] for o in out], nodes, [F0] + [o[0] for o in out]
+        return [F0] + [o[0] for o in out], out[-1][1]
 
     # -- the run -----------------------------------------------------------------------------
     def run(self, y0, t_eval, h0, *, fixed_step=False, budget=None):
@@ -223,8 +220,10 @@ class ExponentialAdams:
         nxt = 1  # next sample to fill
         halvings = 0
         p = ORDER
+        nodes = list(range(p + 1))  # a restart's
         pred_nodes = [-i for i in range(p)]
         corr_nodes = [1] + pred_nodes[:-1]
+
         def over():
             return budget is not None and self.nfev > budget * (nxt + 40)
 
@@ -235,15 +234,15 @@ class ExponentialAdams:
                     f"sides by sample {nxt} of {t_eval.size - 1}, budget {budget} a sample): "
                     "fast modes ring into the checked one")
             self.restarts += 1
-            got = self._restart(t, z, Fz, h)
+            got = self._restart(t, z, Fz, h, nodes)
             if got is None:
                 h, halvings = self._halve(h, halvings)
                 continue
-            zs, Fs, ys, nodes, Fall = got
+            Fall, y_end = got
             # the restart's error: its end state against the one that leaves out the last node
             # (whose last interval is the predictor's extrapolation: Milne's factor as there)
             z_end = self._at(z, Fall, h, nodes, p)
-            err = MILNE * self._norm(z_end - self._at(z, Fall[:-1], h, nodes[:-1], p), ys[-1])
+            err = MILNE * self._norm(z_end - self._at(z, Fall[:-1], h, nodes[:-1], p), y_end)
             if not fixed_step and (not np.isfinite(err) or err > 1.0):
                 self.rejected += 1
                 h, halvings = self._halve(h, halvings)
@@ -251,7 +250,7 @@ class ExponentialAdams:
             # samples inside the restart's span
             nxt = self._fill(Y, t_eval, nxt, t, p, (z, Fall, h, nodes))
             t, z = t + p * h, self.real(z_end)
-            hist = Fs[::-1]  # F_n, F_{n-1}, …
+            hist = Fall[:0:-1]  # F_n, F_{n-1}, …: the restart's nodes p … 1
             good = 0
             while nxt < t_eval.size and not over():
                 zp = self._at(z, hist, h, pred_nodes, 1.0)
@@ -271,7 +270,7 @@ class ExponentialAdams:
                 # PEC: the history keeps F at the predicted state (one evaluation a step; it
                 # differs from F at the corrected one by ‖∂F/∂z‖ |z_C − z_P|, far below the
                 # step's error where ‖∂F/∂z‖ h ≪ 1, as the restarts' contraction shows)
-                Fn = Fp if self.pec else self.F(t + h, zc)[0]
+                Fn = Fp
                 t, z = t + h, zc
                 hist = [Fn] + hist[:p - 1]
                 good = good + 1 if err < GROW_BELOW else 0
