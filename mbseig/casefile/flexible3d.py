@@ -32,6 +32,7 @@ import numpy as np
 
 from ..model.affine import Affine, combine
 from ..model.beam3d_batch import group_of
+from ..model.beam3d_lagrange import ELEMENT_ORDERS, LagrangeBeam3DElement, load_weights
 from ..model.beam3d import (
     THEORIES,
     Beam3DElement,
@@ -73,7 +74,8 @@ class Beam3DSpec:
     ends: tuple
     spin: float
     stations: dict  # name → arc length
-    arcs: np.ndarray = None  # node arc lengths
+    element: str = "ross"  # "ross" (the standard element) or a name of ELEMENT_ORDERS
+    arcs: np.ndarray = None  # node arc lengths (an order-p element spans p + 1 of them)
     node_pos: list = field(default_factory=list)
     pos: list = field(default_factory=list)  # Affine of each node's point (None: set later)
     triad: list = field(default_factory=list)  # triad coordinate indices, "clamped" or a body
@@ -186,20 +188,40 @@ def _spec(b, f, override, rules):
         stations[sname] = min(max(s, 0.0), length)
     spinning = f.raw("spin", None) is not None  # a spinning shaft, even at zero speed
     spin = f.num("spin", 0.0)
+    element = _element(f, theory, auto)
     f.done()
     props = f.formed("the beam's section properties", lambda: BeamProperties3D(
         E=E, G=G, rho=rho, A=A, Iy=Iy, Iz=Iz, J=J, kappa_y=kappa, kappa_z=kappa, theory=theory))
     spec = Beam3DSpec(name=name, label=f.label, points=(pa, pb), length=length, props=props,
                       depth=depth, R0=R0, n_elements=n, auto=auto, ends=ends, spin=spin,
-                      spinning=spinning,
-                      stations=stations)
+                      spinning=spinning, stations=stations, element=element)
     spec.warnings.extend(slenderness_warnings(theory, length / depth, rules["eb_slenderness"],
                                               rules["min_slenderness"]))
     return spec
 
 
+def _element(f, theory, auto):
+    """``element``: "ross" (the standard element; the default for a given count) or
+    "quartic" (the default of ``elements = "auto"`` with the Timoshenko theory)."""
+    names = ("ross", *ELEMENT_ORDERS)
+    default = "quartic" if auto and theory == "timoshenko" else "ross"
+    element = f.text("element", default)
+    if element not in names:
+        raise f.error(f"element must be one of {', '.join(names)}, got {element!r}")
+    if element != "ross" and theory != "timoshenko":
+        raise f.error(f'element = "{element}" needs theory = "timoshenko" (Euler–Bernoulli '
+                      'bending needs a continuous slope: use element = "ross")')
+    return element
+
+
+def order_of(spec) -> int:
+    """Polynomial order of the beam's element: 1 node interval an element for "ross"."""
+    return ELEMENT_ORDERS.get(spec.element, 1)
+
+
 def _mesh(spec):
-    """Node arc lengths: the stations are nodes, elements shared over the spans."""
+    """Node arc lengths: the stations are nodes, elements shared over the spans, an order-p
+    element's p + 1 nodes equally spaced."""
     L = spec.length
     cuts = sorted({0.0, L, *spec.stations.values()})
     merged = [cuts[0]]
@@ -209,13 +231,14 @@ def _mesh(spec):
     merged[-1] = L
     spans = np.diff(merged)
     counts = span_elements(spans, spec.n_elements)
+    p = order_of(spec)
     arcs = [0.0]
     for a, n in zip(merged[:-1], counts, strict=True):
-        h = (merged[merged.index(a) + 1] - a) / n
-        arcs += [a + h * (j + 1) for j in range(n)]
+        h = (merged[merged.index(a) + 1] - a) / (n * p)
+        arcs += [a + h * (j + 1) for j in range(n * p)]
     arcs[-1] = L
     spec.arcs = np.array(arcs)
-    spec.n_elements = len(arcs) - 1
+    spec.n_elements = (len(arcs) - 1) // p
 
 
 def allocate(b, mesh, **rules):
@@ -234,7 +257,7 @@ def allocate(b, mesh, **rules):
         _mesh(spec)
         pa, pb = spec.points
         xa, xb = b.point_pos[pa], b.point_pos[pb]
-        n = spec.n_elements
+        n = len(spec.arcs) - 1  # the last node
         for i, s in enumerate(spec.arcs):
             x = xa + (xb - xa) * (s / spec.length)
             spec.node_pos.append(x)
@@ -268,17 +291,22 @@ def _node_frame(b, spec, k):
 
 
 def _elements(spec, frames):
-    """([Beam3DElement], [(k, l0)]) of the beam's elements that have coordinates."""
-    els, at = [], []
-    for k in range(spec.n_elements):
-        l0 = float(spec.arcs[k + 1] - spec.arcs[k])
-        w = combine([(1.0, frames[k]), (1.0, frames[k + 1])], stack=True)
-        el = Beam3DElement(f"{spec.label} element {k + 1}", w, spec.props, l0, spec.R0,
-                           spec.spin)
+    """The beam's elements that have coordinates."""
+    els = []
+    p = order_of(spec)
+    for j in range(spec.n_elements):
+        k = j * p
+        l0 = float(spec.arcs[k + p] - spec.arcs[k])
+        w = combine([(1.0, frames[i]) for i in range(k, k + p + 1)], stack=True)
+        if spec.element == "ross":
+            el = Beam3DElement(f"{spec.label} element {j + 1}", w, spec.props, l0, spec.R0,
+                               spec.spin)
+        else:
+            el = LagrangeBeam3DElement(f"{spec.label} element {j + 1}", w, spec.props, l0,
+                                       spec.R0, p, spec.spin)
         if el.idx.size:
             els.append(el)
-            at.append((k, l0))
-    return els, at
+    return els
 
 
 def _frozen(a):
@@ -302,38 +330,51 @@ def assemble(b, forces, constraints, mass_elements, mass_blocks, g_const, gravit
     b.mass_reference = q0  # (every M_ref below is evaluated here)
     record, shafts = {}, []
     for spec in b.beam_specs:
-        frames = [_node_frame(b, spec, k) for k in range(spec.n_elements + 1)]
-        for k in range(spec.n_elements + 1):
+        n_nodes = len(spec.arcs)
+        frames = [_node_frame(b, spec, k) for k in range(n_nodes)]
+        for k in range(n_nodes):
             if not isinstance(spec.triad[k], str):
                 constraints.append(triad_constraint(f"{spec.label} node {k} (rigid triad)",
                                                     frames[k]))
         f = Fields({}, spec.label, {})
         # (one guarded computation for all the beam's elements: its error names the beam, as
         # each element's would)
-        els, at = f.formed("the beam element's matrices",
+        els = f.formed("the beam element's matrices",
                            lambda spec=spec, frames=frames: _elements(spec, frames))
-        # the masses at the reference, all elements of the beam in one batch (a member's numbers
-        # do not depend on its batch: mbseig.model.beam3d_batch)
-        masses = f.formed("the beam element's mass matrix",
-                          lambda els=els, p=spec.props: _masses(group_of(p), els, q0))
-        # equal masses kept once, read-only (the elements of a uniform mesh: a few distinct
-        # arrays for thousands of elements; a view would keep its whole batch alive)
-        distinct = {}
-        masses = [distinct.setdefault(M.tobytes(), _frozen(M)) for M in masses]
-        for el, M_ref, (k, l0) in zip(els, masses, at, strict=True):
+        if spec.element == "ross":
+            # the masses at the reference, all elements of the beam in one batch (a member's
+            # numbers do not depend on its batch: mbseig.model.beam3d_batch)
+            masses = f.formed("the beam element's mass matrix",
+                              lambda els=els, p=spec.props: _masses(group_of(p), els, q0))
+            # equal masses kept once, read-only (the elements of a uniform mesh: a few distinct
+            # arrays for thousands of elements; a view would keep its whole batch alive)
+            distinct = {}
+            masses = [distinct.setdefault(M.tobytes(), _frozen(M)) for M in masses]
+        else:  # constant masses (mbseig.model.beam3d_lagrange)
+            masses = [None] * len(els)
+        p_order = order_of(spec)
+        shares = np.full(2, 0.5) if spec.element == "ross" else load_weights(p_order)
+        for el, M_ref in zip(els, masses, strict=True):
             forces.append(el)
-            mass_elements.append((el, M_ref))
-            mass_blocks.append((el.idx, el.idx, M_ref))
-            if gravity is not None:
-                w_el = spec.props.rho * spec.props.A * l0 * gravity
-                for r in (spec.pos[k], spec.pos[k + 1]):
+            if M_ref is None:
+                mass_blocks.append((el.idx, el.idx, el.mass_matrix()))
+            else:
+                mass_elements.append((el, M_ref))
+                mass_blocks.append((el.idx, el.idx, M_ref))
+        if gravity is not None:
+            for j in range(spec.n_elements):
+                k = j * p_order
+                w_el = spec.props.rho * spec.props.A * float(
+                    spec.arcs[k + p_order] - spec.arcs[k]) * gravity
+                for i, share in enumerate(shares):
+                    r = spec.pos[k + i]
                     if r.idx.size:
-                        np.add.at(g_const, r.idx, r.C.T @ (0.5 * w_el))
+                        np.add.at(g_const, r.idx, r.C.T @ (share * w_el))
         points = [frame_point(fr, np.zeros(3)) for fr in frames]
         node_of = {s: int(np.argmin(np.abs(spec.arcs - a))) for s, a in spec.stations.items()}
         for s, k in node_of.items():
             b.register_station(f"{spec.name}.{s}", frames[k], spec.node_pos[k], points[k])
-        for k in range(1, spec.n_elements):
+        for k in range(1, n_nodes - 1):
             b.markers[f"{spec.name}.n{k}"] = points[k]
         if spec.spinning:  # at Ω = 0 too: its gyroscopic matrix is zero, its whirl stations not
             stack = combine([(1.0, frames[0])] + [(1.0, Affine(fr.idx, fr.C[3:], fr.d[3:]))
@@ -346,13 +387,14 @@ def assemble(b, forces, constraints, mass_elements, mass_blocks, g_const, gravit
         Phi_y, Phi_z = p.shear_parameters(spec.length)
         record[spec.name] = {
             "type": "beam", "dimension": 3, "theory": p.theory, "elements": spec.n_elements,
+            "element": spec.element,
             "auto": spec.auto, "length": spec.length, "depth": spec.depth,
             "slenderness": spec.length / spec.depth, "shear_parameter": max(Phi_y, Phi_z),
             "E": p.E, "G": p.G, "rho": p.rho, "A": p.A, "Iy": p.Iy, "Iz": p.Iz, "J": p.J,
             "shear_coefficient": p.kappa_y, "orientation": [float(c) for c in spec.R0[:, 1]],
             "ends": list(spec.ends), "spin": spec.spin, "warnings": list(spec.warnings),
             "stations": {s: float(spec.arcs[k]) for s, k in node_of.items()},
-            "nodes": [f"{spec.name}.n{k}" for k in range(spec.n_elements + 1)],
+            "nodes": [f"{spec.name}.n{k}" for k in range(n_nodes)],
             "points": list(spec.points),
         }
     return record, shafts

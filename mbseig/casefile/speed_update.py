@@ -18,6 +18,7 @@ import copy
 import dataclasses
 
 from ..model.beam3d import Beam3DElement
+from ..model.beam3d_lagrange import LagrangeBeam3DElement
 from ..model.spatial_forces import Rotor
 from .element_readers import ScalarUpdate
 from .fields import Fields
@@ -75,7 +76,7 @@ class SpeedUpdate(ScalarUpdate):
         for f in self.model0.forces:
             if isinstance(f, Rotor) and f.name in speed:
                 f = dataclasses.replace(f, speed=speed[f.name])
-            elif isinstance(f, Beam3DElement):
+            elif isinstance(f, (Beam3DElement, LagrangeBeam3DElement)):
                 beam = f.name.rsplit(" element ", 1)[0]
                 if beam in spin:  # (its frames, matrices and planes do not depend on the spin)
                     f = copy.copy(f)

@@ -40,6 +40,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..errors import CaseError, SimulationError
+from ..model.base import Force
 from ..model.linear_case import LinearCase
 from ..numerics import dense, min_norm_projection, null_space_basis
 from .augmented import AugmentedPattern
@@ -94,7 +95,10 @@ class ForwardDynamics:
             self.cscale = model.constraint_scales() if self.m else np.zeros(0)
         if self.linear:
             self.mass_elements = ()
-        self.stiff = bool(self.mass_elements)  # configuration-dependent mass: Radau (simulate)
+        # configuration-dependent mass or stiff structural elements: integrated as stiff
+        # (simulate)
+        self.stiff = bool(self.mass_elements) or (not self.linear and any(
+            isinstance(f, Force) and f.stiff_structure for f in model.forces))
         self._step = MASS_STEP * (1.0 if self.linear else float(model.length_scale))
         self.redundant = bool(redundant)
         self._check_mass()
@@ -376,8 +380,14 @@ def simulate(dynamics: ForwardDynamics, u0, v0, t_eval, *, segment_samples: int,
         k1 = min(k + segment_samples, len(t_eval) - 1)
         ts = t_eval[k:k1 + 1]
         y0 = np.concatenate([u, v])
-        sol = solve_ivp(fun, (ts[0], ts[-1]), y0, method=method, t_eval=ts[1:], rtol=rtol,
-                        atol=atol, **extra)
+        try:
+            sol = solve_ivp(fun, (ts[0], ts[-1]), y0, method=method, t_eval=ts[1:], rtol=rtol,
+                            atol=atol, **extra)
+        except np.linalg.LinAlgError as exc:  # a state where [M Φ_qᵀ; Φ_q 0] is singular
+            raise SimulationError(
+                f"integration ({method}) failed between t = {ts[0]:.6g} and {ts[-1]:.6g}: the "
+                f"mass-constraint matrix [M, Phi_q^T; Phi_q, 0] was singular at a state the "
+                f"integrator tried ({exc})", element="time-domain check") from exc
         if sol.status != 0:
             t_fail = sol.t[-1] if sol.t.size else ts[0]
             raise SimulationError(f"integration failed at t = {t_fail:.6g}: {sol.message}",

@@ -115,6 +115,9 @@ class Force(_Element):
     #: None, or ``velocity_terms(q, q̇)``: the element's velocity-dependent inertia terms in
     #: closed form (the 3-D beams), which the time-domain check uses instead of differences
     velocity_terms = None
+    #: a structural element whose axial and shear modes lie orders of magnitude above the
+    #: modes a check follows (a beam): the time-domain check integrates its model as stiff
+    stiff_structure = False
 
     def batch_group(self, q, qd=None):
         """The batch that evaluates this element together with others of its kind at (q, q̇)

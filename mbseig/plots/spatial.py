@@ -137,7 +137,8 @@ def _beams(model):
     for name, rec in records.items():
         if rec.get("type") != "beam" or rec.get("dimension") != 3 or q_ref is None:
             continue
-        ends, n = list(rec.get("points") or ()), int(rec.get("elements") or 0)
+        # n node intervals (an order-p element spans p of them: "nodes" lists every node)
+        ends, n = list(rec.get("points") or ()), len(rec.get("nodes") or ()) - 1
         if len(ends) != 2 or n < 1:
             continue
         nodes = [ends[0]] + [f"{name}.n{k}" for k in range(1, n)] + [ends[1]]
