@@ -1,8 +1,9 @@
 """The K largest Floquet multipliers of ``mbseig modes --n-modes K`` on a periodic case: the
 partial (Arnoldi) method (``--floquet partial``) against the full monodromy of the same case
 (independent method: every multiplier from the dense monodromy matrix), on
-cases/column_pulsating_load.toml (3 DOF, 6 multipliers), and the default answer from the full
-monodromy."""
+cases/pendulum_chain_shaken.toml (6 DOF, 12 multipliers), and the answer from the full monodromy
+on cases/column_pulsating_load.toml (3 DOF, 6 multipliers: below the size where ``--floquet
+auto`` takes the partial method; tests/test_periodic_descriptor.py has that choice)."""
 
 from conftest import CASES
 
@@ -13,21 +14,21 @@ CASE = CASES / "column_pulsating_load.toml"
 
 
 def test_partial_method_matches_full_monodromy(capsys):
-    """The partial (Arnoldi) method that ``modes --n-modes K`` runs gives the dominant
-    multiplier of the full monodromy within the two methods' bounds and the same verdict
-    (tolerances 1e-8/1e-10 here to keep the suite fast); the modes JSON of ``--n-modes`` has the
-    §8 keys; K beyond what ARPACK can give is refused in one line."""
+    """The partial (Arnoldi) method that ``modes --n-modes K --floquet partial`` runs gives the
+    dominant multiplier of the full monodromy within the two methods' bounds and the same
+    verdict (tolerance 1e-10 here to keep the suite fast); the modes JSON of
+    ``--n-modes`` has the §8 keys; K beyond what ARPACK can give is refused in one line."""
     from mbseig.studies.periodic_listing import partial_json
     from mbseig.studies.periodic import periodic_analysis
     from mbseig.studies.periodic_partial import periodic_partial
 
-    spec = read_case(CASE)
-    p = periodic_partial(spec, k=1, rtols=(1e-8, 1e-10), tol=1e-9)
+    spec = read_case(CASES / "pendulum_chain_shaken.toml")
+    p = periodic_partial(spec, k=1, rtol=1e-10, tol=1e-9)
     out = partial_json(p)
     part, full = out["floquet"], periodic_analysis(spec).floquet.to_dict()
     assert {"period", "multipliers", "exponents", "error_bound", "verdict"} <= set(part)
     assert part["verdict"] == full["verdict"] == out["verdict"] == "unstable"
-    assert part["partial"]["of"] == 6 and part["partial"]["products"] > 0
+    assert part["partial"]["of"] == 12 and part["partial"]["products"] > 0
     mu_p, mu_f = complex(*part["multipliers"][0]), complex(*full["multipliers"][0])
     assert abs(mu_p - mu_f) <= part["error_bounds"][0] + full["error_bounds"][0]
     assert part["error_bounds"][0] < 1e-6
@@ -38,11 +39,12 @@ def test_partial_method_matches_full_monodromy(capsys):
 
 
 def test_n_modes_takes_the_largest_from_the_full_monodromy(capsys):
-    """``--n-modes K`` (``--floquet auto``) answers from the full monodromy, faster at every
-    size measured (docs/periodic.md): its listing is the full analysis's K multipliers of
-    largest modulus (the same computation: equal to the last bit), a complex one completed by
-    its conjugate, with the full analysis's verdict and bounds, and ``selected`` saying how many
-    of how many and why; K up to every multiplier is accepted (no ARPACK limit there)."""
+    """``--n-modes K`` (``--floquet auto``) answers a 3-DOF case from the full monodromy,
+    faster than the partial method below 100 DOF (docs/periodic.md): its listing is the full
+    analysis's K multipliers of largest modulus (the same computation: equal to the last bit),
+    a complex one completed by its conjugate, with the full analysis's verdict and bounds, and
+    ``selected`` saying how many of how many and why; K up to every multiplier is accepted (no
+    ARPACK limit there)."""
     import json
 
     from mbseig.studies.periodic import periodic_analysis

@@ -40,7 +40,7 @@ def _chain_case(n):
         "periodic_scaling.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
-    return module.CASE.format(n=n), module
+    return module.CASE.replace("\nn = 6 ", f"\nn = {n} ", 1), module  # the bundled chain
 
 
 @pytest.fixture

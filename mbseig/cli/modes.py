@@ -270,30 +270,23 @@ def motion_direction(d) -> str:
 # motion, the Floquet multipliers with their error bounds and the verdict; the frozen-time
 # eigenvalues are listed beside them as what a frozen-time analysis would (wrongly) conclude.
 #
-# ``--n-modes K``: the K multipliers of largest modulus.  ``--floquet auto`` (the default) and
-# ``full`` take them from the full monodromy (faster at every size measured:
-# :data:`mbseig.studies.periodic_listing.FULL_FOR_LARGEST`); ``partial`` runs Arnoldi on the
-# monodromy operator (:mod:`mbseig.studies.periodic_partial`) without forming the monodromy
-# matrix.  The frozen-time summary is left out (it needs every eigenvalue at 64 instants).
+# ``--n-modes K``: the K multipliers of largest modulus.  ``--floquet full`` takes them from the
+# full monodromy, ``partial`` runs Arnoldi on the monodromy operator without forming the
+# monodromy matrix, ``auto`` (the default) the partial method from
+# :data:`mbseig.studies.periodic_partial.PARTIAL_FROM_DOF` degrees of freedom on
+# (:func:`mbseig.studies.periodic_partial.largest_multipliers`).  The frozen-time summary is left
+# out (it needs every eigenvalue at 64 instants).
 def _run_largest(args, spec) -> int:
-    from ..studies.periodic_listing import largest_json, partial_json
-
     if args.band_hz is not None or args.target_hz is not None:
         raise CaseError("--target-hz and --band-hz select eigenvalues of a static case; a "
                         "periodic case takes --n-modes K (the K largest |mu|)",
                         element="command line", file=spec.source)
-    if args.floquet == "partial":
-        from ..studies.periodic_partial import periodic_partial
+    from ..studies.periodic_partial import largest_multipliers
 
-        kw = case_kwargs(args)
-        p = periodic_partial(spec, k=args.n_modes, config=kw["config"], params=kw["params"])
-        out = partial_json(p)
-        of = out["floquet"]["partial"]["of"]
-    else:
-        from ..studies.periodic import periodic_analysis
-
-        out = largest_json(analyzed(args, spec, periodic_analysis), args.n_modes)
-        of = out["floquet"]["selected"]["of"]
+    kw = case_kwargs(args)
+    out = largest_multipliers(spec, k=args.n_modes, floquet=args.floquet, config=kw["config"],
+                              params=kw["params"])
+    of = out["floquet"]["selected"]["of"]
     if args.json:
         return print_json(out)
     fl = out["floquet"]

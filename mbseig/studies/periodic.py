@@ -198,6 +198,9 @@ class PeriodicLinearization:
     sampling_difference: float
     system: object  # ConstrainedLinearization on the first sampling
     check: object  # the same on the shifted sampling, from the same basis at t = 0
+    #: the two samplings' series (C, K, Φ_q) themselves, for the products in the model's own
+    #: coordinates (mbseig.studies.floquet_descriptor)
+    fits: tuple = field(default=(), repr=False)
 
 
 _KEPT: dict = {}  # the last few results of one process (a report, a test runs a case twice)
@@ -268,7 +271,7 @@ def linearize_periodic(timed, ref, *, samples=SAMPLES, max_samples=1024, paramet
                            element="motion", file=file) from None
     if parameters is None:
         parameters = {k: v for k, v in timed.base.parameters.items() if k != TIME}
-    return PeriodicLinearization(timed, parameters, ref, N, diff, sys1, sys2)
+    return PeriodicLinearization(timed, parameters, ref, N, diff, sys1, sys2, (fit, fit2))
 
 
 def periodic_analysis(spec, *, config=None, params=None, rtols=RTOLS, samples=SAMPLES,

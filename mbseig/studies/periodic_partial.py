@@ -2,11 +2,15 @@
 (DESIGN §8; ``mbseig modes CASE --n-modes K`` on a periodic case).
 
 ARPACK (implicitly restarted Arnoldi, ``scipy.sparse.linalg.eigs``) runs on the operator
-v ↦ Φ v, each product one integration of the projected variational equations for one vector
-(:func:`mbseig.studies.floquet.floquet_partial`).  Two independent estimates, as for the full
-monodromy (:mod:`mbseig.studies.periodic`): the linearization sampled on N instants at the tighter
-tolerance and on the grid shifted by half a step at the looser one.  The bound of multiplier k is
-the largest of
+v ↦ Π Φ Π v in the model's own coordinates (:mod:`mbseig.studies.floquet_descriptor`: each
+product one fixed-step integration of the linearized constrained equations in index-1 form,
+with sparse solves whose factorizations every product shares; Π keeps the constraints at
+t = 0 and adds only zeros to the spectrum).  Two independent estimates, as for the full
+monodromy (:mod:`mbseig.studies.periodic`): the linearization sampled on N instants with the
+steps that meet the tighter tolerance, and on the grid shifted by half a sample with half
+those steps (so their difference holds the first's discretization error, not only the
+sampling's).  The bound of
+multiplier k is the largest of
 
 (i)   |μ_k − μ̃_k|, the difference between the two estimates (matched by assignment);
 (ii)  ‖Φ v_k − μ_k v_k‖/‖v_k‖, the residual of the Ritz pair (a fresh product), which bounds the
@@ -17,12 +21,13 @@ and a rounding floor 64 ε_mach |μ_k|.  The verdict reads only the K largest |�
 spectral radius: unstable when some |μ_k| − b_k > 1, stable when the largest |μ_k| + b_k < 1,
 critical otherwise.
 
-Cost: a product costs one integration of 2r numbers (r = n − m), the full monodromy one of
-(2r)² numbers.  Both integrate the Chebyshev interpolants of the projected A(t)
-(:mod:`mbseig.studies.floquet_chebyshev`: A itself is evaluated once per interpolation point,
-not at every stage), so a product costs O((2r)² d) per stage for an interpolant of degree d.
-ARPACK needs a few times K products, many more where the largest |μ| are clustered
-(measured in benchmarks/periodic_scaling.py).
+Cost: a product costs O(nnz) a stage (a sparse solve and four sparse products), against (2r)² a
+stage and column for the full monodromy on the dense projected system.  ARPACK needs a few
+times K products, many more where the largest |μ| are clustered.  Explicit steps suit models
+whose fastest mode the period resolves in a few hundred steps; a stiff one (beams) needs
+thousands, and ``--floquet auto`` hands it to the full monodromy
+(:func:`largest_multipliers`).  Measured in benchmarks/periodic_scaling.py (docs/periodic.md,
+"Floquet at scale").
 """
 
 from __future__ import annotations
@@ -33,14 +38,20 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from ..errors import CaseError, MbseigError
-from .floquet import FloquetError, floquet_partial
-from .floquet_chebyshev import chebyshev_system
+from .floquet import FloquetError
+from .floquet_descriptor import descriptor_partial
 from .periodic import periodic_linearization
 from .periodic_listing import reduced_exponents
 
-__all__ = ["PartialAnalysis", "periodic_partial", "PARTIAL_RTOLS"]
+__all__ = ["PartialAnalysis", "periodic_partial", "PARTIAL_RTOL", "PARTIAL_FROM_DOF",
+           "largest_multipliers"]
 
-PARTIAL_RTOLS = (1e-9, 1e-11)  # the two estimates (shifted sampling at the looser one)
+#: the first estimate's steps change a probe product by at most 63 × this when halved (its own
+#: error about 1/63 of that); the second runs at half those steps
+PARTIAL_RTOL = 1e-11
+#: ``--floquet auto`` runs the partial method from this many degrees of freedom on, the full
+#: monodromy below (benchmarks/periodic_scaling.py, docs/periodic.md "Floquet at scale")
+PARTIAL_FROM_DOF = 100
 
 
 @dataclass(frozen=True)
@@ -59,6 +70,7 @@ class PartialAnalysis:
     products: int
     tolerances: tuple
     method: str
+    steps: tuple = ()  # fixed steps a period of the two estimates
 
     def to_dict(self) -> dict:
         """The §8 ``"floquet"`` object of the K largest multipliers (and the partial record)."""
@@ -78,6 +90,7 @@ class PartialAnalysis:
             "tolerances": list(self.tolerances),
             "partial": {"count": int(mu.size), "of": int(lin.system.system.size),
                         "products": int(self.products),
+                        "steps": [int(x) for x in self.steps],
                         "residuals": [float(x) for x in self.residuals]},
             "samples": lin.samples,
             "sampling_difference": lin.sampling_difference,
@@ -111,10 +124,11 @@ def _verdict(mu, b):
     return "critical", (j, float(mod[j]), float(b[j]), float(min(upper[j] - 1.0, 1.0 - lower[j])))
 
 
-def periodic_partial(spec, *, k, config=None, params=None, rtols=PARTIAL_RTOLS,
+def periodic_partial(spec, *, k, config=None, params=None, rtol=PARTIAL_RTOL,
                      tol=1e-10) -> PartialAnalysis:
     """The ``k`` Floquet multipliers of largest modulus of a periodic case (module docstring);
-    ``tol`` is ARPACK's relative accuracy of the Ritz values."""
+    ``rtol`` sets the first estimate's steps, ``tol`` is ARPACK's relative accuracy of the Ritz
+    values."""
     lin = periodic_linearization(spec, config=config, params=params)
     size = lin.system.system.size
     if not 0 < k < size - 1:
@@ -122,11 +136,14 @@ def periodic_partial(spec, *, k, config=None, params=None, rtols=PARTIAL_RTOLS,
                         f"Floquet method (this case has {size} multipliers; run modes without "
                         f"--n-modes for all of them), got {k}", element="command line",
                         file=spec.source)
-    lo, hi = sorted(rtols)
+    M, T = lin.reference.partition.M, lin.timed.period
     try:
-        # A(t) by its Chebyshev interpolants: every product integrates a cheap A
-        first = floquet_partial(chebyshev_system(lin.system.system)[0], k=k, rtol=lo, tol=tol)
-        second = floquet_partial(chebyshev_system(lin.check.system)[0], k=k, rtol=hi, tol=tol)
+        # products in the model's own sparse coordinates (mbseig.studies.floquet_descriptor);
+        # the second estimate at half the steps, so that the difference also holds the first's
+        # discretization error (about 2⁶ times smaller than the second's)
+        first, steps = descriptor_partial(M, lin.fits[0], T, k=k, rtol=rtol, tol=tol)
+        half = max(steps // 2, 1)
+        second, _ = descriptor_partial(M, lin.fits[1], T, k=k, rtol=rtol, tol=tol, steps=half)
     except MbseigError as exc:
         raise exc.located(file=spec.source) from None
     except (np.linalg.LinAlgError, ArithmeticError, RuntimeError) as exc:
@@ -142,7 +159,52 @@ def periodic_partial(spec, *, k, config=None, params=None, rtols=PARTIAL_RTOLS,
     order = np.lexsort((np.angle(mu), -np.abs(mu)))
     mu, bounds, res = mu[order], bounds[order], res[order]
     verdict, decided = _verdict(mu, bounds)
-    method = (f"{first.method}; {k} largest |μ|, {first.products + second.products} products; "
-              f"{lin.samples} samples of the linearization per period")
+    method = (f"{first.method} (second estimate: {half}); {k} largest |μ|, "
+              f"{first.products + second.products} products; {lin.samples} samples of the "
+              "linearization per period")
     return PartialAnalysis(spec.name, lin.parameters, lin, lin.timed.period, mu, bounds, res,
-                           verdict, decided, first.products + second.products, (lo, hi), method)
+                           verdict, decided, first.products + second.products, (rtol,), method,
+                           (steps, half))
+
+
+def largest_multipliers(spec, *, k, floquet="auto", config=None, params=None) -> dict:
+    """The modes JSON of ``mbseig modes CASE --n-modes K`` on a periodic case: the K largest
+    |μ| by the full monodromy (``floquet = "full"``), the partial method (``"partial"``) or, with
+    ``"auto"``, the partial method from :data:`PARTIAL_FROM_DOF` degrees of freedom on (the full
+    one below, and wherever the partial method's explicit steps do not settle: a stiff model);
+    ``floquet.selected`` says which and why."""
+    from .floquet_descriptor import StepsNotSettled
+    from .periodic import periodic_analysis
+    from .periodic_listing import FULL_FOR_LARGEST, largest_json, partial_json
+
+    why = None
+    if floquet == "auto":
+        dof = periodic_linearization(spec, config=config, params=params).system.dof
+        if dof >= PARTIAL_FROM_DOF:
+            try:
+                p = periodic_partial(spec, k=k, config=config, params=params)
+            except StepsNotSettled as exc:
+                why = (f"full monodromy: the partial method, chosen at {dof} DOF (≥ "
+                       f"{PARTIAL_FROM_DOF}), did not settle ({exc})")
+            else:
+                out = partial_json(p)
+                out["floquet"]["selected"] = {
+                    "count": len(out["floquet"]["multipliers"]),
+                    "of": out["floquet"]["partial"]["of"],
+                    "method": f"partial (Arnoldi) method: {dof} DOF ≥ {PARTIAL_FROM_DOF}, "
+                              "where its sparse products are faster than the full monodromy "
+                              "(docs/periodic.md)"}
+                return out
+        else:
+            why = (f"{FULL_FOR_LARGEST} ({dof} DOF < {PARTIAL_FROM_DOF}; --floquet partial "
+                   "runs the partial method)")
+    elif floquet == "partial":
+        out = partial_json(periodic_partial(spec, k=k, config=config, params=params))
+        out["floquet"]["selected"] = {"count": len(out["floquet"]["multipliers"]),
+                                      "of": out["floquet"]["partial"]["of"],
+                                      "method": "partial (Arnoldi) method, as asked"}
+        return out
+    a = periodic_analysis(spec, config=config, params=params)
+    out = largest_json(a, k)
+    out["floquet"]["selected"]["method"] = why or "full monodromy, as asked"
+    return out
