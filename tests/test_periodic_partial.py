@@ -1,9 +1,8 @@
 """The K largest Floquet multipliers of ``mbseig modes --n-modes K`` on a periodic case: the
 partial (Arnoldi) method (``--floquet partial``) against the full monodromy of the same case
 (independent method: every multiplier from the dense monodromy matrix), on
-cases/pendulum_chain_shaken.toml (6 DOF, 12 multipliers), and the answer from the full monodromy
-on cases/column_pulsating_load.toml (3 DOF, 6 multipliers: below the size where ``--floquet
-auto`` takes the partial method; tests/test_periodic_descriptor.py has that choice)."""
+cases/pendulum_chain_shaken.toml (6 DOF, 12 multipliers), and the default answer from the full
+monodromy on cases/column_pulsating_load.toml (3 DOF, 6 multipliers)."""
 
 from conftest import CASES
 
@@ -39,12 +38,11 @@ def test_partial_method_matches_full_monodromy(capsys):
 
 
 def test_n_modes_takes_the_largest_from_the_full_monodromy(capsys):
-    """``--n-modes K`` (``--floquet auto``) answers a 3-DOF case from the full monodromy,
-    faster than the partial method below 100 DOF (docs/periodic.md): its listing is the full
-    analysis's K multipliers of largest modulus (the same computation: equal to the last bit),
-    a complex one completed by its conjugate, with the full analysis's verdict and bounds, and
-    ``selected`` saying how many of how many and why; K up to every multiplier is accepted (no
-    ARPACK limit there)."""
+    """``--n-modes K`` (``--floquet auto``) answers from the full monodromy (docs/periodic.md,
+    "Floquet at scale"): its listing is the full analysis's K multipliers of largest modulus
+    (the same computation: equal to the last bit), a complex one completed by its conjugate,
+    with the full analysis's verdict and bounds, and ``selected`` saying how many of how many
+    and why; K up to every multiplier is accepted (no ARPACK limit there)."""
     import json
 
     from mbseig.studies.periodic import periodic_analysis
@@ -55,7 +53,7 @@ def test_n_modes_takes_the_largest_from_the_full_monodromy(capsys):
         out = json.loads(capsys.readouterr().out)
         fl = out["floquet"]
         assert fl["selected"]["count"] == listed and fl["selected"]["of"] == 6
-        assert "faster than the partial" in fl["selected"]["method"]
+        assert fl["selected"]["method"].startswith("full monodromy")
         assert fl["multipliers"] == full["multipliers"][:listed]
         assert fl["error_bounds"] == full["error_bounds"][:listed]
         assert out["verdict"] == full["verdict"] == "unstable"

@@ -270,10 +270,9 @@ def motion_direction(d) -> str:
 # motion, the Floquet multipliers with their error bounds and the verdict; the frozen-time
 # eigenvalues are listed beside them as what a frozen-time analysis would (wrongly) conclude.
 #
-# ``--n-modes K``: the K multipliers of largest modulus.  ``--floquet full`` takes them from the
-# full monodromy, ``partial`` runs Arnoldi on the monodromy operator without forming the
-# monodromy matrix, ``auto`` (the default) the partial method from
-# :data:`mbseig.studies.periodic_partial.PARTIAL_FROM_DOF` degrees of freedom on
+# ``--n-modes K``: the K multipliers of largest modulus.  ``--floquet auto`` (the default) and
+# ``full`` take them from the full monodromy, ``partial`` runs Arnoldi on the monodromy operator
+# without forming the monodromy matrix
 # (:func:`mbseig.studies.periodic_partial.largest_multipliers`).  The frozen-time summary is left
 # out (it needs every eigenvalue at 64 instants).
 def _run_largest(args, spec) -> int:

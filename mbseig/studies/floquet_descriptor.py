@@ -47,8 +47,8 @@ from scipy.sparse.linalg import LinearOperator, eigs
 
 from .floquet import FloquetError, PartialFloquetResult
 
-__all__ = ["BUTCHER6", "DescriptorFlow", "StepsNotSettled", "descriptor_flow",
-           "descriptor_partial", "rk_fixed"]
+__all__ = ["BUTCHER6", "DescriptorFlow", "FULL_MAX_STEPS", "StepsNotSettled", "consistent_start",
+           "descriptor_flow", "descriptor_monodromy", "descriptor_partial", "rk_fixed"]
 
 # Butcher's 7-stage, order-6 explicit method: (c, A rows, b)
 BUTCHER6 = (
@@ -74,23 +74,27 @@ def _inner(c):
 
 
 def rk_fixed(f, x, h, steps, tableau=BUTCHER6):
-    """x after ``steps`` fixed steps of length h of x′ = f(k, x) from t = 0, f called with the
-    index k of the stage's instant in :func:`_instants`' order (its operators)."""
+    """x after ``steps`` fixed steps of length h of x′ = f(k, x, out) from t = 0: f writes the
+    rate at the stage's state into ``out`` and is called with the index k of the stage's instant
+    in :func:`_instants`' order (its operators).  x may be a vector or a matrix of columns; the
+    stage combinations are one product with the stacked rates each (few passes over memory)."""
     c, rows, b = tableau
     inner = _inner(c)
     per = len(inner)
     idx = [inner.index(float(x)) if x < 1.0 else per for x in c]
+    K = np.empty((len(rows),) + np.shape(x))
+    flat = K.reshape(len(rows), -1)
     for s in range(steps):
-        ks = []
         for i, row in enumerate(rows):
-            xi = x
-            for j, a in enumerate(row):
-                if a:
-                    xi = xi + (h * a) * ks[j]
-            ks.append(f(s * per + idx[i], xi))
-        for i, bi in enumerate(b):
-            if bi:
-                x = x + (h * bi) * ks[i]
+            if i == 0:
+                xi = x
+            else:
+                xi = (h * row) @ flat[:i]
+                xi = xi.reshape(np.shape(x))
+                xi += x
+            f(s * per + idx[i], xi, K[i])
+        step = (h * b) @ flat
+        x = x + step.reshape(np.shape(x))
     return x
 
 
@@ -123,7 +127,8 @@ class DescriptorFlow:
         n = self.M.shape[0]
         self.n, self.T, self.steps = n, float(period), int(steps)
         self.h = self.T / self.steps
-        J0 = _csr(J(0.0), (0, n))
+        self._J = J
+        J0 = self._jacobian(0.0, 0)
         self.m = J0.shape[0]
         cache = {} if cache is None else cache  # operators by instant (a fraction of T)
         self.ops = []
@@ -133,13 +138,19 @@ class DescriptorFlow:
             self.ops.append(cache[x])
         self.products = 0
         # the projection at t = 0
-        self._J0, self._Jd0 = J0, _csr(J(0.0, 1), (self.m, n))
+        self._J0, self._Jd0 = J0, self._jacobian(0.0, 1)
         if self.m:
             self._JJ = spla.splu(sp.csc_matrix(J0 @ J0.T))
 
+    def _jacobian(self, t, order):
+        """Φ_q(t) (or its derivative of that order) as CSR; the series gives None for a pattern
+        with no entries: zero rows of its shape."""
+        got = self._J(t, order)
+        return sp.csr_matrix(self._J.shape) if got is None else _csr(got, self._J.shape)
+
     def _operators(self, C, K, J, t):
         n = self.n
-        Jt = _csr(J(t), (0, n))
+        Jt = self._jacobian(t, 0)
         m = Jt.shape[0]
         if m:
             kkt = sp.bmat([[self.M, Jt.T], [Jt, None]], format="csc")
@@ -152,23 +163,28 @@ class DescriptorFlow:
                                f"t = {t:g} ({exc}): a coordinate without mass or redundant "
                                "constraints along the motion", element="monodromy") from None
         Ct, Kt = _csr(C(t), (n, n)), _csr(K(t), (n, n))
-        Jd = _csr(J(t, 1), (m, n)) if m else None
-        Jdd = _csr(J(t, 2), (m, n)) if m else None
+        Jd = self._jacobian(t, 1) if m else None
+        Jdd = self._jacobian(t, 2) if m else None
         return lu.solve, Ct, Kt, Jd, Jdd
 
-    def _rate(self, k, x):
+    def _rate(self, k, x, out):
+        """out ← (v, a): the rate at the stage's state x = (q, v) (vector or columns)."""
         solve, Ct, Kt, Jd, Jdd = self.ops[k]
         n = self.n
         q, v = x[:n], x[n:]
-        top = np.zeros(n) if Kt is None else -(Kt @ q)
+        top = np.zeros_like(q) if Kt is None else -(Kt @ q)
         if Ct is not None:
-            top = top - Ct @ v
+            top -= Ct @ v
+        out[:n] = v
         if self.m:
-            rhs = np.concatenate([top, -2.0 * (Jd @ v) - Jdd @ q])
-            a = solve(rhs)[:n]
+            rhs = np.empty((n + self.m,) + q.shape[1:])
+            rhs[:n] = top
+            rhs[n:] = Jd @ v
+            rhs[n:] *= -2.0
+            rhs[n:] -= Jdd @ q
+            out[n:] = solve(rhs)[:n]
         else:
-            a = solve(top)
-        return np.concatenate([v, a])
+            out[n:] = solve(top)
 
     def project(self, x):
         """Π x: the nearest state (in each half) that keeps the constraints at t = 0."""
@@ -188,17 +204,30 @@ class DescriptorFlow:
         return self.project(y)
 
 
+def consistent_start(flow):
+    """A unit state that keeps the constraints at t = 0: a fixed pseudo-random vector (seeded:
+    the runs repeat) projected by Π.  A structured vector such as all ones can lie wholly in the
+    constraint directions (the spatial pendulum's unit-vector conditions) and project to 0."""
+    x = np.random.default_rng(45).standard_normal(2 * flow.n)
+    v = flow.project(x)
+    norm = float(np.linalg.norm(v))
+    if not norm > 1e-8 * float(np.linalg.norm(x)):
+        raise FloquetError("no state keeps the constraints at t = 0 (the projection removed "
+                           "a random start vector): the motion leaves no degree of freedom",
+                           element="monodromy")
+    return v / norm
+
+
 def descriptor_flow(M, fit, period, *, rtol, start=START_STEPS, max_steps=None):
     """The :class:`DescriptorFlow` whose product of a probe vector agrees with the one at half
     its step count to 63 rtol (module docstring); returns (flow, record) with the step counts
     tried, their differences and the probe products (one per step count); the returned flow's
     own ``products`` restart at 0."""
     max_steps = MAX_STEPS if max_steps is None else max_steps
-    n = np.asarray(M.shape)[0]
-    probe = np.ones(2 * n) / np.sqrt(2 * n)
     steps = int(start)
     cache = {}
     coarse = DescriptorFlow(M, fit, period, steps, cache)
+    probe = consistent_start(coarse)
     x_coarse = coarse(probe)
     history = []
     while True:
@@ -233,8 +262,7 @@ def descriptor_partial(M, fit, period, *, k, rtol, tol, steps=None):
         flow, rec = DescriptorFlow(M, fit, period, steps), {"steps": steps, "probe_products": 0}
     size = 2 * flow.n
     op = LinearOperator((size, size), matvec=flow, dtype=float)
-    v0 = flow.project(np.ones(size))
-    v0 = v0 / np.linalg.norm(v0)
+    v0 = consistent_start(flow)
     mu, V = eigs(op, k=k, which="LM", tol=tol, v0=v0)
     floor = 64 * np.finfo(float).eps * float(np.max(np.abs(mu)))
     if np.any(np.abs(mu) <= floor):
@@ -250,3 +278,25 @@ def descriptor_partial(M, fit, period, *, k, rtol, tol, steps=None):
               f"{rec['steps']} fixed steps a period")
     return PartialFloquetResult(period, mu[order], res[order],
                                 flow.products + rec["probe_products"], method, rtol), flow.steps
+
+
+#: the full monodromy in the model's coordinates stops doubling here (each step integrates 2r
+#: columns): a model that needs more is left to the projected system's adaptive integration
+FULL_MAX_STEPS = 512
+
+
+def descriptor_monodromy(M, fits, period, basis, *, rtol, max_steps=None):
+    """(Φ, Φ̃, steps): the monodromy on the coordinates of ``basis`` (2n × 2r, states that keep
+    the constraints at t = 0, e.g. (y, p) ↦ (δq, δq̇) of the projected system) from every
+    column integrated at once, Φ = basis⁺ Π Φ_T basis, on the first sampling with the steps
+    that meet ``rtol`` (:func:`descriptor_flow`) and, as the check, on the shifted sampling at
+    half those steps (so that Φ − Φ̃ holds the first one's discretization error as well as the
+    sampling's).  Raises :class:`StepsNotSettled` past ``max_steps`` (default
+    :data:`FULL_MAX_STEPS`)."""
+    max_steps = FULL_MAX_STEPS if max_steps is None else max_steps
+    flow, rec = descriptor_flow(M, fits[0], period, rtol=rtol, max_steps=max_steps)
+    half = DescriptorFlow(M, fits[1], period, max(rec["steps"] // 2, 1))
+    basis = np.asarray(basis, dtype=float)
+    Phi = np.linalg.lstsq(basis, flow(basis), rcond=None)[0]
+    Phi2 = np.linalg.lstsq(basis, half(basis), rcond=None)[0]
+    return Phi, Phi2, rec["steps"]

@@ -30,6 +30,7 @@ from ..errors import CaseError, MbseigError
 from ..model.timed import sample_time
 from .floquet import FloquetError, FloquetResult, analyze, monodromy
 from .floquet_chebyshev import chebyshev_system
+from .floquet_descriptor import FULL_MAX_STEPS, StepsNotSettled, descriptor_monodromy
 from .floquet_paths import constrained_system
 from .floquet_sparse import as_operator
 from .periodic_motion import reference_motion, sample_linearization
@@ -43,6 +44,10 @@ _UNTIMED_KEYS = {"name", "type", "repeat", "enabled", "fixed", "points", "bodies
                  "joint", "body", "sets", "sense", "follower"}
 RTOLS = (1e-10, 1e-12)
 SAMPLES = 16  # first sampling of the linearization; doubled until two samplings agree
+#: from this many degrees of freedom on, the monodromy is integrated in the model's own sparse
+#: coordinates (mbseig.studies.floquet_descriptor.descriptor_monodromy), below on the projected
+#: system's Chebyshev interpolants (benchmarks/periodic_scaling.py, docs/periodic.md)
+DESCRIPTOR_FROM_DOF = 100
 
 
 def check_time_fields(data):
@@ -286,27 +291,42 @@ def _periodic_analysis(spec, config, params, rtols, samples, max_samples):
                                  max_samples=max_samples)
     T, M = lin.timed.period, lin.reference.partition.M
     sys1, sys2 = lin.system, lin.check
+    N0, Nd0 = sys1.path.derivative(0.0, 0)
+    r = N0.shape[1]
+    G = np.linalg.inv(N0.T @ M @ N0)
+    H = (M @ N0).T @ Nd0
+    # (y, p) ↦ (δq, δq̇) at t = 0: the projected system's state in the model's coordinates
+    basis = np.block([[N0, np.zeros((N0.shape[0], r))], [Nd0 - N0 @ G @ H, N0 @ G]])
     try:
         lo, hi = sorted(rtols)
-        cheb1, rec = chebyshev_system(sys1.system)
-        cheb2, _ = chebyshev_system(sys2.system)
-        Phi = monodromy(cheb1, rtol=lo)
-        Phi2 = monodromy(cheb2, rtol=hi)
-        res = analyze(Phi, Phi2, T, sys1.system.trace_integral(),
-                      method=f"variational equations projected on the constraints (DOP853 on "
-                             f"Chebyshev interpolants of A(t), degree ≤ {max(rec['degrees'])} "
-                             f"on each of {len(rec['degrees'])} segments; {lin.samples} samples "
-                             "of the linearization per period)",
-                      tolerances=(lo, hi))
+        Phi, why = None, ""
+        if r >= DESCRIPTOR_FROM_DOF:
+            try:
+                Phi, Phi2, steps = descriptor_monodromy(M, lin.fits, T, basis, rtol=hi)
+                method = (f"variational equations in the model's coordinates, every column at "
+                          f"once (index-1 form, sparse solves; Butcher's order-6 Runge–Kutta, "
+                          f"{steps} fixed steps a period, the check at {max(steps // 2, 1)}); "
+                          f"{lin.samples} samples of the linearization per period")
+                tolerances = (hi,)
+            except StepsNotSettled:  # too stiff for explicit steps: the projected system's
+                Phi, why = None, (f"; the model's-coordinates integration, tried at {r} DOF, "
+                                  f"did not settle within {FULL_MAX_STEPS} steps a period")
+        if Phi is None:
+            cheb1, rec = chebyshev_system(sys1.system)
+            cheb2, _ = chebyshev_system(sys2.system)
+            Phi = monodromy(cheb1, rtol=lo)
+            Phi2 = monodromy(cheb2, rtol=hi)
+            method = (f"variational equations projected on the constraints (DOP853 on "
+                      f"Chebyshev interpolants of A(t), degree ≤ {max(rec['degrees'])} on each "
+                      f"of {len(rec['degrees'])} segments; {lin.samples} samples of the "
+                      f"linearization per period{why})")
+            tolerances = (lo, hi)
+        res = analyze(Phi, Phi2, T, sys1.system.trace_integral(), method=method,
+                      tolerances=tolerances)
     except MbseigError as exc:
         raise exc.located(file=spec.source) from None
     except (np.linalg.LinAlgError, ArithmeticError) as exc:
         raise FloquetError(f"the monodromy matrix failed: {exc}", element="monodromy",
                            file=spec.source) from None
-    N0, Nd0 = sys1.path.derivative(0.0, 0)
-    r = N0.shape[1]
-    G = np.linalg.inv(N0.T @ M @ N0)
-    H = (M @ N0).T @ Nd0
-    basis = np.block([[N0, np.zeros((N0.shape[0], r))], [Nd0 - N0 @ G @ H, N0 @ G]])
     return PeriodicAnalysis(spec.name, lin.parameters, lin.timed, lin.reference, res,
                             lin.samples, lin.sampling_difference, r, basis, sys1)

@@ -20,12 +20,25 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg as la
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 from scipy.integrate import solve_ivp
 
 from ..errors import CaseError
 from .floquet import FloquetError
 
 _MARCH = 64  # instants of the marched assembly
+#: systems at least this large and at most SPARSE_FILL full are solved by sparse LU (the same
+#: solution to rounding; below, dense LU keeps small models' numbers as they were)
+SPARSE_FROM = 200
+SPARSE_FILL = 0.05
+
+
+def _solve(A, b):
+    """A⁻¹ b, by sparse LU where A is large and sparse (chains: banded), else dense."""
+    if A.shape[0] >= SPARSE_FROM and np.count_nonzero(A) <= SPARSE_FILL * A.size:
+        return spla.splu(sp.csc_matrix(A)).solve(b)
+    return np.linalg.solve(A, b)
 
 __all__ = ["Partitioned", "ReferenceMotion", "reference_motion", "sample_linearization", "shoot",
            "simulate"]
@@ -39,6 +52,7 @@ class Partitioned:
         self.timed, self.tol = timed, tol
         base = timed.base
         self.M = base.mass.toarray()
+        self._M_sparse = None  # M as CSC, made on the first sparse solve (state)
         self.scales = base.constraint_scales()
         q = self.position(np.asarray(q_start, dtype=float), 0.0, dep=None)
         J = timed.phi_q(q, 0.0)
@@ -86,7 +100,7 @@ class Partitioned:
                 step = -np.linalg.lstsq(J, r, rcond=None)[0]
                 q += step
             else:
-                step = -np.linalg.solve(J[:, cols], r)
+                step = -_solve(J[:, cols], r)
                 q[cols] += step
             # a step this small leaves a rounding-level residual: one more evaluation
             small = np.max(np.abs(step)) <= self.tol * max(1.0, self.timed.base.length_scale)
@@ -112,14 +126,21 @@ class Partitioned:
         if m:
             _, phit, phitt = self.timed.phi_time(q, t)
             J = self.timed.phi_q(q, t)
-            qd[self.dep] = np.linalg.solve(J[:, self.dep], -phit - J[:, self.ind] @ xi[d:])
+            qd[self.dep] = _solve(J[:, self.dep], -phit - J[:, self.ind] @ xi[d:])
             rhs2 = model.gamma(q, qd) - 2.0 * self.timed.phi_qt(q, t) @ qd - phitt
         else:
             J, rhs2 = np.zeros((0, q.size)), np.zeros(0)
         self._last = (t, q, qd)
         n = q.size
-        A = np.block([[self.M, J.T], [J, np.zeros((m, m))]])
-        sol = np.linalg.solve(A, np.concatenate([model.generalized_force(q, qd), rhs2]))
+        rhs = np.concatenate([model.generalized_force(q, qd), rhs2])
+        if n + m >= SPARSE_FROM and np.count_nonzero(J) <= SPARSE_FILL * J.size:
+            if self._M_sparse is None:
+                self._M_sparse = sp.csc_matrix(self.M)
+            Js = sp.csr_matrix(J)
+            sol = spla.splu(sp.bmat([[self._M_sparse, Js.T], [Js, None]], format="csc")).solve(rhs)
+        else:
+            A = np.block([[self.M, J.T], [J, np.zeros((m, m))]])
+            sol = np.linalg.solve(A, rhs)
         return q, qd, sol[:n], sol[n:]
 
     budget = 10_000  # right-hand sides per integration (a period far longer than the motion)

@@ -23,11 +23,12 @@ critical otherwise.
 
 Cost: a product costs O(nnz) a stage (a sparse solve and four sparse products), against (2r)² a
 stage and column for the full monodromy on the dense projected system.  ARPACK needs a few
-times K products, many more where the largest |μ| are clustered.  Explicit steps suit models
-whose fastest mode the period resolves in a few hundred steps; a stiff one (beams) needs
-thousands, and ``--floquet auto`` hands it to the full monodromy
-(:func:`largest_multipliers`).  Measured in benchmarks/periodic_scaling.py (docs/periodic.md,
-"Floquet at scale").
+times K products where the largest |μ| stand apart, and a number that grows with the model
+where they are clustered (the chain of shaken pendulums: 65, 229 and 569 products at 6, 25 and
+50 pendulums for K = 1), so ``--floquet auto`` answers from the full monodromy
+(:func:`largest_multipliers`).  Explicit steps suit models whose fastest mode the period
+resolves in a few hundred steps; a stiff one (beams) needs thousands.  Measured in
+benchmarks/periodic_scaling.py (docs/periodic.md, "Floquet at scale").
 """
 
 from __future__ import annotations
@@ -43,15 +44,11 @@ from .floquet_descriptor import descriptor_partial
 from .periodic import periodic_linearization
 from .periodic_listing import reduced_exponents
 
-__all__ = ["PartialAnalysis", "periodic_partial", "PARTIAL_RTOL", "PARTIAL_FROM_DOF",
-           "largest_multipliers"]
+__all__ = ["PartialAnalysis", "periodic_partial", "PARTIAL_RTOL", "largest_multipliers"]
 
 #: the first estimate's steps change a probe product by at most 63 × this when halved (its own
 #: error about 1/63 of that); the second runs at half those steps
 PARTIAL_RTOL = 1e-11
-#: ``--floquet auto`` runs the partial method from this many degrees of freedom on, the full
-#: monodromy below (benchmarks/periodic_scaling.py, docs/periodic.md "Floquet at scale")
-PARTIAL_FROM_DOF = 100
 
 
 @dataclass(frozen=True)
@@ -169,36 +166,14 @@ def periodic_partial(spec, *, k, config=None, params=None, rtol=PARTIAL_RTOL,
 
 def largest_multipliers(spec, *, k, floquet="auto", config=None, params=None) -> dict:
     """The modes JSON of ``mbseig modes CASE --n-modes K`` on a periodic case: the K largest
-    |μ| by the full monodromy (``floquet = "full"``), the partial method (``"partial"``) or, with
-    ``"auto"``, the partial method from :data:`PARTIAL_FROM_DOF` degrees of freedom on (the full
-    one below, and wherever the partial method's explicit steps do not settle: a stiff model);
+    |μ| by the full monodromy (``floquet = "auto"`` or ``"full"``) or by the partial method
+    (``"partial"``, on request only: on clustered multipliers, such as the chain of shaken
+    pendulums', ARPACK needs a number of products that grows with the model, docs/periodic.md);
     ``floquet.selected`` says which and why."""
-    from .floquet_descriptor import StepsNotSettled
     from .periodic import periodic_analysis
     from .periodic_listing import FULL_FOR_LARGEST, largest_json, partial_json
 
-    why = None
-    if floquet == "auto":
-        dof = periodic_linearization(spec, config=config, params=params).system.dof
-        if dof >= PARTIAL_FROM_DOF:
-            try:
-                p = periodic_partial(spec, k=k, config=config, params=params)
-            except StepsNotSettled as exc:
-                why = (f"full monodromy: the partial method, chosen at {dof} DOF (≥ "
-                       f"{PARTIAL_FROM_DOF}), did not settle ({exc})")
-            else:
-                out = partial_json(p)
-                out["floquet"]["selected"] = {
-                    "count": len(out["floquet"]["multipliers"]),
-                    "of": out["floquet"]["partial"]["of"],
-                    "method": f"partial (Arnoldi) method: {dof} DOF ≥ {PARTIAL_FROM_DOF}, "
-                              "where its sparse products are faster than the full monodromy "
-                              "(docs/periodic.md)"}
-                return out
-        else:
-            why = (f"{FULL_FOR_LARGEST} ({dof} DOF < {PARTIAL_FROM_DOF}; --floquet partial "
-                   "runs the partial method)")
-    elif floquet == "partial":
+    if floquet == "partial":
         out = partial_json(periodic_partial(spec, k=k, config=config, params=params))
         out["floquet"]["selected"] = {"count": len(out["floquet"]["multipliers"]),
                                       "of": out["floquet"]["partial"]["of"],
@@ -206,5 +181,6 @@ def largest_multipliers(spec, *, k, floquet="auto", config=None, params=None) ->
         return out
     a = periodic_analysis(spec, config=config, params=params)
     out = largest_json(a, k)
-    out["floquet"]["selected"]["method"] = why or "full monodromy, as asked"
+    out["floquet"]["selected"]["method"] = (FULL_FOR_LARGEST if floquet == "auto"
+                                            else "full monodromy, as asked")
     return out
