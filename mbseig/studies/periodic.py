@@ -30,7 +30,8 @@ from ..errors import CaseError, MbseigError
 from ..model.timed import sample_time
 from .floquet import FloquetError, FloquetResult, analyze, monodromy
 from .floquet_chebyshev import chebyshev_system
-from .floquet_descriptor import FULL_MAX_STEPS, StepsNotSettled, descriptor_monodromy
+from . import floquet_descriptor
+from .floquet_descriptor import StepsNotSettled, descriptor_monodromy
 from .floquet_paths import constrained_system
 from .floquet_sparse import as_operator
 from .periodic_motion import reference_motion, sample_linearization
@@ -310,7 +311,8 @@ def _periodic_analysis(spec, config, params, rtols, samples, max_samples):
                 tolerances = (hi,)
             except StepsNotSettled:  # too stiff for explicit steps: the projected system's
                 Phi, why = None, (f"; the model's-coordinates integration, tried at {r} DOF, "
-                                  f"did not settle within {FULL_MAX_STEPS} steps a period")
+                                  f"did not settle within {floquet_descriptor.FULL_MAX_STEPS} "
+                                  "steps a period")
         if Phi is None:
             cheb1, rec = chebyshev_system(sys1.system)
             cheb2, _ = chebyshev_system(sys2.system)
