@@ -140,7 +140,11 @@ class DescriptorFlow:
         # the projection at t = 0
         self._J0, self._Jd0 = J0, self._jacobian(0.0, 1)
         if self.m:
-            self._JJ = spla.splu(sp.csc_matrix(J0 @ J0.T))
+            try:
+                self._JJ = spla.splu(sp.csc_matrix(J0 @ J0.T))
+            except RuntimeError as exc:  # SuperLU: "Factor is exactly singular"
+                raise FloquetError(f"Φ_q loses rank at t = 0 ({exc}): redundant constraints",
+                                   element="monodromy") from None
 
     def _jacobian(self, t, order):
         """Φ_q(t) (or its derivative of that order) as CSR; the series gives None for a pattern

@@ -37,8 +37,17 @@ SPARSE_FILL = 0.05
 def _solve(A, b):
     """A⁻¹ b, by sparse LU where A is large and sparse (chains: banded), else dense."""
     if A.shape[0] >= SPARSE_FROM and np.count_nonzero(A) <= SPARSE_FILL * A.size:
-        return spla.splu(sp.csc_matrix(A)).solve(b)
+        return _sparse_solve(sp.csc_matrix(A), b)
     return np.linalg.solve(A, b)
+
+
+def _sparse_solve(A, b):
+    """A⁻¹ b by SuperLU; a singular A raises LinAlgError, as the dense solve does (the callers
+    report it)."""
+    try:
+        return spla.splu(A).solve(b)
+    except RuntimeError as exc:  # SuperLU: "Factor is exactly singular"
+        raise np.linalg.LinAlgError(str(exc)) from None
 
 __all__ = ["Partitioned", "ReferenceMotion", "reference_motion", "sample_linearization", "shoot",
            "simulate"]
@@ -137,7 +146,7 @@ class Partitioned:
             if self._M_sparse is None:
                 self._M_sparse = sp.csc_matrix(self.M)
             Js = sp.csr_matrix(J)
-            sol = spla.splu(sp.bmat([[self._M_sparse, Js.T], [Js, None]], format="csc")).solve(rhs)
+            sol = _sparse_solve(sp.bmat([[self._M_sparse, Js.T], [Js, None]], format="csc"), rhs)
         else:
             A = np.block([[self.M, J.T], [J, np.zeros((m, m))]])
             sol = np.linalg.solve(A, rhs)

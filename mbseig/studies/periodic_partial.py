@@ -9,8 +9,7 @@ t = 0 and adds only zeros to the spectrum).  Two independent estimates, as for t
 monodromy (:mod:`mbseig.studies.periodic`): the linearization sampled on N instants with the
 steps that meet the tighter tolerance, and on the grid shifted by half a sample with half
 those steps (so their difference holds the first's discretization error, not only the
-sampling's).  The bound of
-multiplier k is the largest of
+sampling's).  The bound of multiplier k is the largest of
 
 (i)   |μ_k − μ̃_k|, the difference between the two estimates (matched by assignment);
 (ii)  ‖Φ v_k − μ_k v_k‖/‖v_k‖, the residual of the Ritz pair (a fresh product), which bounds the
