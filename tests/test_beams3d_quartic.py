@@ -296,10 +296,9 @@ def test_euler_bernoulli_quartic_refused_and_auto_defaults(tmp_path):
 
 
 def test_campbell_one_build_equals_builds_per_point_with_quartic_shafts(tmp_path, monkeypatch):
-    """A speed sweep of ROSS's example rotor meshed with quartic elements: the one-build path
+    """A speed sweep of the spinning shaft meshed with 2 quartic elements: the one-build path
     (the spin replaced element by element) gives exactly the numbers of a build per point."""
-    text = (CASES / "ross_example_rotor.toml").read_text().replace(
-        "elements = 6", 'elements = 2\nelement = "quartic"')
+    text = SHAFT.replace('elements = "n"', 'elements = 2\nelement = "quartic"')
     spec = read_case(write_case(tmp_path, text))
     speeds = np.linspace(0.0, 500.0, 3)
     a = C.campbell(spec, "Omega", speeds)

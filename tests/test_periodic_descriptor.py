@@ -52,16 +52,15 @@ def test_butcher_method_has_order_6():
 
 def test_descriptor_products_give_the_full_monodromys_multipliers():
     """On the 3-pendulum chain (6 coordinates, 3 rheonomic constraints, 6 multipliers), the
-    largest multipliers by ARPACK on the descriptor products equal the full monodromy's within
+    largest multiplier by ARPACK on the descriptor products equals the full monodromy's within
     the sum of the two bounds (the full one's and the two estimates' difference plus residual of
     the partial one), the verdict is the same (unstable), and the product maps the constraint
     directions the projection removes to 0 (to the rounding of one projection)."""
     spec = read_case(CHAIN)
-    p = PP.periodic_partial(spec, k=2, params={"n": 3})
+    p = PP.periodic_partial(spec, k=1, params={"n": 3})
     full = periodic_analysis(spec, params={"n": 3}).floquet
-    for j in range(2):
-        assert abs(p.multipliers[j] - full.multipliers[j]) <= (p.error_bounds[j]
-                                                               + full.error_bounds[j])
+    assert abs(p.multipliers[0] - full.multipliers[0]) <= (p.error_bounds[0]
+                                                           + full.error_bounds[0])
     assert p.error_bounds[0] < 1e-8 and p.verdict == full.verdict == "unstable"
     lin = periodic_linearization(spec, params={"n": 3})
     flow, rec = descriptor_flow(lin.reference.partition.M, lin.fits[0], lin.timed.period,
