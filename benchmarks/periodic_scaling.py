@@ -1,19 +1,18 @@
 """Benchmark: how the cost of Floquet analysis grows with the model, full monodromy against the
 partial (Arnoldi) method, on a chain of N pendulums whose pivots are shaken vertically.
 
-The chain (cases/pendulum_chain_shaken.toml with n = N): N pendulums (point mass m on a rigid rod l, distance constraints), side by side at
-spacing a, each pivot moved as y = A cos(w t) (the rod's constraint is rheonomic), neighbours
-coupled by weak springs kc between the masses.  2N coordinates (the masses; the reader keeps
-these repeated pivots out of the coordinates), N constraints, N degrees of freedom, 2N
-multipliers.  The hanging chain is an
-exact periodic motion (shooting converges at once), so the timings are those of the
-linearization along it and of the monodromy.  Linearized, the chain's modes decouple into
-Mathieu equations θ'' + (g/l + (kc/m) λ_j − (A w²/l) cos wt) θ = 0, λ_j = 2 − 2 cos(jπ/N)
-(free ends): mode 0 (λ = 0) is the single pendulum, and w = 6.3 puts it in the principal
-tongue (cases/pendulum_shaken_pivot.toml), so the dominant multiplier is that of the single
-pendulum, μ = −1.36824 (checked against the full method at every N).  With kc = 0.05 every
-mode j stays in the tongue (g/l + 4 kc/m < (w/2)² a₁(0.2)), so all N modes grow (at N = 6
-within 0.2 % of it): the dominant multiplier is the top of a cluster.
+The chain (cases/pendulum_chain_shaken.toml with n = N): N pendulums (point mass m on a rigid rod
+l, distance constraints), side by side at spacing a, each pivot moved as y = A cos(w t) (the rod's
+constraint is rheonomic), neighbours coupled by weak springs kc between the masses. 2N coordinates
+(the masses; the reader keeps these repeated pivots out of the coordinates), N constraints, N
+degrees of freedom, 2N multipliers. The hanging chain is an exact periodic motion (shooting
+converges at once), so the timings are those of the linearization along it and of the monodromy.
+Linearized, the chain's modes decouple into Mathieu equations θ'' + (g/l + (kc/m) λ_j − (A w²/l)
+cos wt) θ = 0, λ_j = 2 − 2 cos(jπ/N) (free ends): mode 0 (λ = 0) is the single pendulum, and w =
+6.3 puts it in the principal tongue (cases/pendulum_shaken_pivot.toml), so the dominant multiplier
+is that of the single pendulum, μ = −1.36824 (checked against the full method at every N). With kc
+= 0.05 every mode j stays in the tongue (g/l + 4 kc/m < (w/2)² a₁(0.2)), so all N modes grow (at N
+= 6 within 0.2 % of it): the dominant multiplier is the top of a cluster.
 
 Measured for each N (wall time and the process's CPU time, one BLAS thread, median of --repeat
 cold runs): the linearization (timed model, reference motion, sampled linearization), the full
@@ -22,11 +21,17 @@ the K largest multipliers by the partial method (``periodic_partial``, two estim
 shared machine the CPU time is the steadier figure.  Growth exponents are fitted on log(time)
 against log(N).
 
-    python benchmarks/periodic_scaling.py [--sizes 15 50 100 150] [--partial-max N] [--k 1]
-        [--repeat 5]
+The detuned chain (``--chain detuned``: l2 = 0.5, pendulums 2 to N out of the tongue, stable
+on their own) keeps pendulum 1 alone in resonance: its multiplier (−1.36811) stands apart from
+the rest, on the unit circle, and ARPACK converges in about one basis at every N.  Its
+reference is the full method (no closed form: the modes do not decouple); the single
+pendulum's multiplier printed beside it differs by the coupling (≈ 1.3e-4).
 
-docs/periodic.md, "Floquet at scale", has the run of
-``--sizes 15 25 50 100 150 500 --k 1``.
+    python benchmarks/periodic_scaling.py [--sizes 15 50 100 150] [--partial-max N] [--k 1]
+        [--repeat 5] [--chain uniform|detuned]
+
+docs/periodic.md, "Floquet at scale", has the runs of
+``--sizes 15 25 50 100 150 500 --k 1`` on both chains.
 """
 
 from __future__ import annotations
@@ -48,7 +53,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 #: the bundled chain (n = 6 there), its size replaced per run
 CASE = (ROOT / "cases" / "pendulum_chain_shaken.toml").read_text()
-assert "\nn = 6 " in CASE
+assert "\nn = 6 " in CASE and "\nl2 = 1.0 " in CASE
+#: the chains: uniform (l2 = l, every mode in the tongue, the growing multipliers clustered) and
+#: detuned (l2 = 0.5: pendulums 2 to n out of the tongue, pendulum 1's multiplier apart)
+CHAINS = {"uniform": "1.0", "detuned": "0.5"}
 
 
 def single_pendulum_multiplier(g=9.81, l=1.0, A=0.1, w=6.3):
@@ -99,11 +107,12 @@ def cold_runs(spec, repeat, k=None):
     return {key: statistics.median(v) for key, v in times.items() if v}, out
 
 
-def run(n, directory, *, k, partial, repeat):
+def run(n, directory, *, k, partial, repeat, chain="uniform"):
     from mbseig.casefile import read_case
 
-    path = Path(directory) / f"chain{n}.toml"
-    path.write_text(CASE.replace("\nn = 6 ", f"\nn = {n} ", 1))
+    path = Path(directory) / f"chain{n}_{chain}.toml"
+    path.write_text(CASE.replace("\nn = 6 ", f"\nn = {n} ", 1)
+                    .replace("\nl2 = 1.0 ", f"\nl2 = {CHAINS[chain]} ", 1))
     spec = read_case(path)
     row = {"n": n}
     medians, (lin, a, p) = cold_runs(spec, repeat, k if partial else None)
@@ -135,13 +144,19 @@ def main(argv=None):
                     "asks into the cluster of the chain's growing multipliers: many more "
                     "products)")
     ap.add_argument("--repeat", type=int, default=1, help="runs per size (median)")
+    ap.add_argument("--chain", choices=sorted(CHAINS), default="uniform",
+                    help="uniform (clustered multipliers; the reference is the single pendulum's "
+                         "multiplier) or detuned (l2 = 0.5; pendulum 1's multiplier apart, "
+                         "checked against the full method only)")
     args = ap.parse_args(argv)
     warnings.simplefilter("ignore")
     rows = []
     ref = single_pendulum_multiplier()
+    print(f"chain: {args.chain} (l2 = {CHAINS[args.chain]})")
     with tempfile.TemporaryDirectory() as d:
         for n in args.sizes:
-            row = run(n, d, k=args.k, partial=n <= args.partial_max, repeat=args.repeat)
+            row = run(n, d, k=args.k, partial=n <= args.partial_max, repeat=args.repeat,
+                      chain=args.chain)
             rows.append(row)
             line = (f"N = {n:4d}: {row['coordinates']:4d} coordinates, {row['dof']:4d} DOF; "
                     f"linearization {row['linearization']:7.2f} s "

@@ -76,7 +76,8 @@ def test_a_stiff_model_is_handed_to_the_projected_integration(monkeypatch):
     1e-10) does not settle within a small step cap (StepsNotSettled); made to try the full
     monodromy in its own coordinates (from 1 DOF, within 128 steps here: FULL_MAX_STEPS is 512),
     it does not settle either, and the analysis integrates the projected system instead, saying
-    so in its method."""
+    so in its method; ``--floquet auto`` tries the partial method within that cap, and the full
+    monodromy answers, saying why."""
     spec = read_case(CASES / "column_pulsating_load.toml")
     lin = periodic_linearization(spec)
     monkeypatch.setattr("mbseig.studies.floquet_descriptor.MAX_STEPS", 64)
@@ -87,9 +88,13 @@ def test_a_stiff_model_is_handed_to_the_projected_integration(monkeypatch):
     monkeypatch.setattr("mbseig.studies.floquet_descriptor.FULL_MAX_STEPS", 128)
     P.forget_kept()
     method = P.periodic_analysis(spec).floquet.method
+    # --floquet auto (from 1 DOF here) tries the partial method within the same step cap first
+    how = PP.largest_multipliers(spec, k=1)["floquet"]["selected"]["method"]
     P.forget_kept()
     assert method.startswith("variational equations projected on the constraints")
     assert "did not settle within 128 steps" in method
+    assert how.startswith("full monodromy")
+    assert "could not run: its explicit steps did not settle within 128 a period" in how
 
 
 def test_full_monodromy_in_the_models_coordinates_equals_the_projected_one(monkeypatch):
@@ -123,6 +128,37 @@ def test_partial_on_request_says_so(capsys):
         fl = json.loads(capsys.readouterr().out)["floquet"]
         assert fl["selected"]["method"].startswith(start)
         assert ("partial" in fl) == (option == "partial")
+
+
+def test_auto_tries_the_partial_method_then_the_full_monodromy(monkeypatch, capsys):
+    """``--floquet auto`` from ``DESCRIPTOR_FROM_DOF`` on (1 here, so that 3 pendulums are
+    enough): on the detuned chain (l2 = 0.5: pendulum 1 alone in the tongue, its multiplier
+    apart from the rest on the unit circle) the partial method converges within its budget and
+    answers, agreeing with ``--floquet full`` within the sum of the two bounds; given a budget
+    of 5 products (below ARPACK's first basis of 20), the uniform chain's attempt stops with
+    BudgetSpent and the full monodromy answers, equal to the last bit to ``--floquet full``'s,
+    each saying what ran and why."""
+    monkeypatch.setattr(P, "DESCRIPTOR_FROM_DOF", 1)
+    P.forget_kept()
+
+    def run(*argv):
+        assert main(["modes", str(CHAIN), "--param", "n=3", *argv, "--n-modes", "1",
+                     "--json"]) == 0
+        return json.loads(capsys.readouterr().out)["floquet"]
+
+    auto, full = run("--param", "l2=0.5"), run("--param", "l2=0.5", "--floquet", "full")
+    assert auto["selected"]["method"].startswith("partial (Arnoldi) method: from 1 DOF on")
+    assert auto["partial"]["products"] <= 2 * PP.partial_budget(1) + 8  # + probes, residuals
+    mu_a, mu_f = complex(*auto["multipliers"][0]), complex(*full["multipliers"][0])
+    assert abs(mu_a - mu_f) <= auto["error_bounds"][0] + full["error_bounds"][0]
+    assert auto["verdict"] == full["verdict"] == "unstable"
+    monkeypatch.setattr(PP, "partial_budget", lambda k: 5)
+    auto, full = run(), run("--floquet", "full")
+    P.forget_kept()
+    assert "did not converge within its budget of 5 products" in auto["selected"]["method"]
+    assert "partial" not in auto
+    assert auto["multipliers"] == full["multipliers"]
+    assert auto["error_bounds"] == full["error_bounds"]
 
 
 def test_start_vector_keeps_the_constraints_where_all_ones_does_not():

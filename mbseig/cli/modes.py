@@ -36,8 +36,9 @@ def register(sub):
                         "large models)")
     p.add_argument("--floquet", choices=("auto", "full", "partial"), default="auto",
                    help="a periodic case with --n-modes K: the K largest |mu| from the full "
-                        "monodromy (auto, full: faster at every size measured) or by the "
-                        "partial (Arnoldi) method")
+                        "monodromy (full), by the partial (Arnoldi) method (partial), or (auto) "
+                        "by the partial method from 100 DOF on within a product budget, else "
+                        "the full monodromy")
     p.add_argument("--target-hz", type=float, default=None, metavar="F",
                    help="with --n-modes: the modes whose natural frequency omega_n/2pi = "
                         "|s|/2pi is nearest F Hz (default 0: the lowest)")
@@ -270,9 +271,10 @@ def motion_direction(d) -> str:
 # motion, the Floquet multipliers with their error bounds and the verdict; the frozen-time
 # eigenvalues are listed beside them as what a frozen-time analysis would (wrongly) conclude.
 #
-# ``--n-modes K``: the K multipliers of largest modulus.  ``--floquet auto`` (the default) and
-# ``full`` take them from the full monodromy, ``partial`` runs Arnoldi on the monodromy operator
-# without forming the monodromy matrix
+# ``--n-modes K``: the K multipliers of largest modulus.  ``full`` takes them from the full
+# monodromy, ``partial`` runs Arnoldi on the monodromy operator without forming the monodromy
+# matrix, ``auto`` (the default) tries the partial method within a product budget from 100 DOF
+# on and otherwise answers from the full monodromy
 # (:func:`mbseig.studies.periodic_partial.largest_multipliers`).  The frozen-time summary is left
 # out (it needs every eigenvalue at 64 instants).
 def _run_largest(args, spec) -> int:

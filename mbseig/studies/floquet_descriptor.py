@@ -30,10 +30,11 @@ The integration uses fixed steps of Butcher's explicit Runge–Kutta method of o
 stages at c = 0, 1/3, 2/3, 1/3, 1/2, 1/2, 1: four new instants a step; Butcher 1964, and
 Butcher, *Numerical Methods for Ordinary Differential Equations*, 2016, §325), so that every
 product meets the same instants: the solve's factorization and the sparse C, K, Φ̇_q, Φ̈_q are made
-once per instant and reused by every product.  A stage then costs a sparse solve and four sparse
-products, O(nnz).  The step count is doubled from ``START_STEPS`` until the product of a probe
-vector with n and 2n steps differs by at most 63 rtol ‖Φ v‖ (the order-6 error of the finer run is
-about the difference over 2⁶ − 1).
+once per instant and reused by every product, with the right-hand side's four blocks as one
+sparse matrix of the state.  A stage then costs a sparse solve and one sparse product, O(nnz).
+The step count is doubled from ``START_STEPS`` until the product of a probe vector with n and
+2n steps differs by at most 63 rtol ‖Φ v‖ (the order-6 error of the finer run is about the
+difference over 2⁶ − 1).
 """
 
 from __future__ import annotations
@@ -47,8 +48,9 @@ from scipy.sparse.linalg import LinearOperator, eigs
 
 from .floquet import FloquetError, PartialFloquetResult
 
-__all__ = ["BUTCHER6", "DescriptorFlow", "FULL_MAX_STEPS", "StepsNotSettled", "consistent_start",
-           "descriptor_flow", "descriptor_monodromy", "descriptor_partial", "rk_fixed"]
+__all__ = ["BUTCHER6", "BudgetSpent", "DescriptorFlow", "FULL_MAX_STEPS", "StepsNotSettled",
+           "consistent_start", "descriptor_flow", "descriptor_monodromy", "descriptor_partial",
+           "rk_fixed"]
 
 # Butcher's 7-stage, order-6 explicit method: (c, A rows, b)
 BUTCHER6 = (
@@ -66,6 +68,11 @@ MAX_STEPS = 8192
 class StepsNotSettled(FloquetError):
     """The fixed-step products did not settle within ``MAX_STEPS`` steps a period (a model too
     stiff for explicit steps)."""
+
+
+class BudgetSpent(FloquetError):
+    """ARPACK did not converge within the products it was given (:func:`descriptor_partial`
+    ``budget``): the largest |μ| are clustered, or too many were asked."""
 
 
 def _inner(c):
@@ -137,6 +144,7 @@ class DescriptorFlow:
                 cache[x] = self._operators(C, K, J, self.T * float(x))
             self.ops.append(cache[x])
         self.products = 0
+        self.budget = None  # products allowed (None: no limit), BudgetSpent past it
         # the projection at t = 0
         self._J0, self._Jd0 = J0, self._jacobian(0.0, 1)
         if self.m:
@@ -166,29 +174,22 @@ class DescriptorFlow:
             raise FloquetError(f"the mass-constraint matrix [M, Φ_qᵀ; Φ_q, 0] is singular at "
                                f"t = {t:g} ({exc}): a coordinate without mass or redundant "
                                "constraints along the motion", element="monodromy") from None
-        Ct, Kt = _csr(C(t), (n, n)), _csr(K(t), (n, n))
-        Jd = self._jacobian(t, 1) if m else None
-        Jdd = self._jacobian(t, 2) if m else None
-        return lu.solve, Ct, Kt, Jd, Jdd
+        # the right-hand side as one sparse product with the state (q, v):
+        # [−K, −C; −Φ̈_q, −2 Φ̇_q] (an empty block where the model has no such term)
+        zero = sp.csr_matrix((n, n))
+        Kt, Ct = _csr(K(t), (n, n)), _csr(C(t), (n, n))
+        rows = [[zero if Kt is None else -Kt, zero if Ct is None else -Ct]]
+        if m:
+            rows.append([-self._jacobian(t, 2), -2.0 * self._jacobian(t, 1)])
+        rhs = sp.bmat(rows, format="csr")
+        return lu.solve, rhs
 
     def _rate(self, k, x, out):
         """out ← (v, a): the rate at the stage's state x = (q, v) (vector or columns)."""
-        solve, Ct, Kt, Jd, Jdd = self.ops[k]
+        solve, rhs = self.ops[k]
         n = self.n
-        q, v = x[:n], x[n:]
-        top = np.zeros_like(q) if Kt is None else -(Kt @ q)
-        if Ct is not None:
-            top -= Ct @ v
-        out[:n] = v
-        if self.m:
-            rhs = np.empty((n + self.m,) + q.shape[1:])
-            rhs[:n] = top
-            rhs[n:] = Jd @ v
-            rhs[n:] *= -2.0
-            rhs[n:] -= Jdd @ q
-            out[n:] = solve(rhs)[:n]
-        else:
-            out[n:] = solve(top)
+        out[:n] = x[n:]
+        out[n:] = solve(rhs @ x)[:n]
 
     def project(self, x):
         """Π x: the nearest state (in each half) that keeps the constraints at t = 0."""
@@ -203,6 +204,9 @@ class DescriptorFlow:
 
     def __call__(self, x):
         """Π Φ_T Π x (real x of length 2n)."""
+        if self.budget is not None and self.products >= self.budget:
+            raise BudgetSpent(f"Arnoldi did not converge within {self.budget} products",
+                              element="monodromy")
         self.products += 1
         y = rk_fixed(self._rate, self.project(np.asarray(x, dtype=float)), self.h, self.steps)
         return self.project(y)
@@ -253,21 +257,32 @@ def descriptor_flow(M, fit, period, *, rtol, start=START_STEPS, max_steps=None):
         steps, coarse, x_coarse = 2 * steps, fine, x_fine
 
 
-def descriptor_partial(M, fit, period, *, k, rtol, tol, steps=None):
-    """(result, steps): the ``k`` multipliers of largest modulus by ARPACK on
+def descriptor_partial(M, fit, period, *, k, rtol, tol, steps=None, budget=None, start=None,
+                       ncv=None, max_steps=None):
+    """(result, steps, vectors): the ``k`` multipliers of largest modulus by ARPACK on
     :class:`DescriptorFlow` (a :class:`~mbseig.studies.floquet.PartialFloquetResult`;
-    ``products`` counts every integration, the step probes included) and the steps a period it
-    used: chosen for ``rtol`` (:func:`descriptor_flow`), or ``steps`` as given.  A Ritz value at
-    the rounding level of the largest is one of the 2m zeros the projection adds, not a
-    multiplier: asking that many is refused."""
+    ``products`` counts every integration, the step probes included), the steps a period it
+    used (chosen for ``rtol`` by :func:`descriptor_flow` within ``max_steps``, or ``steps`` as
+    given) and the Ritz
+    vectors (columns, in the result's order).  ARPACK starts from ``start`` projected by Π (a
+    previous estimate's vectors, summed) or from :func:`consistent_start`; past ``budget``
+    products it stops with :class:`BudgetSpent`.  A Ritz value at the rounding level of the
+    largest is one of the 2m zeros the projection adds, not a multiplier: asking that many is
+    refused."""
     if steps is None:
-        flow, rec = descriptor_flow(M, fit, period, rtol=rtol)
+        flow, rec = descriptor_flow(M, fit, period, rtol=rtol, max_steps=max_steps)
     else:
         flow, rec = DescriptorFlow(M, fit, period, steps), {"steps": steps, "probe_products": 0}
     size = 2 * flow.n
     op = LinearOperator((size, size), matvec=flow, dtype=float)
     v0 = consistent_start(flow)
-    mu, V = eigs(op, k=k, which="LM", tol=tol, v0=v0)
+    if start is not None:
+        warm = flow.project(np.asarray(start, dtype=complex).reshape(size, -1).sum(axis=1).real)
+        if np.linalg.norm(warm) > 0.0:
+            v0 = warm / np.linalg.norm(warm)
+    flow.budget = budget
+    mu, V = eigs(op, k=k, which="LM", tol=tol, v0=v0, ncv=ncv)
+    flow.budget = None  # the residual products below are part of the answer, not the search
     floor = 64 * np.finfo(float).eps * float(np.max(np.abs(mu)))
     if np.any(np.abs(mu) <= floor):
         raise FloquetError(f"the {k} largest multipliers reach the rounding level of the largest "
@@ -280,8 +295,9 @@ def descriptor_partial(M, fit, period, *, k, rtol, tol, steps=None):
     method = (f"Arnoldi (ARPACK) on the monodromy operator in the model's coordinates (index-1 "
               f"form, projected on the constraints at t = 0), Butcher's order-6 Runge–Kutta, "
               f"{rec['steps']} fixed steps a period")
-    return PartialFloquetResult(period, mu[order], res[order],
-                                flow.products + rec["probe_products"], method, rtol), flow.steps
+    return (PartialFloquetResult(period, mu[order], res[order],
+                                 flow.products + rec["probe_products"], method, rtol),
+            flow.steps, V[:, order])
 
 
 #: the full monodromy in the model's coordinates stops doubling here (each step integrates 2r

@@ -106,11 +106,12 @@ def _largest(mu, k, decided):
     return sorted(keep)
 
 
-def largest_json(a, k) -> dict:
+def largest_json(a, k, method) -> dict:
     """The modes JSON of ``--n-modes K`` answered by the full monodromy (``a``, a
     :func:`mbseig.studies.periodic.periodic_analysis`): its K multipliers of largest modulus
     (a complex one with its conjugate, and the multiplier that decides the verdict), the verdict
-    over all of them; ``selected`` says how many of how many and why this method."""
+    over all of them; ``selected`` says how many of how many and, in ``method``, why this
+    method."""
     fl = floquet_json(a)
     mu = np.array([complex(*m) for m in fl["multipliers"]])
     keep = _largest(mu, k, int(fl["decided_by"]["index"]))
@@ -118,7 +119,7 @@ def largest_json(a, k) -> dict:
     for key in ("multipliers", "exponents", "error_bounds"):
         listed[key] = [fl[key][j] for j in keep]
     listed["decided_by"] = dict(fl["decided_by"], index=keep.index(fl["decided_by"]["index"]))
-    listed["selected"] = {"count": len(keep), "of": int(mu.size), "method": FULL_FOR_LARGEST}
+    listed["selected"] = {"count": len(keep), "of": int(mu.size), "method": method}
     condition = [a.floquet.condition[j] for j in keep] if a.floquet.condition is not None \
         else None
     model, ref = a.timed.base, a.reference
@@ -130,17 +131,6 @@ def largest_json(a, k) -> dict:
         "verdict": a.floquet.verdict, "modes": exponent_modes(listed, condition),
         "floquet": listed,
     }
-
-
-#: why ``--n-modes K`` on a small periodic case runs the full monodromy
-#: (:func:`mbseig.studies.periodic_partial.largest_multipliers`; benchmarks/periodic_scaling.py,
-#: docs/periodic.md)
-FULL_FOR_LARGEST = ("full monodromy, then the largest |μ|: the partial (Arnoldi) method needs a "
-                    "number of products that grows with the model where the largest |μ| are "
-                    "clustered (a chain of shaken pendulums, K = 1: 65, 229, 569 products at 6, "
-                    "25, 50 pendulums), and the full monodromy, integrated in the model's sparse "
-                    "coordinates from 100 DOF on, was faster at every size measured "
-                    "(docs/periodic.md); --floquet partial runs the partial method")
 
 
 def _frozen_pencils(analysis, instants):

@@ -20,14 +20,17 @@ and a rounding floor 64 ε_mach |μ_k|.  The verdict reads only the K largest |�
 spectral radius: unstable when some |μ_k| − b_k > 1, stable when the largest |μ_k| + b_k < 1,
 critical otherwise.
 
-Cost: a product costs O(nnz) a stage (a sparse solve and four sparse products), against (2r)² a
-stage and column for the full monodromy on the dense projected system.  ARPACK needs a few
-times K products where the largest |μ| stand apart, and a number that grows with the model
-where they are clustered (the chain of shaken pendulums: 65, 229 and 569 products at 6, 25 and
-50 pendulums for K = 1), so ``--floquet auto`` answers from the full monodromy
-(:func:`largest_multipliers`).  Explicit steps suit models whose fastest mode the period
-resolves in a few hundred steps; a stiff one (beams) needs thousands.  Measured in
-benchmarks/periodic_scaling.py (docs/periodic.md, "Floquet at scale").
+Cost: a product costs O(nnz) a stage (a sparse solve and one sparse product), against 2r
+columns a stage for the full monodromy.  ARPACK needs about one basis of products (21 at
+K = 1) where the largest |μ| stand apart (the detuned chain of shaken pendulums, l2 = 0.5:
+35 products in all, both estimates, at every size), and a number that grows with the model
+where they are clustered (the uniform chain: 229, 569, 3,149 products at 25, 50, 150
+pendulums).  So ``--floquet auto`` (:func:`largest_multipliers`) tries the partial method
+from ``DESCRIPTOR_FROM_DOF`` on within :func:`partial_budget` products an estimate and falls
+back to the full monodromy past it.  Explicit steps suit models whose fastest mode the period
+resolves in a few hundred steps; a stiff one (beams) needs thousands, and auto then leaves it
+to the full monodromy too.  Measured in benchmarks/periodic_scaling.py (docs/periodic.md,
+"Floquet at scale").
 """
 
 from __future__ import annotations
@@ -43,7 +46,8 @@ from .floquet_descriptor import descriptor_partial
 from .periodic import periodic_linearization
 from .periodic_listing import reduced_exponents
 
-__all__ = ["PartialAnalysis", "periodic_partial", "PARTIAL_RTOL", "largest_multipliers"]
+__all__ = ["PartialAnalysis", "periodic_partial", "PARTIAL_RTOL", "largest_multipliers",
+           "partial_budget"]
 
 #: the first estimate's steps change a probe product by at most 63 × this when halved (its own
 #: error about 1/63 of that); the second runs at half those steps
@@ -121,10 +125,12 @@ def _verdict(mu, b):
 
 
 def periodic_partial(spec, *, k, config=None, params=None, rtol=PARTIAL_RTOL,
-                     tol=1e-10) -> PartialAnalysis:
+                     tol=1e-10, budget=None, max_steps=None) -> PartialAnalysis:
     """The ``k`` Floquet multipliers of largest modulus of a periodic case (module docstring);
-    ``rtol`` sets the first estimate's steps, ``tol`` is ARPACK's relative accuracy of the Ritz
-    values."""
+    ``rtol`` sets the first estimate's steps (at most ``max_steps`` a period, else
+    StepsNotSettled), ``tol`` is ARPACK's relative accuracy of the Ritz values; with
+    ``budget``, each estimate's Arnoldi stops past that many products
+    (:class:`~mbseig.studies.floquet_descriptor.BudgetSpent`, a FloquetError)."""
     lin = periodic_linearization(spec, config=config, params=params)
     size = lin.system.system.size
     if not 0 < k < size - 1:
@@ -136,10 +142,16 @@ def periodic_partial(spec, *, k, config=None, params=None, rtol=PARTIAL_RTOL,
     try:
         # products in the model's own sparse coordinates (mbseig.studies.floquet_descriptor);
         # the second estimate at half the steps, so that the difference also holds the first's
-        # discretization error (about 2⁶ times smaller than the second's)
-        first, steps = descriptor_partial(M, lin.fits[0], T, k=k, rtol=rtol, tol=tol)
+        # discretization error (about 2⁶ times smaller than the second's).  The second starts
+        # from the first's Ritz vectors with a short basis (2K + 4): a third of the products
+        # on the detuned chain, and the same convergence test on its own operator, so its
+        # values are its own
+        first, steps, V = descriptor_partial(M, lin.fits[0], T, k=k, rtol=rtol, tol=tol,
+                                             budget=budget, max_steps=max_steps)
         half = max(steps // 2, 1)
-        second, _ = descriptor_partial(M, lin.fits[1], T, k=k, rtol=rtol, tol=tol, steps=half)
+        second, _, _ = descriptor_partial(M, lin.fits[1], T, k=k, rtol=rtol, tol=tol,
+                                          steps=half, budget=budget, start=V,
+                                          ncv=min(size - 1, 2 * k + 4))
     except MbseigError as exc:
         raise exc.located(file=spec.source) from None
     except (np.linalg.LinAlgError, ArithmeticError, RuntimeError) as exc:
@@ -163,23 +175,70 @@ def periodic_partial(spec, *, k, config=None, params=None, rtol=PARTIAL_RTOL,
                            (steps, half))
 
 
+def partial_budget(k):
+    """Products an estimate's Arnoldi may take when ``--floquet auto`` tries the partial method:
+    three times ARPACK's default basis (2K + 1, at least 20).  Where the K largest |μ| stand
+    apart ARPACK needs about one basis (21 on the detuned chain of shaken pendulums); where they
+    are clustered it needs hundreds to thousands (the uniform chain), and the try costs at most
+    this many products before the full monodromy answers."""
+    return 3 * max(2 * k + 1, 20)
+
+
 def largest_multipliers(spec, *, k, floquet="auto", config=None, params=None) -> dict:
-    """The modes JSON of ``mbseig modes CASE --n-modes K`` on a periodic case: the K largest
-    |μ| by the full monodromy (``floquet = "auto"`` or ``"full"``) or by the partial method
-    (``"partial"``, on request only: on clustered multipliers, such as the chain of shaken
-    pendulums', ARPACK needs a number of products that grows with the model, docs/periodic.md);
-    ``floquet.selected`` says which and why."""
-    from .periodic import periodic_analysis
-    from .periodic_listing import FULL_FOR_LARGEST, largest_json, partial_json
+    """The modes JSON of ``mbseig modes CASE --n-modes K`` on a periodic case, the K largest
+    |μ|: ``"full"`` from the full monodromy, ``"partial"`` by the partial method, ``"auto"``
+    by the partial method within :func:`partial_budget` products an estimate from
+    ``DESCRIPTOR_FROM_DOF`` degrees of freedom on (below, the full monodromy costs less than
+    the partial method's products), and from the full monodromy if the partial method does not
+    converge within that budget (clustered |μ|) or its explicit steps do not settle within
+    ``FULL_MAX_STEPS`` a period (a stiff model).  ``floquet.selected`` says which ran and why
+    (docs/periodic.md)."""
+    from . import floquet_descriptor, periodic
+    from .floquet_descriptor import BudgetSpent, StepsNotSettled
+    from .periodic_listing import largest_json, partial_json
+
+    def partial(**kw):
+        out = partial_json(periodic_partial(spec, k=k, config=config, params=params, **kw))
+        fl = out["floquet"]
+        fl["selected"] = {"count": len(fl["multipliers"]), "of": fl["partial"]["of"]}
+        return out
 
     if floquet == "partial":
-        out = partial_json(periodic_partial(spec, k=k, config=config, params=params))
-        out["floquet"]["selected"] = {"count": len(out["floquet"]["multipliers"]),
-                                      "of": out["floquet"]["partial"]["of"],
-                                      "method": "partial (Arnoldi) method, as asked"}
+        out = partial(**{})
+        out["floquet"]["selected"]["method"] = "partial (Arnoldi) method, as asked"
         return out
-    a = periodic_analysis(spec, config=config, params=params)
-    out = largest_json(a, k)
-    out["floquet"]["selected"]["method"] = (FULL_FOR_LARGEST if floquet == "auto"
-                                            else "full monodromy, as asked")
-    return out
+    why = "full monodromy, as asked"
+    if floquet == "auto":
+        lin = periodic.periodic_linearization(spec, config=config, params=params)
+        dof, size = lin.system.dof, lin.system.system.size
+        if dof < periodic.DESCRIPTOR_FROM_DOF:
+            why = (f"full monodromy, then the largest |μ|: below {periodic.DESCRIPTOR_FROM_DOF} "
+                   f"DOF ({dof} here) it costs less than the partial method's products "
+                   "(docs/periodic.md); --floquet partial runs the partial method")
+        elif not 0 < k < size - 1:
+            why = (f"full monodromy, then the largest |μ|: the partial method takes 1 to "
+                   f"2·DOF − 2 = {size - 2} multipliers, {k} asked")
+        else:
+            budget = partial_budget(k)
+            try:
+                # the full monodromy's step cap: a model that needs more explicit steps is
+                # stiff, and the full method integrates it on the projected system
+                out = partial(budget=budget, max_steps=floquet_descriptor.FULL_MAX_STEPS)
+            except (BudgetSpent, StepsNotSettled) as exc:
+                what = ("did not converge within its budget of {budget} products an estimate "
+                        "(ARPACK needs many products where the largest |μ| lie close together)"
+                        if isinstance(exc, BudgetSpent) else
+                        f"could not run: its explicit steps did not settle within "
+                        f"{floquet_descriptor.FULL_MAX_STEPS} a period (a stiff model)")
+                why = (f"full monodromy, then the largest |μ|: from "
+                       f"{periodic.DESCRIPTOR_FROM_DOF} DOF on the partial (Arnoldi) method is "
+                       f"tried first, and here it {what.format(budget=budget)}")
+            else:
+                out["floquet"]["selected"]["method"] = (
+                    f"partial (Arnoldi) method: from {periodic.DESCRIPTOR_FROM_DOF} DOF on it is "
+                    f"tried first, within {budget} products an estimate, and converged in "
+                    f"{out['floquet']['partial']['products']} products in all (the step "
+                    "probes included)")
+                return out
+    a = periodic.periodic_analysis(spec, config=config, params=params)
+    return largest_json(a, k, why)
