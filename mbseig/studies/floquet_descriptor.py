@@ -141,7 +141,7 @@ class DescriptorFlow:
         self.ops = []
         for x in _instants(self.steps, BUTCHER6[0]):
             if x not in cache:
-                cache[x] = self._operators(C, K, J, self.T * float(x))
+                cache[x] = self._operators(C, K, self.T * float(x))
             self.ops.append(cache[x])
         self.products = 0
         self.budget = None  # products allowed (None: no limit), BudgetSpent past it
@@ -160,7 +160,7 @@ class DescriptorFlow:
         got = self._J(t, order)
         return sp.csr_matrix(self._J.shape) if got is None else _csr(got, self._J.shape)
 
-    def _operators(self, C, K, J, t):
+    def _operators(self, C, K, t):
         n = self.n
         Jt = self._jacobian(t, 0)
         m = Jt.shape[0]

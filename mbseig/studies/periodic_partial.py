@@ -207,7 +207,7 @@ def largest_multipliers(spec, *, k, floquet="auto", config=None, params=None) ->
         return out
 
     if floquet == "partial":
-        out = partial(**{})
+        out = partial()
         out["floquet"]["selected"]["method"] = "partial (Arnoldi) method, as asked"
         return out
     why = "full monodromy, as asked"
