@@ -17,6 +17,7 @@ from mbseig.casefile import read_case
 from mbseig.cli import main
 from mbseig.studies import periodic as P
 from mbseig.studies import periodic_partial as PP
+from mbseig.studies.floquet import FloquetError
 from mbseig.studies.floquet_descriptor import (
     StepsNotSettled,
     descriptor_flow,
@@ -137,7 +138,8 @@ def test_auto_tries_the_partial_method_then_the_full_monodromy(monkeypatch, caps
     answers, agreeing with ``--floquet full`` within the sum of the two bounds; given a budget
     of 5 products (below ARPACK's first basis of 20), the uniform chain's attempt stops with
     BudgetSpent and the full monodromy answers, equal to the last bit to ``--floquet full``'s,
-    each saying what ran and why."""
+    each saying what ran and why; any other refusal of the partial method (stubbed here) is
+    answered by the full monodromy too, its message quoted."""
     monkeypatch.setattr(P, "DESCRIPTOR_FROM_DOF", 1)
     P.forget_kept()
 
@@ -154,11 +156,19 @@ def test_auto_tries_the_partial_method_then_the_full_monodromy(monkeypatch, caps
     assert auto["verdict"] == full["verdict"] == "unstable"
     monkeypatch.setattr(PP, "partial_budget", lambda k: 5)
     auto, full = run(), run("--floquet", "full")
-    P.forget_kept()
     assert "did not converge within its budget of 5 products" in auto["selected"]["method"]
     assert "partial" not in auto
     assert auto["multipliers"] == full["multipliers"]
     assert auto["error_bounds"] == full["error_bounds"]
+
+    def refuse(*args, **kw):
+        raise FloquetError("a refusal of the partial method", element="monodromy")
+
+    monkeypatch.setattr(PP, "descriptor_partial", refuse)  # any other refusal: the full answers
+    auto = run()
+    P.forget_kept()
+    assert "stopped: a refusal of the partial method" in auto["selected"]["method"]
+    assert auto["multipliers"] == full["multipliers"]
 
 
 def test_start_vector_keeps_the_constraints_where_all_ones_does_not():

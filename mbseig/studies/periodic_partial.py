@@ -227,15 +227,20 @@ def largest_multipliers(spec, *, k, floquet="auto", config=None, params=None) ->
                 # the full monodromy's step cap: a model that needs more explicit steps is
                 # stiff, and the full method integrates it on the projected system
                 out = partial(budget=budget, max_steps=floquet_descriptor.FULL_MAX_STEPS)
-            except (BudgetSpent, StepsNotSettled) as exc:
-                what = ("did not converge within its budget of {budget} products an estimate "
-                        "(ARPACK needs many products where the largest |μ| lie close together)"
-                        if isinstance(exc, BudgetSpent) else
-                        f"could not run: its explicit steps did not settle within "
-                        f"{floquet_descriptor.FULL_MAX_STEPS} a period (a stiff model)")
+            except FloquetError as exc:  # the full monodromy answers, or says what fails
+                if isinstance(exc, BudgetSpent):
+                    what = (f"did not converge within its budget of {budget} products an "
+                            "estimate (ARPACK needs many products where the largest |μ| lie "
+                            "close together)")
+                elif isinstance(exc, StepsNotSettled):
+                    what = (f"could not run: its explicit steps did not settle within "
+                            f"{floquet_descriptor.FULL_MAX_STEPS} a period, as for a stiff "
+                            "model")
+                else:
+                    what = f"stopped: {exc.message}"
                 why = (f"full monodromy, then the largest |μ|: from "
                        f"{periodic.DESCRIPTOR_FROM_DOF} DOF on the partial (Arnoldi) method is "
-                       f"tried first, and here it {what.format(budget=budget)}")
+                       f"tried first, and here it {what}")
             else:
                 out["floquet"]["selected"]["method"] = (
                     f"partial (Arnoldi) method: from {periodic.DESCRIPTOR_FROM_DOF} DOF on it is "
