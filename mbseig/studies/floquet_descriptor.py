@@ -263,12 +263,11 @@ def descriptor_partial(M, fit, period, *, k, rtol, tol, steps=None, budget=None,
     :class:`DescriptorFlow` (a :class:`~mbseig.studies.floquet.PartialFloquetResult`;
     ``products`` counts every integration, the step probes included), the steps a period it
     used (chosen for ``rtol`` by :func:`descriptor_flow` within ``max_steps``, or ``steps`` as
-    given) and the Ritz
-    vectors (columns, in the result's order).  ARPACK starts from ``start`` projected by Π (a
-    previous estimate's vectors, summed) or from :func:`consistent_start`; past ``budget``
-    products it stops with :class:`BudgetSpent`.  A Ritz value at the rounding level of the
-    largest is one of the 2m zeros the projection adds, not a multiplier: asking that many is
-    refused."""
+    given) and the Ritz vectors (columns, in the result's order).  ARPACK starts from ``start``
+    projected by Π (a previous estimate's vectors, summed) or from :func:`consistent_start`,
+    with ``ncv`` basis vectors (None: ARPACK's default); past ``budget`` products it stops with
+    :class:`BudgetSpent`.  A Ritz value at the rounding level of the largest is one of the 2m
+    zeros the projection adds, not a multiplier: asking that many is refused."""
     if steps is None:
         flow, rec = descriptor_flow(M, fit, period, rtol=rtol, max_steps=max_steps)
     else:
