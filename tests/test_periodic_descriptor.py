@@ -86,6 +86,7 @@ def test_a_stiff_model_is_handed_to_the_projected_integration(monkeypatch):
         descriptor_partial(lin.reference.partition.M, lin.fits[0], lin.timed.period, k=1,
                            rtol=1e-9, tol=1e-9)
     monkeypatch.setattr(P, "DESCRIPTOR_FROM_DOF", 1)
+    monkeypatch.setattr(PP, "TRY_PRODUCTS_PER_DOF", 100.0)  # a try at 3 DOF
     monkeypatch.setattr("mbseig.studies.floquet_descriptor.FULL_MAX_STEPS", 128)
     P.forget_kept()
     method = P.periodic_analysis(spec).floquet.method
@@ -139,8 +140,10 @@ def test_auto_tries_the_partial_method_then_the_full_monodromy(monkeypatch, caps
     of 5 products (below ARPACK's first basis of 20), the uniform chain's attempt stops with
     BudgetSpent and the full monodromy answers, equal to the last bit to ``--floquet full``'s,
     each saying what ran and why; any other refusal of the partial method (stubbed here) is
-    answered by the full monodromy too, its message quoted."""
+    answered by the full monodromy too, its message quoted; a budget above
+    ``TRY_PRODUCTS_PER_DOF`` a DOF is not tried at all."""
     monkeypatch.setattr(P, "DESCRIPTOR_FROM_DOF", 1)
+    monkeypatch.setattr(PP, "TRY_PRODUCTS_PER_DOF", 100.0)  # 60 products at 3 DOF
     P.forget_kept()
 
     def run(*argv):
@@ -166,8 +169,13 @@ def test_auto_tries_the_partial_method_then_the_full_monodromy(monkeypatch, caps
 
     monkeypatch.setattr(PP, "descriptor_partial", refuse)  # any other refusal: the full answers
     auto = run()
-    P.forget_kept()
     assert "stopped: a refusal of the partial method" in auto["selected"]["method"]
+    assert auto["multipliers"] == full["multipliers"]
+    monkeypatch.setattr(PP, "TRY_PRODUCTS_PER_DOF", 0.6)  # 5 products > 0.6 × 3 DOF: no try
+    auto = run()
+    P.forget_kept()
+    assert "would give the partial method's try 5 products, more than 0.6 a DOF (3 DOF" in \
+        auto["selected"]["method"]
     assert auto["multipliers"] == full["multipliers"]
 
 

@@ -47,7 +47,7 @@ from .periodic import periodic_linearization
 from .periodic_listing import reduced_exponents
 
 __all__ = ["PartialAnalysis", "periodic_partial", "PARTIAL_RTOL", "largest_multipliers",
-           "partial_budget"]
+           "partial_budget", "TRY_PRODUCTS_PER_DOF"]
 
 #: the first estimate's steps change a probe product by at most 63 × this when halved (its own
 #: error about 1/63 of that); the second runs at half those steps.  The full monodromy in the
@@ -187,12 +187,21 @@ def partial_budget(k):
     return 3 * max(2 * k + 1, 20)
 
 
+#: ``--floquet auto`` tries the partial method only while its budget is at most this many
+#: products a degree of freedom: on the uniform chain at 100 DOF the 60-product try cost about
+#: as much as the full monodromy (0.9 s against 1.0 s, docs/periodic.md), and the full method's
+#: cost grows faster with the DOF than a product's.  So a try never costs much more than the
+#: answer it might replace (K = 50 asks 303 products: from 505 DOF on)
+TRY_PRODUCTS_PER_DOF = 0.6
+
+
 def largest_multipliers(spec, *, k, floquet="auto", config=None, params=None) -> dict:
     """The modes JSON of ``mbseig modes CASE --n-modes K`` on a periodic case, the K largest
     |μ|: ``"full"`` from the full monodromy, ``"partial"`` by the partial method, ``"auto"``
     by the partial method within :func:`partial_budget` products an estimate from
     ``DESCRIPTOR_FROM_DOF`` degrees of freedom on (below, the full monodromy costs less than
-    the partial method's products), and from the full monodromy if the partial method does not
+    the partial method's products) while that budget is at most :data:`TRY_PRODUCTS_PER_DOF`
+    products a DOF, and from the full monodromy otherwise or if the partial method does not
     converge within that budget (clustered |μ|) or its explicit steps do not settle within
     ``FULL_MAX_STEPS`` a period (a stiff model).  ``floquet.selected`` says which ran and why
     (docs/periodic.md)."""
@@ -221,6 +230,11 @@ def largest_multipliers(spec, *, k, floquet="auto", config=None, params=None) ->
         elif not 0 < k < size - 1:
             why = (f"full monodromy, then the largest |μ|: the partial method takes 1 to "
                    f"2·DOF − 2 = {size - 2} multipliers, {k} asked")
+        elif partial_budget(k) > TRY_PRODUCTS_PER_DOF * dof:
+            why = (f"full monodromy, then the largest |μ|: K = {k} would give the partial "
+                   f"method's try {partial_budget(k)} products, more than "
+                   f"{TRY_PRODUCTS_PER_DOF:g} a DOF ({dof} DOF here), where the try could cost "
+                   "more than the full monodromy (docs/periodic.md); --floquet partial runs it")
         else:
             budget = partial_budget(k)
             try:
